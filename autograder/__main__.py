@@ -1,0 +1,59 @@
+"""python -m autograder: the instructor's pipeline. Run it from the course root."""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from autograder.labs import ROOT
+
+
+def main(argv: list[str] | None = None) -> int:
+    parser = argparse.ArgumentParser(prog="python -m autograder", description=__doc__)
+    commands = parser.add_subparsers(dest="command", required=True)
+    commands.add_parser("release", help="generate release/<lab>/ for every lab with nbgrader, then check it for leaks")
+    bundle = commands.add_parser("bundle", help="write the solution-free tree that students get, and check it for leaks")
+    bundle.add_argument("out", type=Path, help="a new folder")
+    grade = commands.add_parser("grade", help="autograde SUBMISSIONS/<student>/<lab>/<lab>.ipynb; write grades and feedback")
+    grade.add_argument("submissions", type=Path)
+    grade.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder to grade in (default: the course root)")
+    grade.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
+    demo = commands.add_parser("demo", help="release, make a synthetic class (blank, solved, every catalogued mistake), grade it")
+    demo.add_argument("--workdir", type=Path, default=ROOT / "demo")
+    data = commands.add_parser("data", help="rebuild the shipped data in course/data/ from the seeded reference builds")
+    data.add_argument("--check", action="store_true", help="only check that a rebuild reproduces the shipped files")
+    args = parser.parse_args(argv)
+
+    if args.command == "release":
+        from autograder.release import release_all
+
+        release_all()
+        print(f"Released to {ROOT / 'release'}; no leaks found.")
+    elif args.command == "bundle":
+        from autograder.bundle import write_bundle
+
+        print(f"Student bundle written to {write_bundle(args.out)}; no leaks found.")
+    elif args.command == "grade":
+        from autograder.grading import grade as grade_submissions
+
+        grade_submissions(args.submissions.resolve(), args.workdir.resolve(), args.out)
+    elif args.command == "demo":
+        from autograder.demo import run_demo
+
+        run_demo(args.workdir.resolve())
+    elif args.command == "data":
+        from autograder import data as shipped
+
+        if args.check:
+            stale = shipped.stale_files()
+            print("The shipped data are reproduced exactly." if not stale else f"Stale: {', '.join(stale)}")
+            return 1 if stale else 0
+        for lab in shipped.all_labs():
+            for path in shipped.build(lab, shipped.DATA_DIR):
+                print(f"{lab.id}: wrote {path.relative_to(ROOT)}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

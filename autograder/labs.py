@@ -1,0 +1,51 @@
+"""Where each lab's files live. A lab is a folder ``source/<lab>/`` holding ``<lab>.ipynb``."""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+from pathlib import Path
+from types import ModuleType
+
+ROOT = Path(__file__).resolve().parent.parent
+"""The course root: the repository, and nbgrader's course directory."""
+
+
+@dataclass(frozen=True)
+class Lab:
+    """One lab, named by its id (``train-kf``); its Python modules use underscores (``train_kf``)."""
+
+    id: str
+
+    @property
+    def module(self) -> str:
+        return self.id.replace("-", "_")
+
+    @property
+    def notebook_name(self) -> str:
+        return f"{self.id}.ipynb"
+
+    @property
+    def source_notebook(self) -> Path:
+        return ROOT / "source" / self.id / self.notebook_name
+
+    @property
+    def release_notebook(self) -> Path:
+        return ROOT / "release" / self.id / self.notebook_name
+
+    def solutions(self) -> ModuleType:
+        """The lab's hidden reference module, ``solutions.<module>``."""
+        return importlib.import_module(f"solutions.{self.module}")
+
+
+def all_labs() -> list[Lab]:
+    """Every lab that has a source notebook, in alphabetical order."""
+    return [Lab(p.parent.name) for p in sorted((ROOT / "source").glob("*/*.ipynb")) if p.stem == p.parent.name]
+
+
+def get_lab(lab_id: str) -> Lab:
+    """The lab with this id, or a ValueError that lists the labs there are."""
+    known = {lab.id: lab for lab in all_labs()}
+    if lab_id not in known:
+        raise ValueError(f"There is no lab '{lab_id}'. The labs are: {', '.join(known)}.")
+    return known[lab_id]

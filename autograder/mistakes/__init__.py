@@ -1,0 +1,45 @@
+"""The catalogue of plausible student mistakes, one module per lab (``mistakes/train_kf.py``).
+
+A mistake is an edit of one blank's model answer: the reference code with ``find`` replaced by
+``replace``. The round-trip test grades a submission with each mistake and requires that it loses
+that blank's points and no other blank's.
+"""
+
+from __future__ import annotations
+
+import importlib
+from dataclasses import dataclass
+
+from autograder.labs import Lab
+
+
+@dataclass(frozen=True)
+class Mistake:
+    """A plausible mistake in the blank ``blank`` (the name of the function it defines)."""
+
+    blank: str
+    slug: str
+    """A short name, used in the demo student's id."""
+    why: str
+    """What the student got wrong, in a sentence."""
+    find: str
+    """Text in the model answer; it must occur there exactly once."""
+    replace: str
+
+    def student_id(self, lab: Lab) -> str:
+        return f"{lab.id}_{self.blank}_{self.slug}"
+
+    def apply(self, answer: str) -> str:
+        """The model answer ``answer`` with this mistake made in it."""
+        count = answer.count(self.find)
+        if count != 1:
+            raise ValueError(
+                f"Mistake {self.slug!r}: {self.find!r} occurs {count} times in the answer to "
+                f"{self.blank}, and must occur exactly once. Update the catalogue."
+            )
+        return answer.replace(self.find, self.replace)
+
+
+def catalogue(lab: Lab) -> tuple[Mistake, ...]:
+    """The catalogued mistakes of a lab (``autograder.mistakes.<module>.MISTAKES``)."""
+    return importlib.import_module(f"autograder.mistakes.{lab.module}").MISTAKES

@@ -1,0 +1,38 @@
+"""Plausible mistakes in the train-kf blanks. Each one edits the model answer of one blank."""
+
+from autograder.mistakes import Mistake
+
+MISTAKES = (
+    Mistake("gain_information_form", "B-not-inverted", "uses B where the information form needs B^-1",
+            "B_inv + H.T @ RinvH", "B + H.T @ RinvH"),
+    Mistake("gain_information_form", "R-not-inverted", "uses R H where the formula has R^-1 H",
+            "RinvH = np.linalg.solve(R, H)", "RinvH = R @ H"),
+    Mistake("gain_information_form", "no-transpose", "uses R^-1 H where the formula has its transpose",
+            "B_inv + H.T @ RinvH, RinvH.T)", "B_inv + H.T @ RinvH, RinvH)"),
+    Mistake("gain_covariance_form", "no-R", "K = B H^T (H B H^T)^-1: forgets the observation noise",
+            "S = H @ B @ H.T + R", "S = H @ B @ H.T"),
+    Mistake("gain_covariance_form", "no-B", "K = H^T (H B H^T + R)^-1: forgets the leading B",
+            "np.linalg.solve(S, H @ B).T", "np.linalg.solve(S, H).T"),
+    Mistake("process_noise", "sigma-over-60", "takes the handout's slip sigma = 15/60 into Q",
+            "return sigma**2 * np.array", "return (sigma / 60.0) ** 2 * np.array"),
+    Mistake("process_noise", "diagonal", "drops the correlation between the position and velocity noise",
+            "np.array([[h * h, h], [h, 1.0]])", "np.diag([h * h, 1.0])"),
+    Mistake("process_noise", "hours-as-minutes", "forgets to convert minutes to hours (h = dt)",
+            "h = dt_min / 60.0", "h = dt_min"),
+    Mistake("predict", "no-Q", "B_f = A B A^T: forgets the process noise", "A @ B @ A.T + Q", "A @ B @ A.T"),
+    Mistake("predict", "transposed-A", "B_f = A^T B A + Q", "A @ B @ A.T + Q", "A.T @ B @ A + Q"),
+    Mistake("predict", "mean-not-moved", "x_f = x: forgets to move the mean", "x_f = A @ x", "x_f = x"),
+    Mistake("kupdate", "innovation-sign", "x_a = x_f + K (y + H x_f), the handout's typo",
+            "y - H @ x_f", "y + H @ x_f"),
+    Mistake("kupdate", "B-minus-KB", "B_a = B - K B, dropping H", "B_f - K @ H @ B_f", "B_f - K @ B_f"),
+    Mistake("kupdate", "gain-without-R", "K = B H^T (H B H^T)^-1 inline, without R",
+            "K = gain_covariance_form(B_f, H, R)", "K = B_f @ H.T @ np.linalg.pinv(H @ B_f @ H.T)"),
+    Mistake("run_filter", "stores-forecast", "stores the forecast instead of the analysis",
+            "x, B = kupdate(x, B, y[t], H, R)\n        xs[t], Bs[t] = x, B",
+            "xs[t], Bs[t] = x, B\n        x, B = kupdate(x, B, y[t], H, R)"),
+    Mistake("run_filter", "restarts-from-prior", "forecasts every step from the initial belief",
+            "x, B = predict(x, B, A, Q)", "x, B = predict(x0, B0, A, Q)"),
+    Mistake("run_filter", "update-before-predict", "assimilates each fix before forecasting to its time",
+            "x, B = predict(x, B, A, Q)\n        x, B = kupdate(x, B, y[t], H, R)",
+            "x, B = kupdate(x, B, y[t], H, R)\n        x, B = predict(x, B, A, Q)"),
+)

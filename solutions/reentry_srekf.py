@@ -1,0 +1,222 @@
+"""Hidden reference for the reentry-srekf lab (MCHA4400 Lab 5, square-root EKF).
+
+The reference for every blank, the truth simulator that generates the shipped data, and the
+command line that runs the reference filter on a data file and prints the handout's report::
+
+    python -m solutions.reentry_srekf --data course/data/starship_reentry.csv
+    python -m solutions.reentry_srekf --write-data course/data
+
+State x = [h, v, c]: altitude [m], velocity [m/s] (v < 0 when falling), ballistic coefficient
+[m^2/kg]. Square roots are upper triangular with S^T S = P. Equation numbers are the handout's.
+"""
+
+from __future__ import annotations
+
+import argparse
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.axes import Axes
+from numpy.typing import ArrayLike, NDArray
+from scipy.linalg import solve_triangular
+
+from course import starship
+from course.starship import G, L, M, P0, R, RADAR_R1, RADAR_R2, SIGMA_RANGE, SQRT_Q, T0
+
+Vector = NDArray[np.float64]
+Matrix = NDArray[np.float64]
+
+
+# =============================================================================================
+# Blank 1: ballistic process model
+# =============================================================================================
+def ballistic_dynamics(x: ArrayLike) -> Vector:
+    """Mean dynamics f(x) of x = [h, v, c], equation (3). Returns shape (3,): [m/s, m/s^2, m^2/kg/s]."""
+    h, v, c = np.asarray(x, dtype=float)
+    # (8) T = T0 - L h
+    T = T0 - L * h
+    # (9) p = p0 (1 - L h / T0)^(g M / (R L))
+    p = P0 * (1 - L * h / T0) ** (G * M / (R * L))
+    # (5) rho = p M / (R T)
+    rho = p * M / (R * T)
+    # (4) d = rho v^2 c / 2
+    d = 0.5 * rho * v**2 * c
+    # (3) f = [v, d - g, 0]
+    return np.array([v, d - G, 0.0])
+
+
+def ballistic_jacobian(x: ArrayLike) -> Matrix:
+    """Jacobian df/dx of equation (3), shape (3, 3)."""
+    h, v, c = np.asarray(x, dtype=float)
+    T = T0 - L * h
+    exponent = G * M / (R * L)
+    # (10) d = (M p0 / (2 R)) (T0 - L h)^-1 (1 - L h / T0)^(g M / (R L)) v^2 c
+    rho = P0 * (1 - L * h / T0) ** exponent * M / (R * T)
+    d = 0.5 * rho * v**2 * c
+    # d is proportional to T^(gM/(RL) - 1) with dT/dh = -L, so dd/dh = d L (1 - gM/(RL)) / T
+    dd_dh = d * L * (1 - exponent) / T
+    # dd/dv = rho v c, dd/dc = rho v^2 / 2
+    dd_dv = rho * v * c
+    dd_dc = 0.5 * rho * v**2
+    return np.array(
+        [
+            [0.0, 1.0, 0.0],
+            [dd_dh, dd_dv, dd_dc],
+            [0.0, 0.0, 0.0],
+        ]
+    )
+
+
+# =============================================================================================
+# Blank 2: range measurement model
+# =============================================================================================
+def radar_predict(x: ArrayLike) -> Vector:
+    """Predicted range [m] from the radar at (r1, r2), equation (13). Returns shape (1,)."""
+    h = float(np.asarray(x, dtype=float)[0])
+    # (13) h_rng = sqrt(r1^2 + (h - r2)^2)
+    return np.array([np.hypot(RADAR_R1, h - RADAR_R2)])
+
+
+def radar_jacobian(x: ArrayLike) -> Matrix:
+    """Jacobian of equation (13) with respect to x = [h, v, c], shape (1, 3)."""
+    h = float(np.asarray(x, dtype=float)[0])
+    rng = np.hypot(RADAR_R1, h - RADAR_R2)
+    # d h_rng / dh = (h - r2) / h_rng; the range does not depend on v or c
+    return np.array([[(h - RADAR_R2) / rng, 0.0, 0.0]])
+
+
+# =============================================================================================
+# Blank 3: marginal of a Gaussian in square-root form
+# =============================================================================================
+def marginal(mu: ArrayLike, S: ArrayLike, idx: ArrayLike) -> tuple[Vector, Matrix]:
+    """Marginal N^(1/2)(mu_I, S_I) of the entries ``idx`` (any order, contiguous or not), eq. (22).
+
+    mu: (n,), S: (n, n) upper triangular, idx: (n_I,) integer indices.
+    Returns mu_I (n_I,) and upper-triangular S_I (n_I, n_I) with S_I^T S_I = P[idx][:, idx].
+    """
+    mu, S = np.asarray(mu, dtype=float), np.asarray(S, dtype=float)
+    idx = np.asarray(idx, dtype=int).reshape(-1)
+    # (22) S_{:,I} = Q [R1; 0]  =>  S_I = R1 (Q-less QR)
+    S_I = np.linalg.qr(S[:, idx], mode="r")
+    return mu[idx], S_I
+
+
+# =============================================================================================
+# Blank 4: conditional of a Gaussian in square-root form
+# =============================================================================================
+def conditional(
+    mu: ArrayLike, S: ArrayLike, idx_a: ArrayLike, idx_b: ArrayLike, x_b: ArrayLike
+) -> tuple[Vector, Matrix]:
+    """Conditional p(x_A | x_B = x_b) = N^(1/2)(mu_c, S_c), equations (29) to (31).
+
+    mu: (n,), S: (n, n) upper triangular, idx_a: (n_A,), idx_b: (n_B,), x_b: (n_B,).
+    Returns mu_c (n_A,) and upper-triangular S_c (n_A, n_A).
+    """
+    mu, S = np.asarray(mu, dtype=float), np.asarray(S, dtype=float)
+    idx_a = np.asarray(idx_a, dtype=int).reshape(-1)
+    idx_b = np.asarray(idx_b, dtype=int).reshape(-1)
+    x_b = np.asarray(x_b, dtype=float).reshape(-1)
+    n_b = idx_b.size
+    # (29)-(30) [S_{:,B}  S_{:,A}] = Q [R1 R2; 0 R3], a Q-less QR of the permuted columns
+    R_ba = np.linalg.qr(S[:, np.concatenate([idx_b, idx_a])], mode="r")
+    R1, R2, R3 = R_ba[:n_b, :n_b], R_ba[:n_b, n_b:], R_ba[n_b:, n_b:]
+    # (31) mu_{A|B} = mu_A + R2^T R1^-T (x_B - mu_B), with R1^-T applied by a triangular solve
+    mu_c = mu[idx_a] + R2.T @ solve_triangular(R1, x_b - mu[idx_b], trans="T")
+    # (31) S_{A|B} = R3
+    return mu_c, R3
+
+
+# =============================================================================================
+# Blank 5: the ballistic-coefficient subplot of Figure 2
+# =============================================================================================
+def plot_ballistic_coefficient(
+    ax: Axes, t: ArrayLike, c_true: ArrayLike, c_mean: ArrayLike, c_std: ArrayLike
+) -> Axes:
+    """Draw truth, estimate and 99.7% region (mean +/- 3 std) of c [m^2/kg] against t [s]."""
+    t, c_mean, c_std = (np.asarray(a, dtype=float) for a in (t, c_mean, c_std))
+    ax.fill_between(
+        t, c_mean - 3 * c_std, c_mean + 3 * c_std, color="C0", alpha=0.25, linewidth=0, label="99.7% region (±3σ)"
+    )
+    ax.plot(t, c_true, color="k", linewidth=1.5, label="truth")
+    ax.plot(t, c_mean, color="C0", linewidth=1.5, linestyle="--", label="estimate")
+    ax.set(title="Ballistic coefficient", xlabel="Time [s]", ylabel="c [m²/kg]")
+    ax.grid(True, alpha=0.3)
+    ax.legend(loc="upper right")
+    return ax
+
+
+# =============================================================================================
+# Reference filter, truth simulator and data build
+# =============================================================================================
+def run_reference(data: starship.ReentryData) -> starship.FilterResult:
+    """The course framework run with the reference blanks."""
+    return starship.run_filter(data, ballistic_dynamics, ballistic_jacobian, radar_predict, radar_jacobian, conditional)
+
+
+DATA_SEED: int = 20230503  #: seed of the shipped data file
+X0_TRUE: Vector = np.array([15_000.0, -500.0, 0.001])  #: true initial state [m, m/s, m^2/kg]
+N_ROWS: int = 500
+DT: float = 0.1  #: measurement spacing [s]
+SUBSTEPS: int = 10  #: RK4 substeps per measurement interval in the truth simulation
+
+
+def simulate(
+    rng: np.random.Generator,
+    n_rows: int = N_ROWS,
+    dt: float = DT,
+    x0: ArrayLike = X0_TRUE,
+    substeps: int = SUBSTEPS,
+) -> tuple[Vector, Matrix, Vector, Vector]:
+    """Simulate the truth of equation (11) and the radar of equation (13).
+
+    The SDE dx = f(x) dt + dw, cov(dw) = Q dt, is integrated with ``substeps`` RK4 steps per
+    measurement interval, each with its noise increment w = SQRT_Q^T e sqrt(dt/substeps),
+    e ~ N(0, I). Measurements are range + N(0, SIGMA_RANGE^2), at t = 0, dt, 2 dt, ...
+    Returns t (N,) [s], truth (N, 3), range_true (N,) [m], range_meas (N,) [m].
+    """
+    h_sub = dt / substeps
+    t = np.arange(n_rows) * dt
+    truth = np.empty((n_rows, 3))
+    x = np.array(x0, dtype=float)
+    process_noise = rng.standard_normal((n_rows - 1, substeps, 3))
+    for k in range(n_rows):
+        if k > 0:
+            for e in process_noise[k - 1]:
+                x = starship.rk4_step(ballistic_dynamics, x, SQRT_Q.T @ e * np.sqrt(h_sub), h_sub)
+        truth[k] = x
+    range_true = np.array([radar_predict(x)[0] for x in truth])
+    range_meas = range_true + SIGMA_RANGE * rng.standard_normal(n_rows)
+    return t, truth, range_true, range_meas
+
+
+def data_text(seed: int = DATA_SEED) -> str:
+    """The shipped data file's text, built from ``seed``."""
+    t, truth, range_true, range_meas = simulate(np.random.default_rng(seed))
+    return starship.format_csv(t, truth, range_true, range_meas)
+
+
+def write_data(directory: str | Path, seed: int = DATA_SEED) -> list[Path]:
+    """Build the shipped data file ``starship_reentry.csv`` from ``seed`` into ``directory``."""
+    path = Path(directory) / starship.DATA_FILE.name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(data_text(seed).encode("ascii"))
+    return [path]
+
+
+def main(argv: Sequence[str] | None = None) -> None:
+    """Command line: run the reference filter on a data file and print the report."""
+    parser = argparse.ArgumentParser(prog="python -m solutions.reentry_srekf", description=__doc__.splitlines()[0])
+    parser.add_argument("--data", help="data file in the handout's CSV format (default: the shipped file)")
+    parser.add_argument("--write-data", metavar="DIR", help="rebuild the data file from the seed into DIR and exit")
+    args = parser.parse_args(argv)
+    if args.write_data:
+        for path in write_data(args.write_data):
+            print(f"Wrote {path}")
+        return
+    data = starship.load(args.data)
+    starship.print_report(data, run_reference(data))
+
+
+if __name__ == "__main__":
+    main()

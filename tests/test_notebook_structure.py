@@ -1,0 +1,106 @@
+"""Every source notebook follows the kit's conventions (docs/adding-a-lab.md)."""
+
+import ast
+import importlib
+import inspect
+
+import pytest
+from nbgrader.nbgraderformat import MetadataValidator
+
+from autograder import cells
+from autograder.cells import BEGIN_HIDDEN, BEGIN_SOLUTION, END_HIDDEN, END_SOLUTION
+from over_labs import over_labs
+
+
+def _without_docstring(func: ast.FunctionDef) -> str:
+    body = func.body
+    if isinstance(body[0], ast.Expr) and isinstance(body[0].value, ast.Constant) and isinstance(body[0].value.value, str):
+        body = body[1:]
+    return ast.dump(ast.Module(body=body, type_ignores=[]), annotate_fields=False)
+
+
+@over_labs
+def test_metadata_is_valid_nbgrader_schema_3(lab):
+    nb = cells.read(lab.source_notebook)
+    MetadataValidator().validate_nb(nb)
+    for cell in nb.cells:
+        if "nbgrader" in cell.metadata:
+            assert cell.metadata.nbgrader["schema_version"] == 3, cells.grade_id(cell)
+    ids = [cells.grade_id(c) for c in nb.cells if "nbgrader" in c.metadata]
+    assert len(ids) == len(set(ids)), "grade_ids must be unique"
+
+
+@over_labs
+def test_notebook_starts_with_credit_and_minimal_tracebacks(lab):
+    nb = cells.read(lab.source_notebook)
+    assert nb.cells[0].cell_type == "markdown" and "Credit" in nb.cells[0].source, "the first cell credits the handout"
+    first_code = next(c for c in nb.cells if c.cell_type == "code")
+    assert cells.meta(first_code).get("locked"), "the set-up cell is locked"
+    assert "%xmode Minimal" in first_code.source.splitlines()[:2], "the set-up cell starts with %xmode Minimal"
+    assert nb.metadata.kernelspec.name == "python3"
+
+
+@over_labs
+def test_each_blank_is_one_function_identical_to_the_reference(lab):
+    nb = cells.read(lab.source_notebook)
+    reference = lab.solutions()
+    blanks = [c for c in nb.cells if cells.is_code_answer(c)]
+    assert blanks, "a lab has blanks"
+    for cell in blanks:
+        name = cells.grade_id(cell)
+        assert cell.source.count(BEGIN_SOLUTION) == 1 and cell.source.count(END_SOLUTION) == 1, name
+        [func] = cells.defined_functions(cell.source)
+        assert func.name == name, f"the answer cell {name} must define {name}, not {func.name}"
+        expected = ast.parse(inspect.getsource(getattr(reference, name))).body[0]
+        assert [a.arg for a in func.args.args] == [a.arg for a in expected.args.args], f"{name}: signature"
+        assert _without_docstring(ast.parse(cells.model_answer(cell)).body[0]) == _without_docstring(expected), (
+            f"{name}: the model answer in the notebook differs from solutions.{lab.module}.{name}"
+        )
+
+
+@over_labs
+def test_each_blank_has_visible_checks_then_a_hidden_test_cell(lab):
+    nb = cells.read(lab.source_notebook)
+    hidden = importlib.import_module(f"autograder.hidden_tests.{lab.module}")
+    by_id = {cells.grade_id(c): (i, c) for i, c in enumerate(nb.cells) if "nbgrader" in c.metadata}
+    for name in cells.blank_names(nb):
+        i_answer, _ = by_id[name]
+        i_check, check = by_id[f"check_{name}"]
+        i_test, test = by_id[f"test_{name}"]
+        assert i_answer < i_check < i_test, f"{name}: answer, visible checks, hidden tests, in that order"
+        assert cells.meta(check)["locked"] and not cells.meta(check)["grade"], f"check_{name} is locked, ungraded"
+        assert "passed(" in check.source and "assert" not in check.source.replace("AssertionError", ""), (
+            f"check_{name}: use course.checks helpers, which carry messages, and end with passed()"
+        )
+        assert cells.meta(test)["points"] > 0 and cells.meta(test)["locked"], f"test_{name}"
+        visible, region = test.source.split(BEGIN_HIDDEN)
+        assert region.split(END_HIDDEN)[0].strip().splitlines() == [
+            f"from autograder.hidden_tests.{lab.module} import check_{name}",
+            f"check_{name}({name})",
+        ], f"test_{name}: the hidden region only calls check_{name}"
+        assert all(line.startswith("#") for line in visible.strip().splitlines()), f"test_{name}: comments only"
+        assert callable(getattr(hidden, f"check_{name}")), f"autograder.hidden_tests.{lab.module}.check_{name}"
+
+
+@over_labs
+def test_written_answers_hold_a_model_answer_and_a_rubric(lab):
+    nb = cells.read(lab.source_notebook)
+    written = [c for c in nb.cells if cells.is_answer(c) and c.cell_type == "markdown"]
+    for cell in written:
+        assert cells.meta(cell)["grade"] and cells.meta(cell)["points"] > 0, cells.grade_id(cell)
+        lines = cell.source.strip().splitlines()
+        assert lines[0].strip() == BEGIN_SOLUTION and lines[-1].strip() == END_SOLUTION, cells.grade_id(cell)
+        assert "Model answer" in cell.source and "Rubric" in cell.source, cells.grade_id(cell)
+
+
+@over_labs
+def test_source_notebook_is_stored_executed_without_errors(lab):
+    nb = cells.read(lab.source_notebook)
+    code = [c for c in nb.cells if c.cell_type == "code"]
+    assert all(c.execution_count is not None for c in code), "execute the source notebook before committing it"
+    errors = [cells.grade_id(c) for c in code for o in c.outputs if o.output_type == "error"]
+    assert not errors, f"cells with errors: {errors}"
+    streams = [cells.grade_id(c) for c in code for o in c.outputs if o.output_type == "stream" and o.name == "stderr"]
+    assert not streams, f"cells that write to stderr (nbgrader zeroes a test cell that does): {streams}"
+    checked = [c for c in code if c.source.startswith("# NBVAL_CHECK_OUTPUT")]
+    assert checked and all(c.outputs for c in checked), "at least one cell prints final numbers for nbval to check"

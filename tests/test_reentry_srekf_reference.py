@@ -1,0 +1,527 @@
+"""The reentry-srekf reference (solutions.reentry_srekf) and its framework (course.starship),
+checked against independent oracles: physics tables, the handout's closed forms, finite and
+complex-step differences, the dense-covariance Gaussian formulas and a dense EKF."""
+
+from __future__ import annotations
+
+import ast
+import contextlib
+import io
+import subprocess
+import sys
+from pathlib import Path
+
+import matplotlib
+
+matplotlib.use("Agg")
+
+import matplotlib.pyplot as plt  # noqa: E402
+import numpy as np  # noqa: E402
+import pytest  # noqa: E402
+from matplotlib.collections import PolyCollection  # noqa: E402
+
+from course import starship  # noqa: E402
+from course.starship import G, L, M, P0, R, RADAR_R1, RADAR_R2, SIGMA_RANGE, T0  # noqa: E402
+from solutions import reentry_srekf as ref  # noqa: E402
+
+ROOT = Path(__file__).resolve().parents[1]
+BLANKS = (
+    "ballistic_dynamics",
+    "ballistic_jacobian",
+    "radar_predict",
+    "radar_jacobian",
+    "marginal",
+    "conditional",
+    "plot_ballistic_coefficient",
+)
+
+
+# ---------------------------------------------------------------------------------------------
+# Independent oracles
+# ---------------------------------------------------------------------------------------------
+def f_oracle(x: np.ndarray) -> np.ndarray:
+    """Equations (3) and (10) in the exp-log form of (9); works on complex x (complex step)."""
+    h, v, c = x
+    exponent = G * M / (R * L)
+    p = P0 * np.exp(exponent * np.log(1 - L * h / T0))
+    d = 0.5 * (M * P0 / R) * (1 / (T0 - L * h)) * (p / P0) * v * v * c
+    return np.array([v, d - G, 0 * h])
+
+
+def complex_step_jacobian(fun, x: np.ndarray, step: float = 1e-30) -> np.ndarray:
+    """Jacobian of fun at x to machine precision: J[:, j] = Im f(x + i h e_j) / h."""
+    x = np.asarray(x, dtype=float)
+    columns = []
+    for j in range(x.size):
+        xc = x.astype(complex)
+        xc[j] += 1j * step
+        columns.append(np.imag(fun(xc)) / step)
+    return np.column_stack(columns)
+
+
+def central_difference_jacobian(fun, x: np.ndarray, rel_step: float = 1e-6) -> np.ndarray:
+    x = np.asarray(x, dtype=float)
+    columns = []
+    for j in range(x.size):
+        step = rel_step * max(abs(x[j]), 1e-3)
+        e = np.zeros_like(x)
+        e[j] = step
+        columns.append((np.asarray(fun(x + e)) - np.asarray(fun(x - e))) / (2 * step))
+    return np.column_stack(columns)
+
+
+def rk4_oracle(z: np.ndarray, dt: float) -> np.ndarray:
+    """One RK4 step of dx = f(x) dt + dw with the increment in every stage (the issue's text)."""
+    x, w = z[:3], z[3:]
+    k1 = f_oracle(x)
+    k2 = f_oracle(x + (k1 * dt + w) / 2)
+    k3 = f_oracle(x + (k2 * dt + w) / 2)
+    k4 = f_oracle(x + k3 * dt + w)
+    return x + dt * (k1 + 2 * k2 + 2 * k3 + k4) / 6 + w
+
+
+def random_upper_sqrt(rng: np.random.Generator, n: int, scales: np.ndarray | None = None) -> np.ndarray:
+    """A random upper-triangular square root of a well-conditioned SPD matrix."""
+    A = rng.standard_normal((n, n)) + n * np.eye(n)
+    S = np.linalg.qr(A, mode="r")
+    if scales is not None:
+        S = S * scales[None, :]
+    return S
+
+
+def assert_upper_triangular(S: np.ndarray) -> None:
+    assert np.array_equal(S, np.triu(S)), f"not upper triangular:\n{S}"
+
+
+def assert_cov_close(P: np.ndarray, P_expected: np.ndarray, rtol: float) -> None:
+    """|P - P_expected|_ij <= rtol sqrt(P_ii P_jj): relative error on the correlation scale."""
+    scale = np.sqrt(np.outer(np.diag(P_expected), np.diag(P_expected)))
+    err = np.abs(P - P_expected)
+    assert np.all(err <= rtol * scale + 1e-300), f"max relative error {np.max(err / (scale + 1e-300)):.3g}"
+
+
+def index_sets(rng: np.random.Generator, n: int) -> list[tuple[str, np.ndarray]]:
+    k = int(rng.integers(1, n))  # 1 <= k < n
+    perm = rng.permutation(n)
+    start = int(rng.integers(0, n - k + 1))
+    return [
+        ("head", np.arange(k)),
+        ("tail", np.arange(k, n)),
+        ("segment", np.arange(start, start + k)),
+        ("non-contiguous, shuffled", perm[:k]),
+        ("non-ascending", np.sort(perm[:k])[::-1]),
+    ]
+
+
+@pytest.fixture(scope="module")
+def data() -> starship.ReentryData:
+    return starship.load()
+
+
+@pytest.fixture(scope="module")
+def result(data: starship.ReentryData) -> starship.FilterResult:
+    return ref.run_reference(data)
+
+
+# ---------------------------------------------------------------------------------------------
+# Blank 1: ballistic process model
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("h", "rho_isa"),
+    # International Standard Atmosphere densities [kg/m^3] (ISO 2533 tables)
+    [(0.0, 1.2250), (5000.0, 0.73643), (11000.0, 0.36392)],
+)
+def test_dynamics_density_matches_standard_atmosphere(h: float, rho_isa: float) -> None:
+    v, c = -200.0, 1e-3
+    d = ref.ballistic_dynamics([h, v, c])[1] + G
+    rho = d / (0.5 * v**2 * c)
+    assert rho == pytest.approx(rho_isa, rel=1e-3)
+
+
+def test_dynamics_matches_closed_form_and_drag_opposes_fall() -> None:
+    rng = np.random.default_rng(1)
+    for _ in range(50):
+        x = np.array([rng.uniform(0, 20000), rng.uniform(-800, -50), rng.uniform(1e-4, 3e-3)])
+        f = ref.ballistic_dynamics(x)
+        assert f.shape == (3,)
+        np.testing.assert_allclose(f, f_oracle(x), rtol=1e-12, atol=1e-12)
+        assert f[0] == x[1] and f[2] == 0.0
+        assert f[1] > -G, "drag must decelerate a falling vehicle (d > 0)"
+
+
+def test_jacobian_matches_finite_and_complex_step_differences() -> None:
+    rng = np.random.default_rng(2)
+    for _ in range(30):
+        x = np.array([rng.uniform(0, 20000), rng.uniform(-800, 800), rng.uniform(-1e-3, 3e-3)])
+        J = ref.ballistic_jacobian(x)
+        assert J.shape == (3, 3)
+        np.testing.assert_allclose(J, complex_step_jacobian(f_oracle, x), rtol=1e-10, atol=1e-14)
+        np.testing.assert_allclose(
+            J, central_difference_jacobian(ref.ballistic_dynamics, x), rtol=1e-6, atol=1e-9
+        )
+
+
+# ---------------------------------------------------------------------------------------------
+# Blank 2: radar
+# ---------------------------------------------------------------------------------------------
+def test_radar_hand_cases() -> None:
+    # radar level with the vehicle: range = r1, and the range is stationary in h
+    assert RADAR_R1 == 5000.0 and RADAR_R2 == 5000.0 and SIGMA_RANGE == 50.0
+    np.testing.assert_allclose(ref.radar_predict([5000.0, -300.0, 1e-3]), [5000.0], rtol=1e-15)
+    np.testing.assert_allclose(ref.radar_jacobian([5000.0, -300.0, 1e-3]), [[0.0, 0.0, 0.0]], atol=1e-15)
+    # 3-4-5 triangle: h - r2 = 3750 m -> range 6250 m, dr/dh = 3750/6250 = 0.6 (and -0.6 below)
+    np.testing.assert_allclose(ref.radar_predict([8750.0, -300.0, 1e-3]), [6250.0], rtol=1e-15)
+    np.testing.assert_allclose(ref.radar_jacobian([8750.0, -300.0, 1e-3]), [[0.6, 0.0, 0.0]], rtol=1e-14)
+    np.testing.assert_allclose(ref.radar_jacobian([1250.0, -300.0, 1e-3]), [[-0.6, 0.0, 0.0]], rtol=1e-14)
+
+
+def test_radar_jacobian_matches_finite_differences() -> None:
+    rng = np.random.default_rng(3)
+    for _ in range(30):
+        x = np.array([rng.uniform(0, 20000), rng.uniform(-800, -50), rng.uniform(1e-4, 3e-3)])
+        assert ref.radar_predict(x).shape == (1,)
+        J = ref.radar_jacobian(x)
+        assert J.shape == (1, 3)
+        np.testing.assert_allclose(J, central_difference_jacobian(ref.radar_predict, x), rtol=1e-6, atol=1e-9)
+
+
+# ---------------------------------------------------------------------------------------------
+# Blank 3: marginal
+# ---------------------------------------------------------------------------------------------
+def test_marginal_of_head_is_top_left_block() -> None:
+    rng = np.random.default_rng(4)
+    S = random_upper_sqrt(rng, 5)
+    mu = rng.standard_normal(5)
+    mu_a, S_a = ref.marginal(mu, S, [0, 1])
+    np.testing.assert_array_equal(mu_a, mu[:2])
+    # (19): S_a = S1 up to the signs of its rows
+    np.testing.assert_allclose(np.abs(S_a), np.abs(S[:2, :2]), rtol=1e-12)
+
+
+def test_marginal_handout_example_index_order() -> None:
+    # the handout's example I = [3 5 1] (1-based) -> [2, 4, 0]
+    rng = np.random.default_rng(5)
+    S = random_upper_sqrt(rng, 5)
+    mu = np.arange(1.0, 6.0)
+    P = S.T @ S
+    mu_I, S_I = ref.marginal(mu, S, [2, 4, 0])
+    np.testing.assert_array_equal(mu_I, [3.0, 5.0, 1.0])
+    assert_upper_triangular(S_I)
+    np.testing.assert_allclose(S_I.T @ S_I, P[np.ix_([2, 4, 0], [2, 4, 0])], rtol=1e-12)
+
+
+@pytest.mark.parametrize("n", range(2, 8))
+def test_marginal_random_index_sets(n: int) -> None:
+    rng = np.random.default_rng(100 + n)
+    S = random_upper_sqrt(rng, n, scales=10.0 ** rng.uniform(-3, 3, n))
+    mu = rng.standard_normal(n)
+    P = S.T @ S
+    for name, idx in index_sets(rng, n) + [("all, permuted", rng.permutation(n))]:
+        mu_I, S_I = ref.marginal(mu, S, idx)
+        assert S_I.shape == (idx.size, idx.size), name
+        assert_upper_triangular(S_I)
+        np.testing.assert_array_equal(mu_I, mu[idx], err_msg=name)
+        assert_cov_close(S_I.T @ S_I, P[np.ix_(idx, idx)], rtol=1e-12)
+
+
+# ---------------------------------------------------------------------------------------------
+# Blank 4: conditional
+# ---------------------------------------------------------------------------------------------
+def textbook_conditional(mu, P, a, b, x_b):
+    """Equation (23): mu_a + P_ab P_bb^-1 (x_b - mu_b), P_aa - P_ab P_bb^-1 P_ba (dense solves)."""
+    P_ab, P_bb = P[np.ix_(a, b)], P[np.ix_(b, b)]
+    gain_t = np.linalg.solve(P_bb, P_ab.T)  # (P_ab P_bb^-1)^T
+    return mu[a] + gain_t.T @ (x_b - mu[b]), P[np.ix_(a, a)] - gain_t.T @ P_ab.T
+
+
+def test_conditional_small_case_by_hand() -> None:
+    # P = [[4, 2], [2, 3]], mu = [1, 2]; x_0 | x_1 = 5: mean 1 + 2/3 (5 - 2) = 3, var 4 - 4/3 = 8/3
+    S = np.linalg.cholesky(np.array([[4.0, 2.0], [2.0, 3.0]])).T
+    mu_c, S_c = ref.conditional(np.array([1.0, 2.0]), S, [0], [1], np.array([5.0]))
+    np.testing.assert_allclose(mu_c, [3.0], rtol=1e-14)
+    np.testing.assert_allclose(S_c.T @ S_c, [[8.0 / 3.0]], rtol=1e-14)
+
+
+def test_conditional_tail_given_head_is_equation_25() -> None:
+    rng = np.random.default_rng(6)
+    S = random_upper_sqrt(rng, 5)
+    mu = rng.standard_normal(5)
+    x_a = rng.standard_normal(2)
+    mu_c, S_c = ref.conditional(mu, S, [2, 3, 4], [0, 1], x_a)
+    # (25): mu_b + S2^T S1^-T (x_a - mu_a), S_{b|a} = S3 (up to row signs)
+    S1, S2, S3 = S[:2, :2], S[:2, 2:], S[2:, 2:]
+    np.testing.assert_allclose(mu_c, mu[2:] + S2.T @ np.linalg.solve(S1.T, x_a - mu[:2]), rtol=1e-12)
+    np.testing.assert_allclose(np.abs(S_c), np.abs(S3), rtol=1e-12)
+
+
+@pytest.mark.parametrize("n", range(2, 8))
+def test_conditional_matches_textbook_formulas(n: int) -> None:
+    rng = np.random.default_rng(200 + n)
+    S = random_upper_sqrt(rng, n, scales=10.0 ** rng.uniform(-3, 3, n))
+    mu = rng.standard_normal(n) * np.diag(S)
+    P = S.T @ S
+    for name, b in index_sets(rng, n):
+        a = np.setdiff1d(np.arange(n), b)
+        a = rng.permutation(a)  # any order of A, too
+        x_b = mu[b] + rng.standard_normal(b.size) * np.sqrt(np.diag(P)[b])
+        mu_c, S_c = ref.conditional(mu, S, a, b, x_b)
+        mu_exp, P_exp = textbook_conditional(mu, P, a, b, x_b)
+        assert S_c.shape == (a.size, a.size), name
+        assert_upper_triangular(S_c)
+        np.testing.assert_allclose(mu_c, mu_exp, rtol=1e-9, atol=1e-9 * np.sqrt(np.diag(P)[a]).max(), err_msg=name)
+        assert_cov_close(S_c.T @ S_c, P_exp, rtol=1e-9)
+        # conditioning on the mean leaves the mean of A where it was
+        mu_0, _ = ref.conditional(mu, S, a, b, mu[b])
+        np.testing.assert_allclose(mu_0, mu[a], rtol=1e-12, atol=1e-12 * np.abs(mu).max())
+
+
+# ---------------------------------------------------------------------------------------------
+# Blank 5: the plot
+# ---------------------------------------------------------------------------------------------
+def test_plot_ballistic_coefficient_draws_truth_estimate_and_3_sigma_band() -> None:
+    rng = np.random.default_rng(7)
+    t = np.linspace(0, 5, 51)
+    c_true = 1e-3 + 1e-5 * rng.standard_normal(51)
+    c_mean = 1e-3 + 1e-4 * rng.standard_normal(51)
+    c_std = rng.uniform(1e-5, 1e-4, 51)
+    fig, ax = plt.subplots()
+    try:
+        assert ref.plot_ballistic_coefficient(ax, t, c_true, c_mean, c_std) is ax
+        lines = {line.get_label(): line for line in ax.get_lines()}
+        np.testing.assert_array_equal(lines["truth"].get_ydata(), c_true)
+        np.testing.assert_array_equal(lines["estimate"].get_ydata(), c_mean)
+        bands = [col for col in ax.collections if isinstance(col, PolyCollection)]
+        assert len(bands) == 1
+        y = bands[0].get_paths()[0].vertices[:, 1]
+        assert y.min() == pytest.approx(np.min(c_mean - 3 * c_std), rel=1e-12)
+        assert y.max() == pytest.approx(np.max(c_mean + 3 * c_std), rel=1e-12)
+        assert "99.7" in bands[0].get_label()
+        assert "[s]" in ax.get_xlabel() and "c" in ax.get_ylabel() and ax.get_title()
+        assert len(ax.get_legend().get_texts()) == 3
+    finally:
+        plt.close(fig)
+
+
+def test_figure_has_three_panels_with_bands(data, result) -> None:
+    fig, axes = starship.plot_results(data, result, ref.marginal, ref.plot_ballistic_coefficient)
+    try:
+        assert len(axes) == 3
+        for ax in axes:
+            assert ax.get_ylabel() and ax.get_title() and ax.get_legend() is not None
+            assert len(ax.get_lines()) == 2 and len(ax.collections) == 1
+    finally:
+        plt.close(fig)
+
+
+# ---------------------------------------------------------------------------------------------
+# The framework: time and measurement updates against a dense-covariance EKF
+# ---------------------------------------------------------------------------------------------
+@pytest.mark.parametrize("dt", [0.1, 0.05, 1.0])
+def test_time_update_equals_dense_ekf(dt: float) -> None:
+    rng = np.random.default_rng(8)
+    Q = np.diag([0.0, 1e-20, 25e-12])  # equation (12)
+    cases = [(starship.MU0, starship.S0)]
+    for _ in range(5):
+        mu = np.array([rng.uniform(3000, 15000), rng.uniform(-500, -150), rng.uniform(5e-4, 2e-3)])
+        cases.append((mu, random_upper_sqrt(rng, 3, scales=np.array([30.0, 3.0, 3e-5]))))
+    for mu, S in cases:
+        mu_sr, S_sr = starship.time_update(mu, S, dt, ref.ballistic_dynamics, ref.ballistic_jacobian)
+        # dense EKF: z = [x; w] ~ N([mu; 0], blkdiag(P, Q dt)), x+ = RK4(z), P+ = J Pz J^T
+        z = np.concatenate([mu, np.zeros(3)])
+        J = complex_step_jacobian(lambda zz: rk4_oracle(zz, dt), z)
+        P_dense = J @ np.block([[S.T @ S, np.zeros((3, 3))], [np.zeros((3, 3)), Q * dt]]) @ J.T
+        np.testing.assert_allclose(mu_sr, rk4_oracle(z, dt), rtol=1e-12)
+        assert_upper_triangular(S_sr)
+        assert_cov_close(S_sr.T @ S_sr, P_dense, rtol=1e-9)
+
+
+def test_time_update_skipped_when_dt_is_zero() -> None:
+    mu, S = starship.time_update(starship.MU0, starship.S0, 0.0, ref.ballistic_dynamics, ref.ballistic_jacobian)
+    np.testing.assert_array_equal(mu, starship.MU0)
+    np.testing.assert_array_equal(S, starship.S0)
+    with pytest.raises(ValueError):
+        starship.time_update(starship.MU0, starship.S0, -0.1, ref.ballistic_dynamics, ref.ballistic_jacobian)
+
+
+def test_measurement_update_equals_dense_kalman_update() -> None:
+    rng = np.random.default_rng(9)
+    for _ in range(10):
+        mu = np.array([rng.uniform(2000, 15000), rng.uniform(-500, -150), rng.uniform(5e-4, 2e-3)])
+        S = random_upper_sqrt(rng, 3, scales=np.array([300.0, 30.0, 3e-4]))
+        P = S.T @ S
+        y = ref.radar_predict(mu) + 100 * rng.standard_normal(1)
+        mu_sr, S_sr = starship.measurement_update(
+            mu, S, y, ref.radar_predict, ref.radar_jacobian, ref.conditional
+        )
+        # Kalman gain and Joseph-form update with H from complex-step differences of (13)
+        H = complex_step_jacobian(lambda x: np.sqrt(RADAR_R1**2 + (x[0] - RADAR_R2) ** 2)[None], mu)
+        innovation_cov = H @ P @ H.T + SIGMA_RANGE**2
+        K = np.linalg.solve(innovation_cov, H @ P).T
+        mu_dense = mu + K @ (y - np.sqrt(RADAR_R1**2 + (mu[0] - RADAR_R2) ** 2))
+        IKH = np.eye(3) - K @ H
+        P_dense = IKH @ P @ IKH.T + SIGMA_RANGE**2 * K @ K.T
+        np.testing.assert_allclose(mu_sr, mu_dense, rtol=1e-9)
+        assert_upper_triangular(S_sr)
+        assert_cov_close(S_sr.T @ S_sr, P_dense, rtol=1e-9)
+
+
+def test_filter_is_consistent_with_the_truth(data, result) -> None:
+    std = starship.marginal_std(result, ref.marginal)
+    np.testing.assert_allclose(std**2, np.einsum("kij,kij->kj", result.S, result.S), rtol=1e-12)
+    errors = np.abs(result.mu - data.truth) / std
+    # a consistent filter keeps nearly every error inside 3 sigma, and ends inside it
+    assert np.mean(errors <= 3, axis=0).min() >= 0.95
+    assert np.all(errors[-1] <= 3)
+
+
+# ---------------------------------------------------------------------------------------------
+# Data and report
+# ---------------------------------------------------------------------------------------------
+def test_shipped_data_rebuilds_bit_for_bit(tmp_path: Path) -> None:
+    [rebuilt] = ref.write_data(tmp_path)
+    assert rebuilt.name == starship.DATA_FILE.name
+    assert rebuilt.read_bytes() == starship.DATA_FILE.read_bytes()
+
+
+def test_shipped_data_format_and_truth(data) -> None:
+    lines = starship.DATA_FILE.read_text().splitlines()
+    assert lines[0] == (
+        "Time [sec],Altitude True [m],Velocity True [m/s],Ballistic Coefficient True [],"
+        "Range True [m],Range measurement [m],"
+    )
+    assert len(lines) == 501 and data.n_lines == 501 and len(data) == 500
+    assert all(line.endswith(",") and line.count(",") == 6 for line in lines)
+    assert data.t[0] == 0.0
+    np.testing.assert_allclose(np.diff(data.t), 0.1, rtol=1e-9)
+    np.testing.assert_array_equal(data.truth[0], [15000.0, -500.0, 0.001])
+    np.testing.assert_allclose(data.range_true, np.hypot(5000.0, data.h - 5000.0), rtol=1e-9)
+    assert 45.0 < np.std(data.range_meas - data.range_true) < 55.0
+    assert abs(np.mean(data.range_meas - data.range_true)) < 3 * 50 / np.sqrt(500)
+    assert np.all(data.v < 0) and np.all(np.diff(data.h) < 0) and data.h[-1] > 0
+
+
+def test_eigen_style_matrix_format_matches_handout() -> None:
+    # the handout's terminal output for mu[0] and P[0]
+    assert starship.format_matrix(starship.MU0) == " 14000\n  -450\n0.0005"
+    assert starship.format_matrix(starship.S0.T @ starship.S0) == (
+        "4.84e+06        0        0\n       0    10000        0\n       0        0    1e-06"
+    )
+    assert starship.format_matrix([2185.37, -152.739, 0.000982013]) == "    2185.37\n   -152.739\n0.000982013"
+
+
+# Regression pin. Provenance: printed by `python -m solutions.reentry_srekf` on the shipped
+# course/data/starship_reentry.csv (seed 20230503) when the data was first built; it is not an
+# independent oracle. The handout's own data gives mu[end] = [2185.37, -152.739, 0.000982013] and
+# P[end] of the same size as these (diagonal 215, 1.57, 4.79e-10).
+PINNED_REPORT = """\
+Found 501 rows within {path}
+Initial state estimate
+mu[0] =
+ 14000
+  -450
+0.0005
+P[0] =
+4.84e+06        0        0
+       0    10000        0
+       0        0    1e-06
+Run filter with 500 steps.
+Final state estimate
+mu[end] =
+   2354.03
+  -149.497
+0.00103922
+P[end] =
+    232.602     10.6467 0.000170708
+    10.6467     1.45696  2.4829e-05
+0.000170708  2.4829e-05 4.89302e-10
+"""
+
+
+def test_report_regression_pin() -> None:
+    path = str(starship.DATA_FILE)
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        ref.main(["--data", path])
+    assert out.getvalue() == f"Reading data from {path}\n" + PINNED_REPORT.format(path=path)
+
+
+def test_command_line_entry_point() -> None:
+    path = "course/data/starship_reentry.csv"
+    done = subprocess.run(
+        [sys.executable, "-m", "solutions.reentry_srekf", "--data", path],
+        cwd=ROOT,
+        capture_output=True,
+        text=True,
+        check=True,
+    )
+    assert done.stdout == f"Reading data from {path}\n" + PINNED_REPORT.format(path=path)
+
+
+def test_course_module_implements_no_blank_and_hides_solutions() -> None:
+    tree = ast.parse(Path(starship.__file__).read_text())
+    defined = {node.name for node in ast.walk(tree) if isinstance(node, (ast.FunctionDef, ast.ClassDef))}
+    assert not defined & set(BLANKS)
+    imported = {
+        alias.name.split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.Import) for alias in node.names
+    } | {(node.module or "").split(".")[0] for node in ast.walk(tree) if isinstance(node, ast.ImportFrom)}
+    assert "solutions" not in imported
+    assert all(hasattr(ref, name) for name in BLANKS)
+
+
+def test_default_load_names_the_shipped_file_portably() -> None:
+    data = starship.load()
+    assert data.path == "course/data/starship_reentry.csv"
+    assert starship.format_report(data, ref.run_reference(data)) + "\n" == (
+        f"Reading data from {data.path}\n" + PINNED_REPORT.format(path=data.path)
+    )
+
+
+# ---------------------------------------------------------------------------------------------
+# The check helpers of course.starship accept right answers and reject wrong ones
+# ---------------------------------------------------------------------------------------------
+def test_check_helpers_accept_right_and_reject_wrong_answers() -> None:
+    rng = np.random.default_rng(10)
+    S = random_upper_sqrt(rng, 4, scales=np.array([1e3, 1.0, 1e-3, 1e-6]))
+    P = S.T @ S
+    starship.check_square_root(-S, P, "S")  # row signs are free
+    starship.check_square_root(np.linalg.cholesky(P).T, P, "S")
+    with pytest.raises(AssertionError, match="upper triangular"):
+        starship.check_square_root(np.linalg.cholesky(P), P, "S")
+    with pytest.raises(AssertionError, match="not a square root"):
+        starship.check_square_root(np.triu(P), P, "S")
+    x = np.array([9000.0, -300.0, 1e-3])
+    starship.check_jacobian(ref.ballistic_jacobian(x), ref.ballistic_dynamics, x, "J")
+    with pytest.raises(AssertionError, match="finite differences"):
+        starship.check_jacobian(ref.ballistic_jacobian(x).T, ref.ballistic_dynamics, x, "J")
+    with pytest.raises(AssertionError, match="shape"):
+        starship.check_jacobian(ref.radar_jacobian(x).T, ref.radar_predict, x, "H")
+
+    t = np.linspace(0.0, 2.0, 9)
+    truth, mean, std = 1e-3 + 0 * t, 1e-3 + 1e-5 * np.sin(t), 1e-4 * (1 + t)
+
+    def draw(k: float = 3.0, legend: bool = True, xlabel: str = "Time [s]"):
+        fig, ax = plt.subplots()
+        ax.fill_between(t, mean - k * std, mean + k * std, label="band")
+        ax.plot(t, truth, label="truth")
+        ax.plot(t, mean, label="estimate")
+        ax.set(xlabel=xlabel, ylabel="c [m²/kg]")
+        if legend:
+            ax.legend()
+        return fig, ax
+
+    try:
+        fig, ax = draw()
+        starship.check_band_plot(ax, ax, t, truth, mean, std, "plot")
+        with pytest.raises(AssertionError, match="return ax"):
+            starship.check_band_plot(ax, None, t, truth, mean, std, "plot")
+        fig, ax = draw(k=2.0)
+        with pytest.raises(AssertionError, match="half-width is 2 std"):
+            starship.check_band_plot(ax, ax, t, truth, mean, std, "plot")
+        fig, ax = draw(legend=False)
+        with pytest.raises(AssertionError, match="legend"):
+            starship.check_band_plot(ax, ax, t, truth, mean, std, "plot")
+        fig, ax = draw(xlabel="Time")
+        with pytest.raises(AssertionError, match="unit"):
+            starship.check_band_plot(ax, ax, t, truth, mean, std, "plot")
+    finally:
+        plt.close("all")
