@@ -8,7 +8,7 @@ refuses too.
 
 from __future__ import annotations
 
-from jupyter_client.utils import ensure_async
+from jupyter_core.utils import ensure_async, run_sync
 from nbgrader.preprocessors import Execute
 
 PROBE = "__import__('solutions')"
@@ -35,3 +35,6 @@ class ExecuteWithReference(Execute):
                 "nbgrader_config.py puts the root on the kernel's PYTHONPATH."
             )
         return kc
+
+    # nbclient binds the synchronous twin to the base class's coroutine; bind it to ours.
+    start_new_kernel_client = run_sync(async_start_new_kernel_client)

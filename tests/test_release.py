@@ -1,0 +1,120 @@
+"""Release hygiene: release/ is in sync with source/, and nothing students get leaks the answers."""
+
+import filecmp
+import json
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import nbformat
+import pytest
+
+from autograder import cells, data, grading, leaks
+from autograder.bundle import LeakFound, write_bundle
+from autograder.labs import ROOT, all_labs
+from over_labs import over_labs
+
+
+def _normalised(path: Path) -> dict:
+    return json.loads(json.dumps(nbformat.read(path, as_version=4)))
+
+
+def test_release_is_in_sync_with_source(tmp_path):
+    grading.generate_release(all_labs(), tmp_path)
+    for lab in all_labs():
+        fresh = tmp_path / "release" / lab.id / lab.notebook_name
+        assert _normalised(fresh) == _normalised(lab.release_notebook), (
+            f"release/{lab.id} is stale: run `python -m autograder release` and commit it"
+        )
+    shipped = sorted(p.relative_to(ROOT / "release") for p in (ROOT / "release").rglob("*") if p.is_file())
+    generated = sorted(p.relative_to(tmp_path / "release") for p in (tmp_path / "release").rglob("*") if p.is_file())
+    assert shipped == generated
+
+
+def test_release_has_no_leaks():
+    assert leaks.find_leaks(ROOT / "release") == []
+
+
+@over_labs
+def test_release_keeps_every_blank_as_a_stub_and_every_test_cell(lab):
+    release = cells.read(lab.release_notebook)
+    for cell in release.cells:
+        if cells.is_code_answer(cell):
+            assert 'raise NotImplementedError("Not written yet' in cell.source, cells.grade_id(cell)
+        if cells.is_autograded_test(cell):
+            assert "check_" not in cell.source, f"{cells.grade_id(cell)} still shows its hidden tests"
+    written = [c for c in release.cells if cells.is_answer(c) and c.cell_type == "markdown"]
+    assert all(c.source == "YOUR ANSWER HERE" for c in written), "model answers and rubrics are stripped"
+
+
+def test_student_bundle_has_no_leaks_and_installs_nothing_hidden(tmp_path):
+    bundle = write_bundle(tmp_path / "bundle")
+    assert sorted(p.name for p in bundle.iterdir()) == sorted(
+        ["release", "course", "environment.txt", "pyproject.toml", "LICENSE", "README.md"]
+    )
+    assert leaks.find_leaks(bundle) == []
+    assert not (bundle / "solutions").exists() and not (bundle / "autograder").exists()
+
+
+def test_bundle_refuses_a_tree_with_a_leak(tmp_path, monkeypatch):
+    planted = tmp_path / "course_with_answer"
+    planted.mkdir()
+    (planted / "helpers.py").write_text("from solutions.train_kf import predict\n")
+    with pytest.raises(LeakFound, match="an import of the reference"):
+        from autograder.bundle import raise_on_leaks
+
+        raise_on_leaks(planted)
+
+
+REFERENCE_PREDICT = '''
+def forecast(x, B, A, Q):
+    """Renamed, with a new docstring: still the reference's body."""
+    # x^f_{t+1} = A x_t
+    x_f = A @ x
+    # B_{t+1} = A B_t A^T + Q
+    B_f = A @ B @ A.T + Q
+    return x_f, B_f
+'''
+
+
+@pytest.mark.parametrize(
+    "text, what",
+    [
+        (REFERENCE_PREDICT, "has the body of solutions/train_kf.py:predict"),
+        ("x = 1\n### BEGIN SOLUTION\n", "a solution delimiter"),
+        ("### BEGIN HIDDEN TESTS\n", "a hidden-test delimiter"),
+        ("import solutions\n", "an import of the reference"),
+        ("   from autograder.hidden_tests.train_kf import check_predict\n", "an import of the reference"),
+        ("mod = __import__('solutions')\n", "a reference to the hidden packages"),
+        ("open('../../solutions/train_kf.py')\n", "a reference to the hidden packages"),
+    ],
+)
+def test_leak_detector_finds_planted_leaks(tmp_path, text, what):
+    (tmp_path / "planted.py").write_text(text)
+    found = leaks.find_leaks(tmp_path)
+    assert any(what in str(leak) for leak in found), found
+
+
+def test_leak_detector_finds_a_reference_body_in_a_notebook(tmp_path):
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("%xmode Minimal\n" + REFERENCE_PREDICT)])
+    nbformat.write(nb, tmp_path / "lab.ipynb")
+    assert [str(leak) for leak in leaks.find_leaks(tmp_path)] == [
+        "lab.ipynb: function forecast has the body of solutions/train_kf.py:predict"
+    ]
+
+
+def test_course_implements_no_blank():
+    assert leaks.blanks_in_course() == []
+
+
+def test_student_environment_cannot_import_the_hidden_packages(tmp_path):
+    # Outside the course root and without the grader's PYTHONPATH, as in a student's environment.
+    env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    probe = "import importlib.util as u; print([u.find_spec(m) is None for m in ('solutions', 'autograder', 'course')])"
+    out = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=env, capture_output=True, text=True, check=True)
+    assert out.stdout.strip() == "[True, True, False]", "solutions and autograder hidden; course installed"
+
+
+def test_shipped_data_is_rebuilt_bit_for_bit():
+    assert data.stale_files() == []
