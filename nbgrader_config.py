@@ -20,6 +20,7 @@ os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), os.environ.get
 os.environ["PATH"] = os.pathsep.join((os.path.dirname(sys.executable), os.environ.get("PATH", "")))
 
 from autograder.execute import ExecuteWithReference  # noqa: E402
+from course.checks import NOT_WRITTEN  # noqa: E402
 from nbconvert.preprocessors import ClearMetadataPreprocessor, CSSHTMLHeaderPreprocessor  # noqa: E402
 from nbgrader.preprocessors import (  # noqa: E402
     AssignLatePenalties,
@@ -36,9 +37,8 @@ c = get_config()  # noqa: F821 (provided by traitlets when it loads this file)
 c.CourseDirectory.course_id = "estimation-lab-kit"
 
 # What students see in place of the model answers.
-c.ClearSolutions.code_stub = {
-    "python": '# YOUR CODE HERE\nraise NotImplementedError("Not written yet: replace this line with your code.")'
-}
+# `course.checks.require` recognises a stub by its message.
+c.ClearSolutions.code_stub = {"python": f'# YOUR CODE HERE\nraise NotImplementedError("{NOT_WRITTEN}")'}
 c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
 
 # Grading. A deleted or edited test cell is restored from the gradebook before grading, and the

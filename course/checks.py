@@ -7,9 +7,29 @@ compute a blank's answer.
 
 from __future__ import annotations
 
-from typing import Any
+from typing import Any, Callable
 
 import numpy as np
+
+NOT_WRITTEN = "Not written yet: replace this line with your code."
+"""The message of the stub that stands in a blank until you write it."""
+
+
+class NotWrittenYet(Exception):
+    """A cell needs a blank that still holds its stub."""
+
+
+def require(*functions: Callable) -> None:
+    """Stop a cell early, with a clear message, if a blank it needs is not written yet."""
+    missing = [f.__name__ for f in functions if NOT_WRITTEN in getattr(getattr(f, "__code__", None), "co_consts", ())]
+    if missing:
+        names = [f"{name}()" for name in missing]
+        listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+        it, its, cell = ("it", "its", "cell") if len(names) == 1 else ("them", "their", "cells")
+        raise NotWrittenYet(
+            f"This cell needs {listed}, which you have not written yet. Write {it} in {its} {cell} above "
+            f"(replace the line that raises NotImplementedError), run {it}, then run this cell again."
+        )
 
 
 def check_array(value: Any, name: str, shape: tuple[int, ...], hint: str = "") -> np.ndarray:

@@ -1,0 +1,64 @@
+"""The check helpers that students see: they catch what they claim to, with useful messages."""
+
+import numpy as np
+import pytest
+
+from autograder import cells
+from course.checks import NotWrittenYet, check_array, check_close, check_pair, check_symmetric, random_spd, require
+from over_labs import over_labs
+
+
+@over_labs
+def test_require_recognises_every_stub_that_nbgrader_generates(lab):
+    for cell in cells.read(lab.release_notebook).cells:
+        if cells.is_code_answer(cell):
+            namespace = {}
+            exec(cell.source, namespace)
+            [func] = [v for k, v in namespace.items() if callable(v) and k == cells.grade_id(cell)]
+            with pytest.raises(NotWrittenYet, match=rf"needs {func.__name__}\(\), which you have not written yet"):
+                require(func)
+
+
+def test_require_lets_written_functions_through_and_lists_every_missing_one():
+    def stub_a():
+        raise NotImplementedError("Not written yet: replace this line with your code.")
+
+    def stub_b():
+        raise NotImplementedError("Not written yet: replace this line with your code.")
+
+    def written():
+        return 1
+
+    require(written)
+    with pytest.raises(NotWrittenYet, match=r"needs stub_a\(\) and stub_b\(\), .* Write them in their cells"):
+        require(stub_a, written, stub_b)
+
+
+def test_check_close_shows_expected_values_only_when_asked():
+    with pytest.raises(AssertionError, match=r"expected\n\[1\. 2\.\]\nbut got\n\[1\. 3\.\]\. Hint"):
+        check_close([1.0, 3.0], [1.0, 2.0], "x", "Hint")
+    with pytest.raises(AssertionError) as hidden:
+        check_close([1.0, 3.0], [1.0, 2.0], "x", show_expected=False)
+    assert "largest difference from the reference is 1" in str(hidden.value) and "2." not in str(hidden.value)
+    check_close([1.0, 2.0 + 1e-12], [1.0, 2.0], "x")
+
+
+def test_shape_and_pair_checks_say_what_was_wrong():
+    with pytest.raises(AssertionError, match=r"should have shape \(2, 2\), but it has shape \(2,\)"):
+        check_array(np.zeros(2), "B", (2, 2))
+    with pytest.raises(AssertionError, match="is a tuple of 2 items"):
+        check_array((np.zeros(2), np.eye(2)), "x", (2,))
+    with pytest.raises(AssertionError, match="NaN or infinite"):
+        check_array(np.array([np.nan, 1.0]), "x", (2,))
+    with pytest.raises(AssertionError, match=r"should return two things, \(x_f, B_f\)"):
+        check_pair(np.zeros(2), "predict", "x_f", "B_f")
+
+
+def test_symmetry_check_and_random_spd():
+    rng = np.random.default_rng(0)
+    for n in range(1, 7):
+        S = random_spd(rng, n)
+        check_symmetric(S, "S")
+        assert np.all(np.linalg.eigvalsh(S) > 0)
+    with pytest.raises(AssertionError, match="should be symmetric"):
+        check_symmetric(np.array([[1.0, 0.1], [0.0, 1.0]]), "B")
