@@ -12,6 +12,7 @@ from autograder.labs import ROOT
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m autograder", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
+    commands.add_parser("labs", help="list the labs: blanks, points, visible checks, hidden tests, catalogued mistakes")
     commands.add_parser("release", help="generate release/<lab>/ for every lab with nbgrader, then check it for leaks")
     bundle = commands.add_parser("bundle", help="write the solution-free tree that students get, and check it for leaks")
     bundle.add_argument("out", type=Path, help="a new folder")
@@ -25,7 +26,12 @@ def main(argv: list[str] | None = None) -> int:
     data.add_argument("--check", action="store_true", help="only check that a rebuild reproduces the shipped files")
     args = parser.parse_args(argv)
 
-    if args.command == "release":
+    if args.command == "labs":
+        from autograder.inventory import print_inventory
+        from autograder.labs import all_labs
+
+        print_inventory(all_labs())
+    elif args.command == "release":
         from autograder.release import release_all
 
         release_all()

@@ -1,0 +1,91 @@
+"""What each lab holds: blanks, points, visible checks, hidden tests and catalogued mistakes."""
+
+from __future__ import annotations
+
+import ast
+import importlib
+from dataclasses import dataclass
+
+from autograder import cells
+from autograder.labs import Lab
+from autograder.mistakes import catalogue
+
+CHECK_HELPERS = {"check_array", "check_close", "check_pair", "check_symmetric"}
+
+
+@dataclass(frozen=True)
+class Inventory:
+    lab: str
+    blanks: int
+    autograded_points: float
+    written_answers: int
+    written_points: float
+    visible_checks: int
+    """Calls of the course.checks helpers in the visible-check cells."""
+    hidden_tests: int
+    """check_<blank> functions, each over several random cases."""
+    hidden_assertions: int
+    """Check-helper calls that the hidden tests make when they grade the reference."""
+    mistakes: int
+
+
+def _helper_calls(code: str) -> int:
+    return sum(
+        1
+        for node in ast.walk(ast.parse(code))
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in CHECK_HELPERS
+    )
+
+
+def _assertions_on_reference(lab: Lab, hidden, blanks: list[str]) -> int:
+    """Run the hidden tests on the reference, counting the check-helper calls they make."""
+    count = 0
+    originals = {name: getattr(hidden, name) for name in CHECK_HELPERS if hasattr(hidden, name)}
+
+    def counted(helper):
+        def wrapper(*args, **kwargs):
+            nonlocal count
+            count += 1
+            return helper(*args, **kwargs)
+
+        return wrapper
+
+    try:
+        for name, helper in originals.items():
+            setattr(hidden, name, counted(helper))
+        for name in blanks:
+            getattr(hidden, f"check_{name}")(getattr(lab.solutions(), name))
+    finally:
+        for name, helper in originals.items():
+            setattr(hidden, name, helper)
+    return count
+
+
+def inventory(lab: Lab) -> Inventory:
+    nb = cells.read(lab.source_notebook)
+    blanks = cells.blank_names(nb)
+    points = {cells.grade_id(c): cells.meta(c)["points"] for c in nb.cells if cells.meta(c).get("grade")}
+    written = [c for c in nb.cells if cells.is_answer(c) and c.cell_type == "markdown"]
+    visible = [c for c in nb.cells if "nbgrader" in c.metadata and cells.grade_id(c).startswith("check_")]
+    hidden = importlib.import_module(f"autograder.hidden_tests.{lab.module}")
+    return Inventory(
+        lab=lab.id,
+        blanks=len(blanks),
+        autograded_points=sum(points[f"test_{name}"] for name in blanks),
+        written_answers=len(written),
+        written_points=sum(points[cells.grade_id(c)] for c in written),
+        visible_checks=sum(_helper_calls("\n".join(l for l in c.source.splitlines() if not l.startswith("%"))) for c in visible),
+        hidden_tests=len(blanks),
+        hidden_assertions=_assertions_on_reference(lab, hidden, blanks),
+        mistakes=len(catalogue(lab)),
+    )
+
+
+def print_inventory(labs: list[Lab]) -> None:
+    header = ("lab", "blanks", "auto points", "written answers", "visible checks", "hidden tests", "hidden asserts", "mistakes")
+    print("".join(f"{h:>16}" if k else f"{h:<16}" for k, h in enumerate(header)))
+    for lab in labs:
+        i = inventory(lab)
+        row = (i.lab, i.blanks, f"{i.autograded_points:g}", f"{i.written_answers} ({i.written_points:g} pt)",
+               i.visible_checks, i.hidden_tests, i.hidden_assertions, i.mistakes)
+        print("".join(f"{v:>16}" if k else f"{v:<16}" for k, v in enumerate(row)))
