@@ -76,9 +76,9 @@ def check_kernel_has_reference() -> None:
 
     Raises ReferenceUnavailable (from autograder.execute) if it cannot.
     """
-    course_config()  # loading the course configuration sets the kernel's PYTHONPATH
+    config = course_config()  # loading it also sets the kernel's PYTHONPATH
     with tempfile.TemporaryDirectory() as cwd:
-        ExecuteWithReference().preprocess(nbformat.v4.new_notebook(), {"metadata": {"path": cwd}})
+        ExecuteWithReference(config=config).preprocess(nbformat.v4.new_notebook(), {"metadata": {"path": cwd}})
 
 
 def import_submissions(submissions: Path, workdir: Path) -> dict[str, list[str]]:
