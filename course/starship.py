@@ -318,7 +318,7 @@ def measurement_update(
     )
 
 
-def run_filter(
+def run_square_root_ekf(
     data: ReentryData,
     dynamics: Dynamics,
     jacobian: Jacobian,
@@ -523,11 +523,15 @@ def check_band_plot(
         positive = std > 0
         reach = np.median(((upper - lower) / 2)[positive] / std[positive]) if np.any(positive) else np.nan
         centre = np.median(np.abs((upper + lower) / 2 - mean) / np.maximum(std, 1e-300))
+        if centre > 1e-6:
+            advice = "It is not centred on the estimate: draw it around c_mean."
+        elif reach < 0.5:
+            advice = "Is the band built from the variance? c_std is already the standard deviation."
+        else:
+            advice = f"A 99.7% region of a Gaussian is {n_sigma:g} standard deviations either side of the mean."
         raise AssertionError(
-            f"{name}: the band should run from mean - {n_sigma:g} std to mean + {n_sigma:g} std (the 99.7% region), "
-            f"but its half-width is {reach:.3g} std"
-            + (" and it is not centred on the estimate" if centre > 1e-6 else "")
-            + ". Use c_std, the standard deviation, not the variance."
+            f"{name}: the band should run from mean - {n_sigma:g} std to mean + {n_sigma:g} std (the 99.7% "
+            f"region), but its half-width is {reach:.3g} std. {advice}"
         )
     if not ax.get_ylabel():
         raise AssertionError(f"{name}: label the y axis with the quantity and its unit, e.g. ax.set_ylabel(...).")

@@ -81,9 +81,9 @@ def radar_predict(x: ArrayLike) -> Vector:
 def radar_jacobian(x: ArrayLike) -> Matrix:
     """Jacobian of equation (13) with respect to x = [h, v, c], shape (1, 3)."""
     h = float(np.asarray(x, dtype=float)[0])
-    rng = np.hypot(RADAR_R1, h - RADAR_R2)
+    h_rng = np.hypot(RADAR_R1, h - RADAR_R2)
     # d h_rng / dh = (h - r2) / h_rng; the range does not depend on v or c
-    return np.array([[(h - RADAR_R2) / rng, 0.0, 0.0]])
+    return np.array([[(h - RADAR_R2) / h_rng, 0.0, 0.0]])
 
 
 # =============================================================================================
@@ -151,7 +151,7 @@ def plot_ballistic_coefficient(
 # =============================================================================================
 def run_reference(data: starship.ReentryData) -> starship.FilterResult:
     """The course framework run with the reference blanks."""
-    return starship.run_filter(data, ballistic_dynamics, ballistic_jacobian, radar_predict, radar_jacobian, conditional)
+    return starship.run_square_root_ekf(data, ballistic_dynamics, ballistic_jacobian, radar_predict, radar_jacobian, conditional)
 
 
 DATA_SEED: int = 20230503  #: seed of the shipped data file

@@ -1,4 +1,4 @@
-"""Shared test set-up.
+"""Shared test set-up (at the root, so that `pytest source/<lab>` alone gets it too).
 
 The solved notebooks (nbval) and the grading kernels run hidden tests that import `solutions` and
 `autograder`, which are not installed. Kernels inherit PYTHONPATH, so put the course root on it,
