@@ -26,14 +26,14 @@ CSV_HEADER = "minute,x_true_mi,v_true_mph,x_gps_mi,v_gps_mph"
 RunFilter = Callable[..., tuple[np.ndarray, np.ndarray]]
 
 
-def transition_matrix(dt_min: float = 1.0) -> np.ndarray:
-    """The model matrix A (2 x 2) for a step of ``dt_min`` minutes."""
+def model_matrix(dt_min: float = 1.0) -> np.ndarray:
+    """The train model's matrix A (2 x 2) for a step of ``dt_min`` minutes."""
     # x_{t+1} = x_t + (dt/60) v_t,  v_{t+1} = v_t
     return np.array([[1.0, dt_min / MINUTES_PER_HOUR], [0.0, 1.0]])
 
 
-def observation_matrix() -> np.ndarray:
-    """The observation operator H (2 x 2): the GPS reports position and velocity directly."""
+def gps_operator() -> np.ndarray:
+    """The GPS observation operator H (2 x 2): it reports position and velocity directly."""
     return np.eye(2)
 
 
@@ -187,7 +187,7 @@ def covariance_scaling_experiment(
     filter's assumptions change. ``run_filter(y, x0, B0, A, Q, H, R)`` is your function and
     ``Q`` (2 x 2) your process noise for one-minute steps.
     """
-    A, H, R = transition_matrix(), observation_matrix(), gps_covariance()
+    A, H, R = model_matrix(), gps_operator(), gps_covariance()
     x0, B0 = initial_belief()
     hours = [simulate(n_minutes, rng) for _ in range(n_runs)]
     errors = np.zeros((2, len(scales), 2))

@@ -47,7 +47,7 @@ def test_process_noise_scales_with_the_step_length():
 def test_filter_matches_filterpy_on_the_shipped_data():
     data = train.load()
     x0, B0 = train.initial_belief()
-    A, H, R, Q = train.transition_matrix(), train.observation_matrix(), train.gps_covariance(), ref.process_noise(15.0)
+    A, H, R, Q = train.model_matrix(), train.gps_operator(), train.gps_covariance(), ref.process_noise(15.0)
     xs, Bs = ref.run_filter(data.gps, x0, B0, A, Q, H, R)
     kf = KalmanFilter(dim_x=2, dim_z=2)
     kf.x, kf.P, kf.F, kf.H, kf.R, kf.Q = x0.copy(), B0.copy(), A, H, R, Q
@@ -78,7 +78,7 @@ def test_filter_beats_gps_and_is_consistent_over_many_hours():
     # Over 200 simulated hours the filter's position error is far below the GPS error, and its
     # normalised estimation error squared averages the state dimension (a consistent filter).
     rng = np.random.default_rng(11)
-    A, H, R, Q = train.transition_matrix(), train.observation_matrix(), train.gps_covariance(), ref.process_noise(15.0)
+    A, H, R, Q = train.model_matrix(), train.gps_operator(), train.gps_covariance(), ref.process_noise(15.0)
     x0, B0 = train.initial_belief()
     nees, kf_err, gps_err = [], [], []
     for _ in range(200):

@@ -1,0 +1,385 @@
+"""The castaway-bob reference, the shipped flow and Bob's drift, against independent oracles.
+
+Oracles: explicit-inverse textbook formulas, FilterPy's KalmanFilter, batch Gaussian
+conditioning of a whole trajectory, brute-force sums, SciPy's RegularGridInterpolator, and
+physical facts about the flow (incompressible, a periodic vortex street, ocean speeds).
+"""
+
+from __future__ import annotations
+
+import inspect
+import io
+import zipfile
+
+import numpy as np
+import pytest
+from filterpy.kalman import KalmanFilter
+from scipy.interpolate import RegularGridInterpolator
+
+import solutions.castaway_bob as ref
+from course import ocean
+from course.checks import random_spd
+from solutions import castaway_bob_flow
+
+
+@pytest.fixture(scope="module")
+def flow() -> ocean.Flow:
+    return ocean.load()
+
+
+# ------------------------------------------------------------------------------------------------
+# Blank 1: A and H
+# ------------------------------------------------------------------------------------------------
+
+
+def test_transition_matrix_moves_position_by_dt_times_velocity_and_damps_velocity():
+    dt, alpha = 60.0, 0.9
+    A = ref.transition_matrix(dt, alpha)
+    state = np.array([100.0, -20.0, 0.3, -0.1])
+    np.testing.assert_allclose(A @ state, [100.0 + 18.0, -20.0 - 6.0, 0.27, -0.09])
+    assert sorted(np.linalg.eigvals(A).real) == pytest.approx([alpha, alpha, 1.0, 1.0])
+
+
+def test_transition_matrices_compose_over_two_steps_without_damping():
+    # with alpha = 1 the model is exact kinematics: two steps of dt are one step of 2 dt
+    np.testing.assert_allclose(ref.transition_matrix(30.0, 1.0) @ ref.transition_matrix(30.0, 1.0),
+                               ref.transition_matrix(60.0, 1.0))
+
+
+def test_observation_matrix_picks_the_position():
+    H = ref.observation_matrix()
+    assert H.shape == (2, 4)
+    np.testing.assert_array_equal(H @ np.array([1.0, 2.0, 3.0, 4.0]), [1.0, 2.0])
+    np.testing.assert_array_equal(H @ H.T, np.eye(2))
+
+
+# ------------------------------------------------------------------------------------------------
+# Blank 2: the fixed-lag mean
+# ------------------------------------------------------------------------------------------------
+
+
+@pytest.mark.parametrize("order", [1, 2, 3, 5])
+def test_fixed_lag_mean_equals_brute_force_sums(order):
+    y = np.random.default_rng(order).normal(size=(17, 2))
+    expected = []
+    for n in range(17):
+        first = max(0, n - order + 1)
+        expected.append(sum(y[k] for k in range(first, n + 1)) / (n + 1 - first))
+    np.testing.assert_allclose(ref.fixed_lag_mean(y, order=order), expected, rtol=1e-12)
+
+
+def test_fixed_lag_mean_is_causal_and_of_order_one_is_the_fixes():
+    y = np.random.default_rng(1).normal(size=(12, 2))
+    changed = y.copy()
+    changed[8:] += 100.0
+    np.testing.assert_array_equal(ref.fixed_lag_mean(y)[:8], ref.fixed_lag_mean(changed)[:8])
+    np.testing.assert_array_equal(ref.fixed_lag_mean(y, order=1), y)
+
+
+# ------------------------------------------------------------------------------------------------
+# Blank 3: the gain (18) and the Joseph form (13)
+# ------------------------------------------------------------------------------------------------
+
+SIZES = [(1, 1), (2, 2), (4, 2), (5, 3), (6, 1)]
+
+
+@pytest.mark.parametrize("n, m", SIZES)
+def test_gain_equals_the_explicit_inverse_formula(n, m):
+    rng = np.random.default_rng(10 * n + m)
+    P, H, R = random_spd(rng, n), rng.standard_normal((m, n)), random_spd(rng, m)
+    explicit = P @ H.T @ np.linalg.inv(H @ P @ H.T + R)
+    np.testing.assert_allclose(ref.kalman_gain(P, H, R), explicit, rtol=1e-10, atol=1e-12)
+
+
+@pytest.mark.parametrize("n, m", SIZES)
+def test_joseph_form_equals_the_simple_form_at_the_optimal_gain_only(n, m):
+    rng = np.random.default_rng(20 * n + m)
+    P, H, R = random_spd(rng, n), rng.standard_normal((m, n)), random_spd(rng, m)
+    K = ref.kalman_gain(P, H, R)
+    simple = (np.eye(n) - K @ H) @ P
+    np.testing.assert_allclose(ref.joseph_covariance(P, K, H, R), simple, rtol=1e-9, atol=1e-10)
+    # a suboptimal gain: the simple form is wrong there, the Joseph form is the true covariance
+    K_bad = K + 0.3 * rng.standard_normal(K.shape)
+    joseph = ref.joseph_covariance(P, K_bad, H, R)
+    assert not np.allclose(joseph, (np.eye(n) - K_bad @ H) @ P)
+    np.testing.assert_allclose(joseph, joseph.T, atol=1e-10)
+    assert np.linalg.eigvalsh(joseph).min() > 0
+
+
+def test_joseph_form_is_the_covariance_of_the_updated_error_by_monte_carlo():
+    # x ~ N(0, P), y = H x + v, v ~ N(0, R); the error of x^ = K y is (I - K H) x - K v
+    rng = np.random.default_rng(5)
+    P, H, R = random_spd(rng, 3), rng.standard_normal((2, 3)), random_spd(rng, 2)
+    K = rng.standard_normal((3, 2))
+    x = rng.multivariate_normal(np.zeros(3), P, size=200_000)
+    v = rng.multivariate_normal(np.zeros(2), R, size=200_000)
+    error = x - (x @ H.T + v) @ K.T
+    np.testing.assert_allclose(np.cov(error.T), ref.joseph_covariance(P, K, H, R), rtol=0.03, atol=0.03)
+
+
+@pytest.mark.parametrize("n, m", SIZES)
+def test_the_gain_minimises_the_trace_of_the_joseph_form(n, m):
+    rng = np.random.default_rng(30 * n + m)
+    P, H, R = random_spd(rng, n), rng.standard_normal((m, n)), random_spd(rng, m)
+    K = ref.kalman_gain(P, H, R)
+    best = np.trace(ref.joseph_covariance(P, K, H, R))
+    for scale in (1e-3, 1e-1, 1.0):
+        for _ in range(20):
+            E = scale * rng.standard_normal(K.shape)
+            # tr P^(K + E) - tr P^(K) = tr(E S E^T) > 0 exactly, S = H P H^T + R
+            gap = np.trace(ref.joseph_covariance(P, K + E, H, R)) - best
+            np.testing.assert_allclose(gap, np.trace(E @ (H @ P @ H.T + R) @ E.T), rtol=1e-6, atol=1e-9)
+            assert gap > 0
+
+
+def test_gain_trace_experiment_in_course_finds_no_better_gain():
+    gaps = ocean.gain_trace_experiment(ref.kalman_gain, ref.joseph_covariance, np.random.default_rng(0), 50, 10)
+    assert gaps.shape == (50, 10) and gaps.min() > 0
+
+
+# ------------------------------------------------------------------------------------------------
+# Blank 4: one step
+# ------------------------------------------------------------------------------------------------
+
+
+def _condition(mean: np.ndarray, cov: np.ndarray, H: np.ndarray, R: np.ndarray, y: np.ndarray):
+    """Posterior of x ~ N(mean, cov) given y = H x + N(0, R), from the joint Gaussian (explicit inverse)."""
+    C_xy = cov @ H.T
+    C_yy = H @ cov @ H.T + R
+    gain = C_xy @ np.linalg.inv(C_yy)
+    return mean + gain @ (y - H @ mean), cov - gain @ C_xy.T
+
+
+@pytest.mark.parametrize("n, m", SIZES)
+@pytest.mark.parametrize("with_input", [False, True])
+def test_kalman_step_is_gaussian_conditioning_of_the_prediction(n, m, with_input):
+    rng = np.random.default_rng(40 * n + m + with_input)
+    x, P, Q = rng.standard_normal(n), random_spd(rng, n), random_spd(rng, n)
+    A, H, R = rng.standard_normal((n, n)), rng.standard_normal((m, n)), random_spd(rng, m)
+    y = rng.standard_normal(m)
+    u = rng.standard_normal(n) if with_input else None
+    x_new, P_new = ref.kalman_step(x, P, y, A, H, Q, R, u=u)
+    mean = A @ x + (u if with_input else 0.0)
+    want_x, want_P = _condition(mean, A @ P @ A.T + Q, H, R, y)
+    np.testing.assert_allclose(x_new, want_x, rtol=1e-9, atol=1e-10)
+    np.testing.assert_allclose(P_new, want_P, rtol=1e-9, atol=1e-10)
+
+
+# ------------------------------------------------------------------------------------------------
+# Blank 5: the two filters
+# ------------------------------------------------------------------------------------------------
+
+
+def test_rank2_last_estimate_is_the_batch_posterior_of_the_whole_random_walk():
+    # Oracle: the positions x_0..x_k given all fixes y_0..y_k at once (flat prior on x_0, random
+    # walk steps N(0, q^2), fixes N(x, r^2)), in information form, each axis on its own:
+    # precision L = I / r^2 + D^T D / q^2 with D the difference operator, mean = L^-1 y / r^2.
+    # The filter's estimate at k is that posterior's last entry.
+    rng = np.random.default_rng(2)
+    T, q, r = 9, 20.0, 50.0
+    y = np.cumsum(rng.normal(0, q, (T, 2)), axis=0) + rng.normal(0, r, (T, 2))
+    xs, Ps = ref.run_rank2(y, sigma_walk=q, sigma_gps=r)
+    for k in range(T):
+        D = np.diff(np.eye(k + 1), axis=0)
+        L = np.eye(k + 1) / r**2 + D.T @ D / q**2
+        mean = np.linalg.solve(L, y[: k + 1] / r**2)
+        np.testing.assert_allclose(xs[k], mean[-1], rtol=1e-10, atol=1e-8)
+        np.testing.assert_allclose(Ps[k], np.linalg.inv(L)[-1, -1] * np.eye(2), rtol=1e-10, atol=1e-8)
+
+
+def _filterpy_rank4(y, flow, t, alpha, sigma_F, sigma_gps, dt):
+    kf = KalmanFilter(dim_x=4, dim_z=2)
+    kf.F = np.array([[1, 0, dt, 0], [0, 1, 0, dt], [0, 0, alpha, 0], [0, 0, 0, alpha]], dtype=float)
+    kf.H = np.array([[1, 0, 0, 0], [0, 1, 0, 0]], dtype=float)
+    kf.Q = np.diag([0.0, 0.0, sigma_F**2, sigma_F**2])
+    kf.R = sigma_gps**2 * np.eye(2)
+    kf.B = np.vstack((dt * np.eye(2), np.zeros((2, 2))))
+    var_w = sigma_F**2 / (1 - alpha**2)
+    kf.x = np.array([y[0, 0], y[0, 1], 0.0, 0.0])
+    kf.P = np.diag([sigma_gps**2, sigma_gps**2, var_w, var_w])
+    xs, Ps = [kf.x.copy()], [kf.P.copy()]
+    for k in range(1, len(y)):
+        kf.predict(u=flow(kf.x[:2], t[k - 1]))
+        kf.update(y[k])
+        xs.append(kf.x.copy())
+        Ps.append(kf.P.copy())
+    return np.array(xs), np.array(Ps)
+
+
+def test_rank4_matches_filterpy_with_the_current_as_control_input(flow):
+    drift = ocean.simulate_drift(flow, np.random.default_rng(11), n_fixes=60)
+    xs, Ps = ref.run_rank4(drift.fixes, flow, drift.t)
+    want_x, want_P = _filterpy_rank4(drift.fixes, flow, drift.t, ocean.ALPHA, ocean.SIGMA_F, ocean.SIGMA_GPS, ocean.DT)
+    np.testing.assert_allclose(xs, want_x, rtol=1e-9, atol=1e-6)
+    np.testing.assert_allclose(Ps, want_P, rtol=1e-9, atol=1e-9)
+
+
+def test_rank4_in_a_uniform_current_is_rank4_in_still_water_seen_from_a_moving_boat():
+    # Galilean check: fixes in a uniform current c are still-water fixes shifted by c t
+    rng = np.random.default_rng(3)
+    c = np.array([0.4, -0.1])
+    t = 60.0 * np.arange(30)
+    still = rng.normal(0, 50, (30, 2)).cumsum(axis=0) * 0.1
+    moving = still + t[:, None] * c
+    xs_moving, P_moving = ref.run_rank4(moving, lambda p, s: c, t)
+    xs_still, P_still = ref.run_rank4(still, lambda p, s: np.zeros(2), t)
+    np.testing.assert_allclose(xs_moving[:, :2] - t[:, None] * c, xs_still[:, :2], atol=1e-8)
+    np.testing.assert_allclose(xs_moving[:, 2:], xs_still[:, 2:], atol=1e-12)
+    np.testing.assert_allclose(P_moving, P_still)
+
+
+def test_filter_defaults_are_bobs_parameters():
+    rank2 = inspect.signature(ref.run_rank2).parameters
+    rank4 = inspect.signature(ref.run_rank4).parameters
+    assert (rank2["sigma_walk"].default, rank2["sigma_gps"].default) == (ocean.SIGMA_WALK, ocean.SIGMA_GPS)
+    assert (rank4["alpha"].default, rank4["sigma_F"].default, rank4["sigma_gps"].default, rank4["dt"].default) == (
+        ocean.ALPHA, ocean.SIGMA_F, ocean.SIGMA_GPS, ocean.DT)
+
+
+def test_filter_covariances_are_symmetric_and_shrink_from_the_gps_covariance():
+    rng = np.random.default_rng(4)
+    y = rng.normal(0, 50, (40, 2))
+    for xs, Ps in (ref.run_rank2(y), ref.run_rank4(y, lambda p, s: np.zeros(2), 60.0 * np.arange(40))):
+        np.testing.assert_allclose(Ps, np.swapaxes(Ps, 1, 2), atol=1e-9)
+        assert np.all(np.linalg.eigvalsh(Ps).min(axis=1) >= 0)
+        assert np.all(Ps[1:, 0, 0] < ocean.SIGMA_GPS**2)
+
+
+# ------------------------------------------------------------------------------------------------
+# Blank 6: RMSE and ellipse area
+# ------------------------------------------------------------------------------------------------
+
+
+def test_track_rmse_on_a_hand_case():
+    truth = np.zeros((4, 2))
+    estimates = np.array([[3.0, 4.0], [0.0, 5.0], [-5.0, 0.0], [1.0, 0.0]])
+    # distances 5, 5, 5, 1: RMSE = sqrt((25 + 25 + 25 + 1) / 4) = sqrt(19)
+    assert ref.track_rmse(estimates, truth) == pytest.approx(np.sqrt(19.0))
+
+
+def test_ellipse_area_matches_the_axes_and_a_monte_carlo_count():
+    # diag(a^2, b^2): the 2-sigma ellipse has semi-axes 2a, 2b
+    assert ref.ellipse_area(np.diag([9.0, 4.0])) == pytest.approx(np.pi * 6.0 * 4.0)
+    rng = np.random.default_rng(6)
+    P = random_spd(rng, 2)
+    areas = ref.ellipse_area(np.stack([P, 4 * P, np.eye(2)]), n_sigma=1.0)
+    assert areas.shape == (3,) and areas[1] == pytest.approx(4 * areas[0])
+    # count grid points inside {d : d^T P^-1 d <= 4}
+    half = 2.5 * np.sqrt(P.diagonal().max())
+    g = np.linspace(-half, half, 801)
+    d = np.stack(np.meshgrid(g, g), axis=-1)
+    inside = np.einsum("...i,ij,...j->...", d, np.linalg.inv(P), d) <= 4.0
+    assert ref.ellipse_area(P) == pytest.approx(inside.mean() * (2 * half) ** 2, rel=0.01)
+
+
+# ------------------------------------------------------------------------------------------------
+# The shipped flow
+# ------------------------------------------------------------------------------------------------
+
+
+def test_flow_interpolation_reproduces_grid_values(flow):
+    rng = np.random.default_rng(8)
+    k, i, j = rng.integers(0, len(flow.t), 50), rng.integers(0, len(flow.x), 50), rng.integers(0, len(flow.y), 50)
+    p = np.column_stack((flow.x[i], flow.y[j]))
+    np.testing.assert_allclose(flow(p, flow.t[k]), flow.velocity[k, i, j], atol=1e-12)
+
+
+def test_flow_interpolation_matches_scipy_regular_grid_interpolator(flow):
+    rng = np.random.default_rng(9)
+    p = np.column_stack((rng.uniform(flow.x[0], flow.x[-1], 500), rng.uniform(flow.y[0], flow.y[-1], 500)))
+    t = rng.uniform(flow.t[0], flow.t[-1], 500)
+    oracle = RegularGridInterpolator((flow.t, flow.x, flow.y), flow.velocity)
+    np.testing.assert_allclose(flow(p, t), oracle(np.column_stack((t, p))), atol=1e-12)
+    # broadcasting: one time for a (5, 7, 2) block of positions
+    block = p[:35].reshape(5, 7, 2)
+    assert flow(block, 1000.0).shape == (5, 7, 2)
+
+
+def test_flow_is_nearly_divergence_free(flow):
+    # centred differences of an incompressible field on this grid: |div u| << |curl u|
+    wake = (np.abs(flow.x[:, None]) > 1.5e3) | (np.abs(flow.y[None, :]) > 1.5e3)  # away from the island's edge
+    for t in flow.t[::10]:
+        div, vort = np.abs(flow.divergence(t))[wake], np.abs(flow.vorticity(t))[wake]
+        assert div.mean() < 0.05 * vort.mean(), (t, div.mean(), vort.mean())
+
+
+def test_flow_has_ocean_speeds_and_a_periodic_vortex_street(flow):
+    speed = np.linalg.norm(flow.velocity, axis=-1)
+    assert 0.6 < speed.max() < 1.0
+    upstream = flow(np.array([-4500.0, 0.0]), flow.t)
+    np.testing.assert_allclose(upstream[:, 0], 0.5, atol=0.05)
+    # cross-stream velocity 5 km behind the island swings from side to side
+    v = flow(np.array([5000.0, 0.0]), flow.t)[:, 1]
+    assert v.max() > 0.1 and v.min() < -0.1
+    ups = np.flatnonzero((v[:-1] < 0) & (v[1:] >= 0))
+    assert len(ups) >= 1
+    crossings = np.flatnonzero(np.sign(v[:-1]) != np.sign(v[1:]))
+    half_periods = np.diff(flow.t[crossings]) / 60.0
+    # Strouhal number f D / U of a Re = 150 wake on this grid: 0.12-0.22, a period of 2.5-4.6 h
+    period_s = 2 * half_periods.mean() * 60.0
+    strouhal = 1000.0 / (0.5 * period_s)
+    assert 0.12 < strouhal < 0.22, strouhal
+
+
+def test_shipped_file_says_how_it_was_built(flow):
+    with np.load(ocean.DATA_FILE) as data:
+        assert int(data["seed"]) == castaway_bob_flow.FLOW_SEED
+        assert float(data["reynolds"]) == castaway_bob_flow.REYNOLDS
+        assert data["velocity_m_s"].dtype == np.float16
+        assert "phiflow" in str(data["solver"])
+    assert flow.velocity.shape == (castaway_bob_flow.N_SNAPSHOTS, 120, 50, 2)
+    np.testing.assert_allclose(np.diff(flow.t), 360.0)
+
+
+def test_the_file_writer_is_a_function_of_the_arrays(tmp_path):
+    # rewriting the shipped arrays gives the shipped bytes: no timestamps, fixed order and level
+    with np.load(ocean.DATA_FILE) as data:
+        arrays = {name: data[name] for name in data.files}
+    castaway_bob_flow.write_npz(tmp_path / "again.npz", arrays)
+    assert (tmp_path / "again.npz").read_bytes() == ocean.DATA_FILE.read_bytes()
+    with zipfile.ZipFile(io.BytesIO(ocean.DATA_FILE.read_bytes())) as archive:
+        assert {info.date_time for info in archive.infolist()} == {(1980, 1, 1, 0, 0, 0)}
+
+
+def test_the_solver_is_reproducible_from_its_seed():
+    # The full build (python -m autograder data --check) is compared byte for byte with the shipped
+    # file by tests/test_release.py; here a short run shows the seed fixes the result bit for bit.
+    first = castaway_bob_flow.simulate_wake(seed=1, n_snapshots=2, spin_up_steps=6)
+    again = castaway_bob_flow.simulate_wake(seed=1, n_snapshots=2, spin_up_steps=6)
+    other = castaway_bob_flow.simulate_wake(seed=2, n_snapshots=2, spin_up_steps=6)
+    np.testing.assert_array_equal(first["velocity"], again["velocity"])
+    assert not np.array_equal(first["velocity"], other["velocity"])
+
+
+# ------------------------------------------------------------------------------------------------
+# Bob's drift (course.ocean): the truth the filters are scored against
+# ------------------------------------------------------------------------------------------------
+
+
+def test_drift_in_still_water_moves_by_dt_times_own_velocity(flow):
+    still = flow.scaled(0.0)
+    drift = ocean.simulate_drift(still, np.random.default_rng(12), n_fixes=30)
+    np.testing.assert_allclose(np.diff(drift.position, axis=0), ocean.DT * drift.truth[:-1, 2:], rtol=0, atol=1e-9)
+
+
+def test_drift_statistics_of_the_force_and_the_gps(flow):
+    drifts = ocean.simulate_drifts(flow.scaled(0.0), np.random.default_rng(13), 400, n_fixes=30)
+    w = np.stack([d.truth[:, 2:] for d in drifts])
+    force = (w[:, 1:] - ocean.ALPHA * w[:, :-1]).reshape(-1, 2)
+    gps = np.concatenate([d.fixes - d.position for d in drifts])
+    # 11 600 and 12 000 samples: the sample standard deviations are within 3 % with 5-sigma margin
+    np.testing.assert_allclose(force.std(axis=0), ocean.SIGMA_F, rtol=0.035)
+    np.testing.assert_allclose(gps.std(axis=0), ocean.SIGMA_GPS, rtol=0.035)
+    np.testing.assert_allclose(np.corrcoef(force.T)[0, 1], 0.0, atol=0.05)
+
+
+def test_drift_follows_the_current_and_rk4_converges(flow):
+    # with w = 0, one minute of RK4 with 3 substeps agrees with 50 substeps to far below a metre
+    rng = np.random.default_rng(14)
+    p = np.column_stack((rng.uniform(1500, 8000, 20), rng.uniform(-1500, 1500, 20)))
+    t = 3600.0
+    coarse = ocean.drift_step(flow, p, np.zeros_like(p), t)
+    fine = ocean.drift_step(flow, p, np.zeros_like(p), t, substeps=50)
+    assert np.abs(coarse - fine).max() < 0.05
+    # and it moves with the current: the displacement is about 60 s times the local velocity
+    np.testing.assert_allclose(coarse - p, 60.0 * flow(p, t), atol=3.0)
