@@ -84,8 +84,9 @@ def check_kernel_has_reference() -> None:
 def import_submissions(submissions: Path, workdir: Path) -> dict[str, list[str]]:
     """Copy ``submissions/<student>/<lab>/<lab>.ipynb`` into ``workdir/submitted/``.
 
-    Returns lab id -> the students who submitted it. Files that do not fit the layout are
-    reported and skipped.
+    A ``timestamp.txt`` beside the notebook (nbgrader's submission time) is copied too, so that
+    late penalties apply. Returns lab id -> the students who submitted it. Files that do not fit
+    the layout are reported and skipped.
     """
     by_lab: dict[str, list[str]] = {}
     for path in sorted(submissions.glob("*/*/*.ipynb")):
@@ -98,6 +99,8 @@ def import_submissions(submissions: Path, workdir: Path) -> dict[str, list[str]]
             shutil.rmtree(target)
         target.mkdir(parents=True)
         shutil.copy2(path, target / path.name)
+        if (path.parent / "timestamp.txt").exists():
+            shutil.copy2(path.parent / "timestamp.txt", target / "timestamp.txt")
         by_lab.setdefault(lab_id, []).append(student)
     return by_lab
 
