@@ -13,6 +13,7 @@ results as arguments*; nothing here implements a blank.
 
 from __future__ import annotations
 
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -43,6 +44,7 @@ V_INIT: float = 3000.0  # prior mean of the speed [m/s]
 BETA_INIT: float = 20_000.0  # prior mean of the ballistic coefficient [kg/(m s^2)]
 PRIOR_STD: Vector = np.array([500.0, 200.0, 1500.0])  # prior standard deviations of h, v, beta
 INNOVATION_STD: Vector = np.array([100.0, 100.0, 5.0])  # innovation standard deviations, D^(1/2)
+RUN_SEED: int = 2029  # seed of the lab's filter run, np.random.default_rng(RUN_SEED)
 
 STATE_NAMES: tuple[str, str, str] = ("h", "v", "beta")
 STATE_LABELS: tuple[str, str, str] = ("altitude h [m]", "speed v [m/s]", r"ballistic coefficient $\beta$ [kg/(m s$^2$)]")
@@ -159,6 +161,38 @@ class FilterHistory:
         return [name for name in names if not np.all(np.isfinite(getattr(self, name)))]
 
 
+def check_history(history: object, n_times: int, n_particles: int) -> None:
+    """Visible check of a run's FilterHistory: its type, every entry filled, bands that nest
+    (lo90 <= lo50 <= median <= hi50 <= hi90) and an ESS between 1 and N. Raises AssertionError
+    with a message that says what to fix."""
+    if not isinstance(history, FilterHistory):
+        raise AssertionError(
+            f"run_particle_filter should return a FilterHistory (FilterHistory.empty(len(b), N), filled in), "
+            f"not {type(history).__name__}."
+        )
+    for name in ("mean", "median", "lo50", "hi50", "lo90", "hi90", "ess"):
+        value = np.asarray(getattr(history, name))
+        shape = (n_times,) if name == "ess" else (3, n_times)
+        if value.shape != shape:
+            raise AssertionError(f"history.{name} should have shape {shape}, one column per reading; it has {value.shape}.")
+        if not np.all(np.isfinite(value)):
+            missing = np.flatnonzero(~np.all(np.isfinite(value.reshape(-1, n_times)), axis=0))
+            raise AssertionError(f"history.{name} is not filled in at the times j = {missing[:8].tolist()}: fill it at every t_j.")
+    order = (history.lo90, history.lo50, history.median, history.hi50, history.hi90)
+    labels = ("lo90", "lo50", "median", "hi50", "hi90")
+    for k in range(4):
+        if np.any(order[k] > order[k + 1]):
+            raise AssertionError(
+                f"history.{labels[k]} exceeds history.{labels[k + 1]} somewhere: the 90% band should contain the 50% "
+                "band, which contains the median. Did you sort the samples, and use p = 50 and p = 90 the right way round?"
+            )
+    if np.any(history.ess < 1 - 1e-9) or np.any(history.ess > n_particles * (1 + 1e-9)):
+        raise AssertionError(
+            f"The effective sample size should lie between 1 and N = {n_particles}; it ranges from "
+            f"{np.min(history.ess):.3g} to {np.max(history.ess):.3g}. ESS = 1 / sum_l w_l^2 with normalised weights."
+        )
+
+
 def _require_complete(history: FilterHistory, n_times: int) -> None:
     if not isinstance(history, FilterHistory):
         raise TypeError(f"Expected a FilterHistory (from run_particle_filter), got {type(history).__name__}.")
@@ -265,4 +299,28 @@ def plot_ess(data: RadarData, history: FilterHistory, ax: Axes | None = None) ->
     ax.set_title("Effective sample size of the weights after each step")
     ax.grid(alpha=0.3)
     ax.legend(loc="lower left")
+    return ax
+
+
+def plot_band_widths(data: RadarData, histories: Mapping[str, FilterHistory], ax: Axes | None = None) -> Axes:
+    """The width of the 90% credibility band of beta against time, one curve per run.
+
+    ``histories`` maps a label (for example "N = 5000") to a run's FilterHistory. The prior's
+    90% band, 2 x 1.645 x 1500 = 4935, is drawn for comparison.
+    """
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(8, 3.8), layout="constrained")
+    for label, history in histories.items():
+        _require_complete(history, data.t.shape[0])
+        ax.plot(data.t, history.hi90[2] - history.lo90[2], lw=1.4, label=label)
+    prior = 2 * 1.6448536269514722 * PRIOR_STD[2]
+    ax.axhline(prior, color="k", lw=0.8, ls=":", label=f"prior 90% band ({prior:.0f})")
+    ax.set_ylim(bottom=0)
+    ax.set_xlabel("time t [s]")
+    ax.set_ylabel(r"width of the 90% band of $\beta$ [kg/(m s$^2$)]")
+    ax.set_title(r"How fast does the filter learn $\beta$? The 90% band for several N")
+    ax.grid(alpha=0.3)
+    ax.legend(loc="lower left", fontsize=9)
     return ax

@@ -114,10 +114,12 @@ def pf_step(x: np.ndarray, w: np.ndarray, b_next: float, rng: np.random.Generato
 
 
 def credibility_interval(samples: np.ndarray, p: float) -> tuple[np.ndarray, np.ndarray]:
-    """The p% credibility interval [lo, hi] of the handout's sorted-sample rule.
+    """The p% credibility interval [lo, hi] of the samples (N,), p in percent, by the handout's
+    sorted-sample rule. (Written with ``...`` indexing, it also takes (k, N): one interval per row.)
 
-    samples has shape (N,), or (k, N) for k variables at once (one interval per row); p is in
-    percent. The handout's 1-based index i is Python's index i - 1 in the sorted samples.
+    The handout's 1-based index i is Python's index i - 1 in the sorted samples. The rule is
+    evaluated in floating point, as MATLAB evaluates it: where (1 -+ p/100)(N/2) is a half in exact
+    arithmetic but lands just below it in floating point (N = 10, p = 90), it rounds down.
     """
     s = np.sort(samples, axis=-1)
     N = s.shape[-1]
@@ -148,8 +150,10 @@ def run_particle_filter(b: np.ndarray, N: int, rng: np.random.Generator) -> Filt
         # weighted mean sum_l w(l) x(l)
         history.mean[:, j] = x @ w
         history.median[:, j] = np.median(x, axis=1)
-        history.lo50[:, j], history.hi50[:, j] = credibility_interval(x, 50)
-        history.lo90[:, j], history.hi90[:, j] = credibility_interval(x, 90)
+        for i in range(3):
+            # p% credibility intervals of h, v and beta by the sorted-sample rule
+            history.lo50[i, j], history.hi50[i, j] = credibility_interval(x[i], 50)
+            history.lo90[i, j], history.hi90[i, j] = credibility_interval(x[i], 90)
         # ESS = 1 / sum_l w(l)^2
         history.ess[j] = 1.0 / np.sum(w**2)
     return history

@@ -161,7 +161,7 @@ DT: float = 0.1  #: measurement spacing [s]
 SUBSTEPS: int = 10  #: RK4 substeps per measurement interval in the truth simulation
 
 
-def simulate(
+def simulate_reentry(
     rng: np.random.Generator,
     n_rows: int = N_ROWS,
     dt: float = DT,
@@ -192,7 +192,7 @@ def simulate(
 
 def data_text(seed: int = DATA_SEED) -> str:
     """The shipped data file's text, built from ``seed``."""
-    t, truth, range_true, range_meas = simulate(np.random.default_rng(seed))
+    t, truth, range_true, range_meas = simulate_reentry(np.random.default_rng(seed))
     return starship.format_csv(t, truth, range_true, range_meas)
 
 
