@@ -19,16 +19,21 @@ os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), os.environ.get
 # that was not activated (`.venv/bin/python -m autograder ...`).
 os.environ["PATH"] = os.pathsep.join((os.path.dirname(sys.executable), os.environ.get("PATH", "")))
 
-from autograder.execute import ExecuteWithReference  # noqa: E402
+from autograder.execute import GradingExecute  # noqa: E402
+from autograder.restore_cells import RestoreLabCells  # noqa: E402
 from course.checks import NOT_WRITTEN  # noqa: E402
 from nbconvert.preprocessors import ClearMetadataPreprocessor, CSSHTMLHeaderPreprocessor  # noqa: E402
 from nbgrader.preprocessors import (  # noqa: E402
     AssignLatePenalties,
     CheckCellMetadata,
     ClearHiddenTests,
+    ClearOutput,
+    DeduplicateIds,
     GetGrades,
     IgnorePattern,
     LimitOutput,
+    OverwriteCells,
+    OverwriteKernelspec,
     SaveAutoGrades,
 )
 
@@ -36,21 +41,41 @@ c = get_config()  # noqa: F821 (provided by traitlets when it loads this file)
 
 c.CourseDirectory.course_id = "estimation-lab-kit"
 
+# The gradebook: nbgrader's default is SQLite, `gradebook.db` in the course folder. A course with
+# several graders can keep it in a database server instead: set GRADEBOOK_URL to its SQLAlchemy
+# URL, e.g. postgresql+psycopg://USER:PASSWORD@HOST:5432/DATABASE (driver: environment.txt).
+if os.environ.get("GRADEBOOK_URL"):
+    c.CourseDirectory.db_url = os.environ["GRADEBOOK_URL"]
+
 # What students see in place of the model answers.
 # `course.checks.require` recognises a stub by its message.
 c.ClearSolutions.code_stub = {"python": f'# YOUR CODE HERE\nraise NotImplementedError("{NOT_WRITTEN}")'}
 c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
 
-# Grading. A deleted or edited test cell is restored from the gradebook before grading, and the
-# kernel must import `solutions` (ExecuteWithReference refuses to grade otherwise).
+# Grading. A deleted or edited test cell is restored from the gradebook before grading. The kernel
+# must import `solutions` (GradingExecute refuses to grade otherwise), and each kernel is capped:
+# memory, time per cell, time per submission, output per cell. A kernel that dies or hangs is
+# restarted and the cells before the fatal one are replayed (see autograder/execute.py).
 c.OverwriteCells.add_missing_cells = True
-c.Execute.timeout = 60
+c.Execute.timeout = 30
+c.GradingExecute.memory_limit_gb = 4.0
+c.GradingExecute.notebook_timeout = 300
+c.GradingExecute.max_output_bytes = 1_000_000
 # The kernel's own log goes to the grader's terminal, never into the graded notebook. At WARNING
 # level ipykernel 7 prints a notice about unencrypted loopback TCP for every submission, which
 # buries the grading summary; errors still show.
 c.Execute.extra_arguments = ["--HistoryManager.hist_file=:memory:", "--IPKernelApp.log_level=ERROR"]
+# Before grading, a submission's cells are put back in the lab's order, with any lab cell it lost.
+c.Autograde.sanitize_preprocessors = [
+    ClearOutput,
+    DeduplicateIds,
+    RestoreLabCells,
+    OverwriteKernelspec,
+    OverwriteCells,
+    CheckCellMetadata,
+]
 c.Autograde.autograde_preprocessors = [
-    ExecuteWithReference,
+    GradingExecute,
     IgnorePattern,
     ClearMetadataPreprocessor,
     LimitOutput,
@@ -61,3 +86,18 @@ c.Autograde.autograde_preprocessors = [
 
 # Feedback shows students their graded notebook without the hidden tests' code.
 c.GenerateFeedback.preprocessors = [GetGrades, CSSHTMLHeaderPreprocessor, ClearHiddenTests]
+
+# Late submissions: the labs' due dates are in due_dates.toml (`python -m autograder grade` writes
+# them into the gradebook). A late submission loses percent_per_day of its earned points for every
+# started day late, at most max_percent (autograder/late.py).
+from autograder.late import LatePenalty  # noqa: E402
+
+c.AssignLatePenalties.plugin_class = LatePenalty
+c.LatePenalty.percent_per_day = 10.0
+c.LatePenalty.max_percent = 50.0
+
+# `nbgrader export` rewrites grades.csv from the gradebook in the kit's format, with the scores
+# given by hand in formgrader, without grading again (autograder/export.py).
+from autograder.export import GradesExport  # noqa: E402
+
+c.ExportApp.plugin_class = GradesExport

@@ -10,13 +10,17 @@ from the course root.
 from __future__ import annotations
 
 import csv
+import multiprocessing
+import re
 import shutil
 import tempfile
 import warnings
-from dataclasses import dataclass
+from concurrent.futures import ProcessPoolExecutor
+from dataclasses import dataclass, field
 from pathlib import Path
 
 import nbformat
+from nbformat import NotebookNode
 from nbgrader.api import Gradebook, MissingEntry
 from nbgrader.converters import Autograde, GenerateAssignment, GenerateFeedback
 from nbgrader.coursedir import CourseDirectory
@@ -25,8 +29,10 @@ from sqlalchemy.exc import SAWarning
 from traitlets.config import Config
 from traitlets.config.loader import PyFileConfigLoader
 
-from autograder.execute import ExecuteWithReference
+from autograder import cells, late, versions
+from autograder.execute import GradingExecute
 from autograder.labs import ROOT, Lab
+from autograder.restore_cells import add_grader_notes, grader_notes
 
 
 # nbgrader 0.9.6 builds gradebook objects that SQLAlchemy 2 no longer adds to the session through
@@ -44,20 +50,23 @@ def course_config(workdir: Path = ROOT) -> Config:
     config = PyFileConfigLoader("nbgrader_config.py", path=str(ROOT)).load_config()
     config.CourseDirectory.root = str(workdir)
     config.CourseDirectory.source_directory = str(ROOT / "source")
+    if "db_url" not in config.CourseDirectory:
+        # Grading processes (grade --jobs) share one SQLite gradebook: each waits for the lock.
+        config.CourseDirectory.db_url = f"sqlite:///{workdir / 'gradebook.db'}?timeout=120"
     return config
 
 
-def _coursedir(workdir: Path, lab: Lab) -> CourseDirectory:
+def _coursedir(workdir: Path, lab: Lab, student: str) -> CourseDirectory:
     config = course_config(workdir)
     coursedir = CourseDirectory(config=config)
     coursedir.assignment_id = lab.id
-    coursedir.student_id = "*"
+    coursedir.student_id = student
     return coursedir
 
 
-def _run(app_class: type, workdir: Path, lab: Lab) -> dict:
-    """Run one nbgrader converter on every student of a lab; nbgrader's ``capture_log`` result."""
-    coursedir = _coursedir(workdir, lab)
+def _run(app_class: type, workdir: Path, lab: Lab, student: str = "*") -> dict:
+    """Run one nbgrader converter on a lab (every student, or one); nbgrader's ``capture_log`` result."""
+    coursedir = _coursedir(workdir, lab, student)
     app = app_class(coursedir=coursedir, config=coursedir.config)
     app.force = True
     return capture_log(app)
@@ -78,42 +87,94 @@ def check_kernel_has_reference() -> None:
     """
     config = course_config()  # loading it also sets the kernel's PYTHONPATH
     with tempfile.TemporaryDirectory() as cwd:
-        ExecuteWithReference(config=config).preprocess(nbformat.v4.new_notebook(), {"metadata": {"path": cwd}})
+        GradingExecute(config=config).preprocess(nbformat.v4.new_notebook(), {"metadata": {"path": cwd}})
 
 
-def import_submissions(submissions: Path, workdir: Path) -> dict[str, list[str]]:
-    """Copy ``submissions/<student>/<lab>/<lab>.ipynb`` into ``workdir/submitted/``.
+def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
+    """The notebook in a student's ``folder`` for ``lab``, and notes on anything wrong with it.
 
-    A ``timestamp.txt`` beside the notebook (nbgrader's submission time) is copied too, so that
-    late penalties apply. Returns lab id -> the students who submitted it. Files that do not fit
-    the layout are reported and skipped.
+    A notebook under another name is taken if it is the only one. A file that is not a readable
+    notebook (not JSON, truncated, invalid) is replaced by the blank release notebook, so that it
+    is graded as an empty submission, with the reason in its notes.
     """
-    by_lab: dict[str, list[str]] = {}
-    for path in sorted(submissions.glob("*/*/*.ipynb")):
-        student, lab_id = path.parent.parent.name, path.parent.name
-        if path.name != f"{lab_id}.ipynb":
-            print(f"skipped {path}: a submission of {lab_id} must be named {lab_id}.ipynb")
-            continue
-        target = workdir / "submitted" / student / lab_id
-        if target.exists():
-            shutil.rmtree(target)
-        target.mkdir(parents=True)
-        shutil.copy2(path, target / path.name)
-        if (path.parent / "timestamp.txt").exists():
-            shutil.copy2(path.parent / "timestamp.txt", target / "timestamp.txt")
-        by_lab.setdefault(lab_id, []).append(student)
+    expected = folder / lab.notebook_name
+    found = sorted(folder.glob("*.ipynb"))
+    if expected.exists():
+        path, notes = expected, []
+    elif len(found) == 1:
+        path, notes = found[0], [f"It was submitted as {found[0].name} and graded as {lab.notebook_name}."]
+    else:
+        listed = ", ".join(p.name for p in found) or "none"
+        return cells.read(lab.release_notebook), [
+            f"No notebook named {lab.notebook_name} was found (notebooks there: {listed}); "
+            "it was graded as an empty submission."
+        ]
+    try:
+        nb = nbformat.read(path, as_version=4)
+        nbformat.validate(nb)
+    except Exception as error:  # not JSON, truncated, not a notebook: any of nbformat's errors
+        reason = " ".join(str(error).split())[:160] or type(error).__name__
+        return cells.read(lab.release_notebook), notes + [
+            f"{path.name} could not be read as a notebook ({type(error).__name__}: {reason}); "
+            "it was graded as an empty submission."
+        ]
+    return nb, notes
+
+
+def import_submissions(submissions: Path, workdir: Path, labs: list[Lab]) -> dict[str, list[str]]:
+    """Put ``submissions/<student>/<lab>/<lab>.ipynb`` into ``workdir/submitted/``, for these labs.
+
+    Each file goes through ``read_submission``; its notes become a grader's note at the top of the
+    notebook, which the feedback shows. A ``timestamp.txt`` beside the notebook (nbgrader's
+    submission time) is copied too, so that late penalties apply. Returns lab id -> students.
+    """
+    by_lab: dict[str, list[str]] = {lab.id: [] for lab in labs}
+    for lab in labs:
+        for folder in sorted(p for p in submissions.glob(f"*/{lab.id}") if p.is_dir()):
+            student = folder.parent.name
+            nb, notes = read_submission(folder, lab)
+            add_grader_notes(nb, notes)
+            target = workdir / "submitted" / student / lab.id
+            if target.exists():
+                shutil.rmtree(target)
+            target.mkdir(parents=True)
+            nbformat.write(nb, target / lab.notebook_name)
+            if (folder / "timestamp.txt").exists():
+                shutil.copy2(folder / "timestamp.txt", target / "timestamp.txt")
+            by_lab[lab.id].append(student)
     return by_lab
 
 
-def autograde(lab: Lab, workdir: Path) -> str:
-    """``nbgrader autograde`` every submission of a lab in ``workdir``, then write its feedback.
+def _grade_students(workdir: Path, lab_id: str, students: list[str]) -> str:
+    """Autograde, then write the feedback of, each student in turn; nbgrader's log."""
+    log = []
+    for student in students:
+        for app_class in (Autograde, GenerateFeedback):
+            result = _run(app_class, workdir, Lab(lab_id), student)
+            log.append(result.get("log", "") + result.get("error", ""))
+    return "".join(log)
 
-    nbgrader goes on past a submission it cannot grade and reports a failure at the end; that is
-    not raised here, so that one bad file does not stop a class: the caller finds the
-    submissions missing from the gradebook. Returns nbgrader's log.
+
+def autograde(lab: Lab, workdir: Path, students: list[str], jobs: int = 1) -> str:
+    """``nbgrader autograde`` and feedback for these students' submissions of a lab in ``workdir``.
+
+    With ``jobs > 1`` the students are shared among that many processes, which all write to the
+    one gradebook (SQLite waits for its lock; a database server handles it natively). nbgrader
+    goes on past a submission it cannot grade; that is not raised here, so that one bad file does
+    not stop a class: the caller finds the submissions missing from the gradebook. Returns
+    nbgrader's log.
     """
-    results = [_run(app_class, workdir, lab) for app_class in (Autograde, GenerateFeedback)]
-    return "".join(result.get("log", "") + result.get("error", "") for result in results)
+    if jobs <= 1 or len(students) <= 1:
+        return _grade_students(workdir, lab.id, students)
+    shares = [students[k::jobs] for k in range(jobs)]
+    with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
+        return "".join(pool.map(_grade_students, [workdir] * jobs, [lab.id] * jobs, shares))
+
+
+def all_graded_labs(workdir: Path) -> list[Lab]:
+    """The labs with submissions in ``workdir/submitted``."""
+    names = sorted({p.name for p in (workdir / "submitted").glob("*/*") if p.is_dir()})
+    return [Lab(name) for name in names if (ROOT / "source" / name).is_dir()]
 
 
 def submitted_students(workdir: Path, lab: Lab) -> list[str]:
@@ -130,10 +191,16 @@ class GradeRow:
     cells: dict[str, float | None]
     max_cells: dict[str, float]
     autograded: frozenset[str]
+    late_penalty: float = 0.0
+    """Points taken for a late submission (nbgrader's AssignLatePenalties, autograder/late.py)."""
+    notes: tuple[str, ...] = ()
+    """What the grader changed before grading (the grader's note in the feedback)."""
+    reasons: dict[str, str] = field(default_factory=dict)
+    """Why each autograded cell short of full marks lost them: its error, or its stderr output."""
 
     @property
     def total(self) -> float:
-        return sum(score for score in self.cells.values() if score is not None)
+        return max(0.0, sum(score for score in self.cells.values() if score is not None) - self.late_penalty)
 
     @property
     def auto_score(self) -> float:
@@ -166,6 +233,7 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
                     if grade.cell.cell_type == "code":
                         auto.add(grade.name)
                 order = [c.name for c in gb.find_notebook(lab.id, lab.id).grade_cells]
+                notes, reasons = _notes_and_reasons(workdir / "autograded" / student / lab.id / lab.notebook_name)
                 rows.append(
                     GradeRow(
                         student,
@@ -173,23 +241,51 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
                         {c: cells[c] for c in order},
                         {c: maxima[c] for c in order},
                         frozenset(auto),
+                        submission.late_submission_penalty or 0.0,
+                        notes,
+                        {c: reasons[c] for c in order if c in reasons and (cells[c] or 0.0) < maxima[c]},
                     )
                 )
     return rows
 
 
+ANSI = re.compile(r"\x1b\[[0-9;]*m")
+
+
+def _notes_and_reasons(autograded: Path) -> tuple[tuple[str, ...], dict[str, str]]:
+    """The grader's notes of an autograded notebook, and for each graded cell its first error or
+    its stderr output (the reasons nbgrader gives a cell 0)."""
+    if not autograded.exists():
+        return (), {}
+    nb = nbformat.read(autograded, as_version=4)
+    reasons = {}
+    for cell in nb.cells:
+        if cell.cell_type != "code" or not cells.meta(cell).get("grade"):
+            continue
+        errors = [o for o in cell.outputs if o.output_type == "error"]
+        stderr = [o for o in cell.outputs if o.output_type == "stream" and o.name == "stderr"]
+        if errors:
+            reasons[cells.grade_id(cell)] = ANSI.sub("", f"{errors[0].ename}: {errors[0].evalue}")
+        elif stderr:
+            first = ANSI.sub("", stderr[0].text).strip().splitlines()[0]
+            reasons[cells.grade_id(cell)] = f"the cell wrote to stderr, which nbgrader scores 0 ({first})"
+    return tuple(grader_notes(nb)), reasons
+
+
 def write_csv(rows: list[GradeRow], path: Path) -> None:
     """One row per student and lab, one column per graded cell (empty: not in this lab, or not
-    graded by hand yet), the total so far, and the total possible."""
+    graded by hand yet), the late penalty, the total so far (less the penalty), and the total possible."""
     columns: list[str] = []
     for row in rows:
         columns += [c for c in row.cells if c not in columns]
     with open(path, "w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["student", "lab", *columns, "total", "max_score"])
+        writer.writerow(["student", "lab", *columns, "late_penalty", "total", "max_score", "notes"])
         for row in rows:
             scores = ["" if row.cells.get(c) is None else f"{row.cells[c]:g}" for c in columns]
-            writer.writerow([row.student, row.lab, *scores, f"{row.total:g}", f"{sum(row.max_cells.values()):g}"])
+            notes = [*row.notes, *(f"{cell}: {why}" for cell, why in row.reasons.items())]
+            writer.writerow([row.student, row.lab, *scores, f"{row.late_penalty:g}", f"{row.total:g}",
+                             f"{sum(row.max_cells.values()):g}", " | ".join(notes)])
 
 
 def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None) -> None:
@@ -199,28 +295,34 @@ def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = No
     for row in rows:
         score = f"{row.auto_score:g}/{row.auto_max:g}"
         print(f"{row.student:<{width}}  {row.lab:<16}{score:>12}  {', '.join(row.lost) or '-'}")
+        for line in [*row.notes, *(f"{cell}: {why}" for cell, why in row.reasons.items())]:
+            print(f"{'':<{width}}  {'':<16}{'':>12}    {line[:150]}")
     for lab_id, students in (failures or {}).items():
         for student in students:
             print(f"{student:<{width}}  {lab_id:<16}{'NOT GRADED':>12}  nbgrader could not grade this file; see its log")
     print("Written answers (derivations) are graded by hand in formgrader and are not counted above.")
 
 
-def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None) -> list[GradeRow]:
+def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int = 1) -> list[GradeRow]:
     """Autograde ``submissions/<student>/<lab>/<lab>.ipynb`` in the course ``workdir``.
 
-    Refuses to start unless the grading kernel can import ``solutions``. Writes feedback HTML to
-    ``workdir/feedback/`` and the grades to ``out_csv`` (default ``workdir/grades.csv``), prints
+    Refuses to start unless the grading kernel can import ``solutions``. Grades only the
+    submissions given (with ``jobs`` processes), so that regrading one student leaves everyone
+    else's grades as they were. Writes feedback HTML to ``workdir/feedback/`` and the grades of
+    every graded submission in the course to ``out_csv`` (default ``workdir/grades.csv``), prints
     the table, and returns the rows.
     """
     check_kernel_has_reference()
     workdir.mkdir(parents=True, exist_ok=True)
-    by_lab = import_submissions(submissions, workdir)
-    labs = [Lab(lab_id) for lab_id in sorted(by_lab) if (ROOT / "source" / lab_id).is_dir()]
-    for lab_id in sorted(set(by_lab) - {lab.id for lab in labs}):
-        print(f"skipped {lab_id}: there is no such lab (its submissions: {', '.join(by_lab[lab_id])})")
+    known = {p.parent.name for p in (ROOT / "source").glob("*/*.ipynb")}
+    for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
+        print(f"skipped {folder}: there is no lab called {folder.name}")
+    labs = [Lab(lab_id) for lab_id in sorted(known & {p.name for p in submissions.glob("*/*") if p.is_dir()})]
     generate_release(labs, workdir)
-    logs = {lab.id: autograde(lab, workdir) for lab in labs}
-    rows = read_grades(workdir, labs, None)
+    late.set_due_dates(labs, course_config(workdir))
+    by_lab = import_submissions(submissions, workdir, labs)
+    logs = {lab.id: autograde(lab, workdir, by_lab[lab.id], jobs) for lab in labs}
+    rows = read_grades(workdir, all_graded_labs(workdir))
     graded = {(row.student, row.lab) for row in rows}
     failures = {lab.id: [s for s in by_lab[lab.id] if (s, lab.id) not in graded] for lab in labs}
     for lab_id, students in failures.items():
@@ -229,6 +331,7 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None) 
             log_path.write_text(logs[lab_id])
             print(f"{len(students)} submission(s) of {lab_id} could not be graded; nbgrader's log is in {log_path}")
     write_csv(rows, out_csv or workdir / "grades.csv")
+    versions.record(out_csv or workdir / "grades.csv")
     print_table(rows, failures)
     print(f"Grades: {out_csv or workdir / 'grades.csv'}. Feedback: {workdir / 'feedback'}.")
     return rows

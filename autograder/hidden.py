@@ -2,11 +2,17 @@
 
 Partial credit is isolated: a blank's hidden tests call the student's function with every other
 blank it uses bound to the reference, so that one mistake costs one blank's points.
+
+Warnings are failures with a message. nbgrader gives 0 to a test cell that writes to stderr, but
+Python shows a warning only the first time a line triggers it, so the score would depend on which
+cell ran first; here it is the same every time, and the student is told why.
 """
 
 from __future__ import annotations
 
+import functools
 import types
+import warnings
 from typing import Callable, Iterable
 
 
@@ -21,4 +27,19 @@ def isolate(func: Callable, reference: types.ModuleType, blanks: Iterable[str]) 
     namespace = {**func.__globals__, **others}
     copy = types.FunctionType(func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__)
     copy.__kwdefaults__ = func.__kwdefaults__
-    return copy
+
+    @functools.wraps(func)
+    def without_warnings(*args, **kwargs):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            result = copy(*args, **kwargs)
+        if caught:
+            first = caught[0]
+            raise AssertionError(
+                f"{func.__name__} gave the warning {first.category.__name__}: {first.message}. A graded function "
+                "must run without warnings: find the computation that triggers it (a log or square root of "
+                "a negative number, a division by zero, an overflow) and fix it."
+            )
+        return result
+
+    return without_warnings

@@ -15,7 +15,7 @@ import nbformat
 import pytest
 
 from autograder import grading, submissions
-from autograder.execute import ExecuteWithReference, ReferenceUnavailable
+from autograder.execute import GradingExecute, ReferenceUnavailable
 from autograder.labs import ROOT, all_labs
 from autograder.mistakes import catalogue
 from over_labs import LABS, over_labs
@@ -90,7 +90,7 @@ def test_feedback_shows_messages_but_not_hidden_tests(graded):
 def test_grading_refuses_a_kernel_without_the_reference(tmp_path, monkeypatch):
     monkeypatch.setenv("PYTHONPATH", "")
     with pytest.raises(ReferenceUnavailable, match="cannot import the hidden reference package"):
-        ExecuteWithReference().preprocess(nbformat.v4.new_notebook(), {"metadata": {"path": str(tmp_path)}})
+        GradingExecute().preprocess(nbformat.v4.new_notebook(), {"metadata": {"path": str(tmp_path)}})
 
 
 def test_plain_nbgrader_autogrades_from_the_course_root(tmp_path):

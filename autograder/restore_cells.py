@@ -1,0 +1,76 @@
+"""Grading a submission in the lab's cell order, with the lab's cells that it lost put back.
+
+A student can drag cells around or delete them by accident. nbgrader restores deleted test cells
+(at the end of the notebook) but not the set-up cell or a deleted answer cell, and it runs cells in
+the order it finds them. ``RestoreLabCells`` rebuilds the submission on the released notebook's
+skeleton: every nbgrader cell in the lab's order (the student's version where there is one, the
+released one otherwise), and every cell the student added right after the lab cell it followed.
+What it changed goes into a grader's note at the top, which the student sees in the feedback.
+"""
+
+from __future__ import annotations
+
+from nbformat import NotebookNode
+from nbformat.v4 import new_markdown_cell
+from nbgrader.preprocessors import NbGraderPreprocessor
+
+from autograder import cells
+from autograder.labs import Lab
+
+NOTE_TITLE = "**Note from the grader.**"
+
+
+def grader_notes(nb: NotebookNode) -> list[str]:
+    """The notes in a notebook's grader's note (its first cell), if it has one."""
+    if nb.cells and nb.cells[0].cell_type == "markdown" and nb.cells[0].source.startswith(NOTE_TITLE):
+        return [line[2:] for line in nb.cells[0].source.splitlines()[1:] if line.startswith("- ")]
+    return []
+
+
+def add_grader_notes(nb: NotebookNode, notes: list[str]) -> None:
+    """Add notes to the notebook's grader's note, creating it as the first cell if needed."""
+    if not notes:
+        return
+    existing = grader_notes(nb)
+    if existing:
+        nb.cells.pop(0)
+    body = "\n".join(f"- {note}" for note in existing + notes)
+    nb.cells.insert(0, new_markdown_cell(f"{NOTE_TITLE} Your notebook was graded with these changes:\n{body}"))
+
+
+def _has_id(cell: NotebookNode) -> bool:
+    return "grade_id" in cells.meta(cell)
+
+
+class RestoreLabCells(NbGraderPreprocessor):
+    """Reorder a submission to the lab's order and restore missing lab cells (see the module doc)."""
+
+    def preprocess(self, nb: NotebookNode, resources: dict) -> tuple[NotebookNode, dict]:
+        lab = Lab(resources["nbgrader"]["assignment"])
+        released = cells.read(lab.release_notebook)
+        order = [cells.grade_id(c) for c in released.cells if _has_id(c)]
+        notes = grader_notes(nb)
+        students = [c for c in nb.cells if not (c.cell_type == "markdown" and c.source.startswith(NOTE_TITLE))]
+
+        mine: dict[str, NotebookNode] = {}
+        added: dict[str | None, list[NotebookNode]] = {None: []}
+        previous = None
+        for cell in students:
+            if _has_id(cell) and cells.grade_id(cell) in order and cells.grade_id(cell) not in mine:
+                previous = cells.grade_id(cell)
+                mine[previous] = cell
+                added[previous] = []
+            else:
+                added[previous].append(cell)
+
+        seen = [cells.grade_id(c) for c in students if _has_id(c) and cells.grade_id(c) in order]
+        if seen != [i for i in order if i in mine]:
+            notes.append("Its cells were not in the lab's order; it was graded in the lab's order.")
+        missing = [i for i in order if i not in mine]
+        if missing:
+            notes.append(f"Cells that were missing were put back as released: {', '.join(missing)}.")
+
+        by_id = {cells.grade_id(c): c for c in released.cells if _has_id(c)}
+        nb.cells = added[None] + [c for i in order for c in [mine.get(i, by_id[i]), *added.get(i, [])]]
+        add_grader_notes(nb, notes)
+        return nb, resources

@@ -1,0 +1,142 @@
+"""Intake of an LMS download through nbgrader's zip_collect: files named by student, mapped to our
+student ids, into the layout `python -m autograder grade` takes. Nothing is dropped silently."""
+
+import os
+import subprocess
+import sys
+import zipfile
+
+import nbformat
+import pytest
+
+from autograder import grading, submissions
+from autograder.__main__ import main
+from autograder.intake import IntakeError, collect
+from autograder.labs import ROOT, get_lab
+
+LAB = get_lab("train-kf")
+STUDENTS = "lms_name,student_id\nalice,s001\nbob,s002\ncarol,s003\ndave,s004\n"
+
+
+def notebook(tag: str) -> str:
+    """The solved notebook, marked so that a test can tell which file was collected."""
+    nb = submissions.solved(LAB)
+    nb.metadata["intake_test"] = tag
+    return nbformat.writes(nb)
+
+
+def tag(path) -> str:
+    return nbformat.read(path, as_version=4).metadata["intake_test"]
+
+
+@pytest.fixture
+def download(tmp_path):
+    """An LMS zip with a folder inside: two files of alice (the newer one wins), bob without a
+    time, carol's file under another name, a stranger, a receipt, and a name the pattern misses."""
+    files = {
+        "alice_2026-10-02-23-30-00_train-kf.ipynb": notebook("alice-old"),
+        "alice_2026-10-03-01-00-00_train-kf.ipynb": notebook("alice-new"),
+        "bob_train-kf.ipynb": notebook("bob"),
+        "carol_my work.ipynb": notebook("carol"),
+        "mallory_train-kf.ipynb": notebook("mallory"),
+        "receipt.txt": "submitted",
+        "untitled.ipynb": notebook("untitled"),
+    }
+    path = tmp_path / "lms.zip"
+    with zipfile.ZipFile(path, "w") as archive:
+        for name, text in files.items():
+            archive.writestr(f"export/{name}", text)
+    students = tmp_path / "students.csv"
+    students.write_text(STUDENTS)
+    return path, students
+
+
+def test_collects_a_zip_into_the_grading_layout_and_reports_every_other_file(download, tmp_path):
+    zip_path, students = download
+    out = tmp_path / "SUBMISSIONS"
+    report = collect(LAB, zip_path, students, out, zone="Europe/London")
+
+    assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()) == [
+        "s001/train-kf/timestamp.txt", "s001/train-kf/train-kf.ipynb",
+        "s002/train-kf/train-kf.ipynb", "s003/train-kf/train-kf.ipynb",
+    ]
+    assert report.students == ["s001", "s002", "s003"]
+    assert tag(out / "s001/train-kf/train-kf.ipynb") == "alice-new"
+    assert tag(out / "s003/train-kf/train-kf.ipynb") == "carol"
+    # 01:00 in London in October (BST, UTC+1) is midnight UTC, as nbgrader stores it
+    assert (out / "s001/train-kf/timestamp.txt").read_text() == "2026-10-03 00:00:00"
+
+    assert sorted(report.skipped) == [
+        ("lms/export/mallory_train-kf.ipynb", "unknown student 'mallory': not in the student list"),
+        ("lms/export/receipt.txt", "not a notebook"),
+        ("lms/export/untitled.ipynb", "the file name does not match the LMS pattern"),
+    ]
+    assert report.superseded == [("lms/export/alice_2026-10-02-23-30-00_train-kf.ipynb", "s001")]
+    assert report.renamed == [("lms/export/carol_my work.ipynb", "s003")]
+    assert report.missing == ["s004"]
+
+    # grade() takes this layout as it is, timestamp included
+    workdir = tmp_path / "course"
+    assert grading.import_submissions(out, workdir, [LAB]) == {"train-kf": ["s001", "s002", "s003"]}
+    assert (workdir / "submitted/s001/train-kf/timestamp.txt").read_text() == "2026-10-03 00:00:00"
+
+
+def test_collects_a_folder_with_the_lms_pattern_given(tmp_path):
+    """A Moodle-style download: one folder per student, named by the student's full name."""
+    download = tmp_path / "moodle"
+    for folder in ("Alice Smith_101_assignsubmission_file_", "Bob Jones_102_assignsubmission_file_"):
+        (download / folder).mkdir(parents=True)
+        (download / folder / "train-kf.ipynb").write_text(notebook(folder))
+    students = tmp_path / "students.csv"
+    students.write_text("lms_name,student_id\nAlice Smith,s001\nBob Jones,s002\n")
+    pattern = r"(?:^|/)(?P<student_id>[^/_]+)_\d+_assignsubmission_file_/[^/]+\.ipynb$"
+    report = collect(LAB, download, students, tmp_path / "out", pattern=pattern)
+    assert report.students == ["s001", "s002"] and not report.skipped and not report.renamed
+    assert tag(tmp_path / "out/s002/train-kf/train-kf.ipynb") == "Bob Jones_102_assignsubmission_file_"
+    assert not (tmp_path / "out/s002/train-kf/timestamp.txt").exists()
+
+
+def test_command_reports_unknown_names_and_exits_nonzero(download, tmp_path, capsys):
+    zip_path, students = download
+    out = tmp_path / "SUBMISSIONS"
+    assert main(["collect", "train-kf", str(zip_path), "--students", str(students), "--out", str(out)]) == 1
+    printed = capsys.readouterr().out
+    assert "NOT COLLECTED lms/export/mallory_train-kf.ipynb: unknown student 'mallory'" in printed
+    assert "no submission from: s004" in printed
+    # times in file names are UTC unless --timezone says otherwise
+    assert (out / "s001/train-kf/timestamp.txt").read_text() == "2026-10-03 01:00:00"
+
+
+def test_two_files_of_one_student_without_times_are_refused(tmp_path):
+    download = tmp_path / "lms"
+    download.mkdir()
+    for name in ("bob_train-kf.ipynb", "bob_train-kf (1).ipynb"):
+        (download / name).write_text(notebook(name))
+    students = tmp_path / "students.csv"
+    students.write_text(STUDENTS)
+    with pytest.raises(IntakeError, match=r"(?s)Duplicate submission file.*s002: bob_train-kf \(1\)\.ipynb, bob_train-kf\.ipynb"):
+        collect(LAB, download, students, tmp_path / "out")
+
+
+def test_a_student_list_mapping_one_name_twice_is_refused(download, tmp_path):
+    zip_path, _ = download
+    students = tmp_path / "twice.csv"
+    students.write_text("lms_name,student_id\nalice,s001\nalice,s009\n")
+    with pytest.raises(IntakeError, match="'alice' is mapped to both s001 and s009"):
+        collect(LAB, zip_path, students, tmp_path / "out")
+
+
+def test_plain_nbgrader_zip_collect_uses_the_collector(download, tmp_path):
+    """`nbgrader zip_collect` with our collector, as README shows it, into a course's submitted/."""
+    zip_path, students = download
+    course = tmp_path / "course"
+    archive = course / "downloaded" / LAB.id / "archive"
+    archive.mkdir(parents=True)
+    (archive / zip_path.name).write_bytes(zip_path.read_bytes())
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    subprocess.run([sys.executable, "-m", "nbgrader", "zip_collect", LAB.id,
+                    "--collector=autograder.intake.StudentIdCollector",
+                    f"--StudentIdCollector.students_file={students}"],
+                   cwd=course, env=env, check=True, capture_output=True)
+    assert sorted(p.name for p in (course / "submitted").iterdir()) == ["s001", "s002", "s003"]
+    assert tag(course / "submitted/s001/train-kf/train-kf.ipynb") == "alice-new"
