@@ -57,7 +57,8 @@ c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
 # memory, time per cell, time per submission, output per cell. A kernel that dies or hangs is
 # restarted and the cells before the fatal one are replayed (see autograder/execute.py).
 c.OverwriteCells.add_missing_cells = True
-c.Execute.timeout = 30
+# GRADING_CELL_TIMEOUT lowers the time per cell, e.g. for the tests' deliberately stuck submissions.
+c.Execute.timeout = int(os.environ.get("GRADING_CELL_TIMEOUT", "30"))
 c.GradingExecute.memory_limit_gb = 4.0
 c.GradingExecute.notebook_timeout = 300
 c.GradingExecute.max_output_bytes = 1_000_000

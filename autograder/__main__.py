@@ -23,6 +23,7 @@ def main(argv: list[str] | None = None) -> int:
     grade.add_argument("--jobs", type=int, default=1, help="grade this many submissions at a time (default 1)")
     demo = commands.add_parser("demo", help="release, make a synthetic class (blank, solved, every catalogued mistake), grade it")
     demo.add_argument("--workdir", type=Path, default=ROOT / "demo")
+    demo.add_argument("--jobs", type=int, default=2, help="grade this many submissions at a time (default 2)")
     data = commands.add_parser("data", help="rebuild the shipped data in course/data/ from the seeded reference builds")
     data.add_argument("--check", action="store_true", help="only check that a rebuild reproduces the shipped files")
     collect = commands.add_parser("collect", help="turn an LMS download of one lab (a zip or a folder) into SUBMISSIONS/<student>/<lab>/ with nbgrader's zip_collect")
@@ -59,7 +60,7 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "demo":
         from autograder.demo import run_demo
 
-        run_demo(args.workdir.resolve())
+        run_demo(args.workdir.resolve(), args.jobs)
     elif args.command == "data":
         from autograder import data as shipped
 

@@ -11,11 +11,12 @@ from autograder.release import release_all
 DEMO_DIR = ROOT / "demo"
 
 
-def run_demo(workdir: Path = DEMO_DIR) -> list[grading.GradeRow]:
-    """Release all labs, write the demo class to ``workdir/class`` and grade it in ``workdir/course``."""
+def run_demo(workdir: Path = DEMO_DIR, jobs: int = 2) -> list[grading.GradeRow]:
+    """Release all labs, write the demo class to ``workdir/class`` and grade it in ``workdir/course``
+    with ``jobs`` processes."""
     labs = all_labs()
     release_all()
     class_dir = workdir / "class"
     students = submissions.write_class(labs, class_dir)
     print(f"Demo class: {len(students)} students in {class_dir} (blank, solved, and one per catalogued mistake).")
-    return grading.grade(class_dir, workdir / "course", workdir / "grades.csv")
+    return grading.grade(class_dir, workdir / "course", workdir / "grades.csv", jobs)

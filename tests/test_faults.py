@@ -1,12 +1,12 @@
 """Faulty submissions are graded alongside honest ones: each gets a clear reason, loses only what
 its fault costs, and nobody else's grade changes (autograder/faults.py has the catalogue)."""
 
+import nbformat
 import pytest
 
-from autograder import faults, grading, submissions
+from autograder import cells, faults, grading, submissions
 from autograder.faults import ALL, FAULTS
 from autograder.labs import get_lab
-import nbformat
 
 LAB = get_lab("train-kf")
 BLANK = "gain_information_form"
@@ -14,34 +14,30 @@ BLANK = "gain_information_form"
 
 
 @pytest.fixture(scope="module")
-def graded(tmp_path_factory, monkeypatch_module):
-    """Grade the honest pair and every fault in one batch, with short cell timeouts."""
+def graded(tmp_path_factory, short_timeouts):
+    """Grade the honest pair and every fault in one batch, three at a time (the stuck ones mostly
+    wait), with 10 s cell timeouts."""
     class_dir = tmp_path_factory.mktemp("class")
-    for student, nb in ((submissions.SOLVED, submissions.solved(LAB)), (submissions.BLANK, grading.cells.read(LAB.release_notebook))):
+    for student, nb in ((submissions.SOLVED, submissions.solved(LAB)), (submissions.BLANK, cells.read(LAB.release_notebook))):
         path = class_dir / student / LAB.id / LAB.notebook_name
         path.parent.mkdir(parents=True)
         nbformat.write(nb, path)
     faults.write_faults(LAB, BLANK, class_dir)
-    rows = grading.grade(class_dir, tmp_path_factory.mktemp("course"))
-    return {row.student: row for row in rows}
+    workdir = tmp_path_factory.mktemp("course")
+    rows = grading.grade(class_dir, workdir, jobs=3)
+    return {row.student: row for row in rows}, workdir
 
 
 @pytest.fixture(scope="module")
-def monkeypatch_module():
+def short_timeouts():
     """Cell timeout of 10 s for this module's grading (the course's is 30 s)."""
-    original = grading.course_config
-
-    def shorter(workdir=grading.ROOT):
-        config = original(workdir)
-        config.Execute.timeout = 10
-        return config
-
-    grading.course_config = shorter
-    yield
-    grading.course_config = original
+    with pytest.MonkeyPatch.context() as patch:
+        patch.setenv("GRADING_CELL_TIMEOUT", "10")
+        yield
 
 
 def test_honest_submissions_are_graded_normally(graded):
+    graded, _ = graded
     assert graded[submissions.SOLVED].auto_score == graded[submissions.SOLVED].auto_max
     assert graded[submissions.SOLVED].notes == () and graded[submissions.SOLVED].reasons == {}
     assert graded[submissions.BLANK].auto_score == 0
@@ -49,6 +45,7 @@ def test_honest_submissions_are_graded_normally(graded):
 
 @pytest.mark.parametrize("fault", FAULTS, ids=[f.slug for f in FAULTS])
 def test_each_fault_costs_what_it_should_and_says_why(graded, fault):
+    graded, _ = graded
     row = graded[fault.student_id(LAB)]
     solved = graded[submissions.SOLVED]
     expected_lost = {ALL: sorted(solved.autograded), "blank": [f"test_{BLANK}"], None: []}[fault.loses]
@@ -57,8 +54,9 @@ def test_each_fault_costs_what_it_should_and_says_why(graded, fault):
     assert fault.says in said, said
 
 
-def test_feedback_carries_the_graders_note(graded, tmp_path):
-    # The note is the first cell of the graded notebook, so the feedback shows it first.
+def test_feedback_shows_the_graders_note_first(graded):
     fault = next(f for f in FAULTS if f.slug == "kernel-dies")
-    row = graded[fault.student_id(LAB)]
-    assert any("The kernel died" in note for note in row.notes)
+    _, workdir = graded
+    html = (workdir / "feedback" / fault.student_id(LAB) / LAB.id / f"{LAB.id}.html").read_text()
+    assert html.index("Note from the grader") < html.index("Lab train-kf")
+    assert "The kernel died in cell" in html

@@ -22,18 +22,10 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 
 from course import starship  # noqa: E402
 from course.starship import G, L, M, P0, R, RADAR_R1, RADAR_R2, SIGMA_RANGE, T0  # noqa: E402
+from autograder.hidden_tests.reentry_srekf import BLANKS  # noqa: E402
 from solutions import reentry_srekf as ref  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
-BLANKS = (
-    "ballistic_dynamics",
-    "ballistic_jacobian",
-    "radar_predict",
-    "radar_jacobian",
-    "marginal",
-    "conditional",
-    "plot_ballistic_coefficient",
-)
 
 
 # ---------------------------------------------------------------------------------------------

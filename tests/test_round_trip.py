@@ -23,10 +23,11 @@ from over_labs import LABS, over_labs
 
 @pytest.fixture(scope="module")
 def graded(tmp_path_factory):
-    """Grade the demo class once: (student, lab) -> GradeRow, and the course folder."""
+    """Grade the demo class once, two submissions at a time (as `demo` does): (student, lab) ->
+    GradeRow, and the course folder."""
     class_dir, workdir = tmp_path_factory.mktemp("class"), tmp_path_factory.mktemp("course")
     submissions.write_class(all_labs(), class_dir)
-    rows = grading.grade(class_dir, workdir)
+    rows = grading.grade(class_dir, workdir, jobs=2)
     return {(row.student, row.lab): row for row in rows}, workdir
 
 
