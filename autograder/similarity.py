@@ -22,8 +22,6 @@ from dataclasses import dataclass
 from itertools import combinations
 from pathlib import Path
 
-import nbformat
-
 from autograder import cells
 from autograder.labs import Lab, all_labs
 
@@ -61,16 +59,18 @@ class _Canonical(ast.NodeTransformer):
             self.arguments.setdefault(argument.arg, f"a{position}")
         node.name = self._rename(node.name)
         node.returns = None
-        return self._body(node)
+        return self.generic_visit(node)
+
+    visit_AsyncFunctionDef = visit_FunctionDef
 
     def visit_ClassDef(self, node: ast.ClassDef) -> ast.ClassDef:
         node.name = self._rename(node.name)
-        return self._body(node)
+        return self.generic_visit(node)
 
     def visit_ExceptHandler(self, node: ast.ExceptHandler) -> ast.ExceptHandler:
         if node.name:
             node.name = self._rename(node.name)
-        return self._body(node)
+        return self.generic_visit(node)
 
     def visit_Import(self, node: ast.Import) -> None:
         return None
@@ -81,12 +81,6 @@ class _Canonical(ast.NodeTransformer):
         if isinstance(node.value, ast.Constant) and isinstance(node.value.value, str):
             return None
         return self.generic_visit(node)
-
-    def _body(self, node: ast.AST) -> ast.AST:
-        self.generic_visit(node)
-        if not node.body:
-            node.body = [ast.Pass()]
-        return node
 
 
 def _bound_names(tree: ast.AST, keep: set[str]) -> set[str]:
@@ -113,6 +107,9 @@ def normalise_code(code: str, keep: set[str] = frozenset()) -> str | None:
     except SyntaxError:
         return None
     tree = _Canonical(_bound_names(tree, set(keep))).visit(tree)
+    for node in ast.walk(tree):
+        if isinstance(getattr(node, "body", None), list) and not node.body:
+            node.body = [ast.Pass()]  # its only statements were imports or docstrings
     return ast.unparse(ast.fix_missing_locations(tree))
 
 
@@ -192,15 +189,13 @@ def read_answers(folder: Path, labs: list[Lab]) -> tuple[dict[tuple[str, str], d
         for path in sorted(_submissions(folder).glob(f"*/{lab.id}/{lab.notebook_name}")):
             student = path.parent.parent.name
             try:
-                nb = cells.read(path)
-            except (OSError, ValueError, nbformat.ValidationError) as error:
+                found = [(cells.grade_id(c), c.source, c.cell_type) for c in cells.read(path).cells
+                         if cells.is_answer(c) and cells.meta(c).get("grade_id") in stubs]
+            except Exception as error:  # a submission can be any file: not JSON, truncated, not a notebook
                 not_compared.append(f"{path}: not a readable notebook ({type(error).__name__})")
                 continue
-            for cell in nb.cells:
-                if not (cells.is_answer(cell) and cells.meta(cell).get("grade_id") in stubs):
-                    continue
-                blank = cells.grade_id(cell)
-                answer = normalise(cell.source, cell.cell_type, blank)
+            for blank, source, cell_type in found:
+                answer = normalise(source, cell_type, blank)
                 if answer is None:
                     not_compared.append(f"{path}: the answer to {blank} is not valid Python")
                 elif answer not in (stubs[blank], normalise_text(TEXT_STUB)):

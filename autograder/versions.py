@@ -3,7 +3,8 @@ environment matches the lock file ``environment.lock``.
 
 Grades depend on the environment: NumPy's random streams, SciPy's solvers and nbgrader itself may
 change between versions. ``environment.lock`` pins the whole grading environment
-(``pip freeze --exclude-editable``); a record written beside each grades CSV says what was used.
+(``pip freeze --all --exclude-editable --exclude pip``); a record written beside each grades CSV
+says what was used.
 """
 
 from __future__ import annotations
@@ -73,7 +74,7 @@ def environment() -> dict:
     """The record of the current grading environment."""
     differ = differences_from_lock(LOCK) if LOCK.exists() else None
     return {
-        "graded_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
+        "recorded_at": datetime.now(timezone.utc).isoformat(timespec="seconds"),
         "python": platform.python_version(),
         "platform": platform.platform(),
         "packages": {name: _installed(name) for name in PACKAGES},
@@ -87,5 +88,9 @@ def environment() -> dict:
 def record(grades_csv: Path) -> Path:
     """Write the environment record beside a grades CSV (``grades.csv`` -> ``grades.versions.json``)."""
     path = Path(grades_csv).with_suffix(".versions.json")
-    path.write_text(json.dumps(environment(), indent=2) + "\n")
+    record = environment()
+    path.write_text(json.dumps(record, indent=2) + "\n")
+    if record["differs_from_lock"]:
+        differ = ", ".join(f"{name} {v['installed']} (locked {v['locked']})" for name, v in record["differs_from_lock"].items())
+        print(f"Graded in an environment that differs from {LOCK.name}: {differ}. See {path}.")
     return path
