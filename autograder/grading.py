@@ -222,9 +222,12 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
     with Gradebook(CourseDirectory(config=course_config(workdir)).db_url) as gb:
         for lab in labs:
             for student in students or submitted_students(workdir, lab):
+                autograded = workdir / "autograded" / student / lab.id / lab.notebook_name
                 try:
                     submission = gb.find_submission_notebook(lab.id, lab.id, student)
                 except MissingEntry:
+                    continue
+                if not autograded.exists():  # nbgrader failed part-way: reported as not graded
                     continue
                 cells, maxima, auto = {}, {}, set()
                 for grade in sorted(submission.grades, key=lambda g: g.cell.id):
@@ -233,7 +236,7 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
                     if grade.cell.cell_type == "code":
                         auto.add(grade.name)
                 order = [c.name for c in gb.find_notebook(lab.id, lab.id).grade_cells]
-                notes, reasons = _notes_and_reasons(workdir / "autograded" / student / lab.id / lab.notebook_name)
+                notes, reasons = _notes_and_reasons(autograded)
                 rows.append(
                     GradeRow(
                         student,
@@ -255,8 +258,6 @@ ANSI = re.compile(r"\x1b\[[0-9;]*m")
 def _notes_and_reasons(autograded: Path) -> tuple[tuple[str, ...], dict[str, str]]:
     """The grader's notes of an autograded notebook, and for each graded cell its first error or
     its stderr output (the reasons nbgrader gives a cell 0)."""
-    if not autograded.exists():
-        return (), {}
     nb = nbformat.read(autograded, as_version=4)
     reasons = {}
     for cell in nb.cells:
