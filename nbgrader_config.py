@@ -20,6 +20,7 @@ os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), os.environ.get
 os.environ["PATH"] = os.pathsep.join((os.path.dirname(sys.executable), os.environ.get("PATH", "")))
 
 from autograder.execute import GradingExecute  # noqa: E402
+from autograder.flag_cheating import FlagCheating  # noqa: E402
 from autograder.restore_cells import RestoreLabCells  # noqa: E402
 from course.checks import NOT_WRITTEN  # noqa: E402
 from nbconvert.preprocessors import ClearMetadataPreprocessor, CSSHTMLHeaderPreprocessor  # noqa: E402
@@ -75,8 +76,11 @@ c.Autograde.sanitize_preprocessors = [
     OverwriteCells,
     CheckCellMetadata,
 ]
+# After execution, the integrity findings (static scan and the kernel's monitor) take away the
+# points of every blank a submission games, and flag it for review (autograder/flag_cheating.py).
 c.Autograde.autograde_preprocessors = [
     GradingExecute,
+    FlagCheating,
     IgnorePattern,
     ClearMetadataPreprocessor,
     LimitOutput,

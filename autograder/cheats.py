@@ -7,17 +7,20 @@ the way its entry says:
 - ``static``: ``integrity.static_findings`` flags it before execution;
 - ``runtime``: the kernel's integrity monitor reports it (``RUNTIME_PROBE`` after a test cell),
   and refuses the worst operations outright;
-- ``overwrite``: nbgrader restores the test cells it edited or deleted (OverwriteCells with
-  ``add_missing_cells``), so it gains nothing and needs no flag;
+- ``overwrite``: the sanitize step (RestoreLabCells, then nbgrader's OverwriteCells) restores the
+  test cells it edited or deleted, so it gains nothing and needs no flag. (``retag-test-cell``, a
+  test cell given an unknown grade_id, makes nbgrader 0.9.6's OverwriteCells fail instead: the
+  test marks it as a known failure until the sanitize step drops unknown nbgrader metadata);
 - ``hidden-tests``: the hidden tests' random inputs defeat it, so it needs no flag.
 
 ``games`` says which blanks a cheat games: ``"blank"`` is the entry's target blank (a trick in one
 answer), ``"all"`` every blank (shared machinery: NumPy, the check helpers, IPython, builtins,
 the gradebook), ``"none"`` nothing (suspicious, flagged for review, costs no points).
 
-Most entries work for any lab: they target the lab's first blank (``target``) and, where the
-cheat is to turn a wrong answer into full marks, plant that blank's first catalogued mistake.
-A few need a lab's details and list the labs they work for.
+Most entries work for any lab: they target one blank (``target``: train-kf's ``predict``, else
+the lab's first blank) and, where the cheat is to turn a wrong answer into full marks, plant one
+of that blank's catalogued mistakes (``target_mistake``). A few need a lab's details and list the
+labs they work for.
 """
 
 from __future__ import annotations
@@ -398,7 +401,7 @@ def _hardcode_visible(lab: Lab) -> NotebookNode:
 
 CHEATS: tuple[Cheat, ...] = (
     Cheat("import-reference", "reaching the reference through `import`: the answer calls solutions.<lab>",
-          "blank", frozenset({STATIC}), _IMPORT, exact=True),
+          "blank", frozenset({STATIC, RUNTIME}), _IMPORT, exact=True),
     Cheat("importlib-reference", "reaching the reference through `importlib.import_module`",
           "blank", frozenset({STATIC}), _IMPORTLIB, exact=True),
     Cheat("dunder-import-reference", "reaching the reference through `__import__`",
@@ -406,7 +409,7 @@ CHEATS: tuple[Cheat, ...] = (
     Cheat("sys-modules-reference", "reaching the reference through `sys.modules`",
           "blank", frozenset({STATIC}), _SYS_MODULES, exact=True),
     Cheat("sys-path-reference", "a `sys.path` edit, then an import of the reference",
-          "blank", frozenset({STATIC}), _SYS_PATH, exact=True),
+          "blank", frozenset({STATIC, RUNTIME}), _SYS_PATH, exact=True),
     Cheat("open-exec-reference", "`open()` of the reference's .py file and `exec` of its source",
           "blank", frozenset({STATIC, RUNTIME}), _OPEN_EXEC),
     Cheat("exec-obfuscated-import", "an import of the reference hidden in rot13 and run with `exec`",

@@ -6,6 +6,9 @@
   hidden test fails with ModuleNotFoundError and nbgrader still reports success);
 - caps on each kernel: address space (``memory_limit_gb``), time per cell (``timeout``), time for
   the whole notebook (``notebook_timeout``), and output kept per cell (``max_output_bytes``);
+- the integrity monitor (autograder/integrity.py): installed before any student cell, and probed
+  after each graded test cell; its findings go to ``resources["integrity_findings"]`` for
+  ``FlagCheating``;
 - recovery: when the kernel dies (``os._exit``, a crash, the memory cap) or a cell times out, the
   cell gets an error that says so, a fresh kernel replays the cells before it silently, and
   grading goes on. nbgrader alone throws the whole submission away when its kernel dies.
@@ -26,6 +29,7 @@ from nbgrader.preprocessors import Execute
 from traitlets import Float, Integer
 
 from autograder import cells
+from autograder.integrity import INTEGRITY_SETUP, PROBE_NAME, RUNTIME_PROBE, runtime_findings
 from autograder.restore_cells import add_grader_notes
 
 PROBE = "__import__('solutions')"
@@ -66,6 +70,11 @@ class GradingExecute(Execute):
                 "would fail, so nothing was graded. Run nbgrader from the course root, whose "
                 "nbgrader_config.py puts the root on the kernel's PYTHONPATH."
             )
+        msg_id = await ensure_async(kc.execute(INTEGRITY_SETUP, silent=True, store_history=False))
+        reply = await self.async_wait_for_reply(msg_id)
+        if reply is None or reply["content"]["status"] != "ok":
+            await self._async_cleanup_kernel()
+            raise RuntimeError(f"The integrity monitor did not install in the grading kernel: {reply and reply['content']}")
         return kc
 
     # nbclient binds the synchronous twin to the base class's coroutine; bind it to ours.
@@ -78,6 +87,7 @@ class GradingExecute(Execute):
         self._check_assign_resources(resources)
         self._output_bytes: dict[int, int] = {}
         notes: list[str] = []
+        self.resources["integrity_findings"] = findings = []
         deadline = time.monotonic() + self.notebook_timeout
         failed: set[int] = set()
         restarts = 0
@@ -110,6 +120,8 @@ class GradingExecute(Execute):
                 else:
                     timeouts = [o for o in cell.outputs if o.output_type == "error" and o.ename == TIMEOUT_ERROR]
                     if not timeouts:
+                        if cells.meta(cell).get("grade") and not cells.meta(cell).get("solution"):
+                            findings += [f for f in self._probe(_name(cell, index)) if f not in findings]
                         continue
                     timeouts[-1]["evalue"] = stopped
                     timeouts[-1]["traceback"] = [f"{TIMEOUT_ERROR}: {stopped}"]
@@ -124,6 +136,16 @@ class GradingExecute(Execute):
         add_grader_notes(self.nb, notes)
         self.set_widgets_metadata()
         return self.nb, self.resources
+
+    def _probe(self, cell: str) -> list:
+        """The integrity monitor's findings so far, asked for after the graded cell ``cell``."""
+        msg_id = self.kc.execute("", silent=True, store_history=False, user_expressions={PROBE_NAME: RUNTIME_PROBE})
+        try:
+            reply = self.wait_for_reply(msg_id)
+        except (DeadKernelError, CellTimeoutError):
+            reply = None
+        result = reply["content"].get("user_expressions", {}).get(PROBE_NAME) if reply else None
+        return runtime_findings(result, cell)
 
     def _restart_and_replay(self, upto: int, failed: set[int], deadline: float) -> None:
         """A fresh kernel that has silently run every code cell before ``upto`` that did not fail."""

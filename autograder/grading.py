@@ -31,6 +31,7 @@ from traitlets.config.loader import PyFileConfigLoader
 
 from autograder import cells, late, versions
 from autograder.execute import GradingExecute
+from autograder.flag_cheating import FLAG
 from autograder.labs import ROOT, Lab
 from autograder.restore_cells import add_grader_notes, grader_notes
 
@@ -211,6 +212,11 @@ class GradeRow:
         return sum(self.max_cells[c] for c in self.autograded)
 
     @property
+    def flags(self) -> list[str]:
+        """Why the submission is flagged for review (integrity findings); empty if it is not."""
+        return [note.removeprefix(FLAG).strip() for note in self.notes if note.startswith(FLAG)]
+
+    @property
     def lost(self) -> list[str]:
         """Autograded cells short of full marks."""
         return [c for c in self.cells if c in self.autograded and (self.cells[c] or 0.0) < self.max_cells[c]]
@@ -281,12 +287,12 @@ def write_csv(rows: list[GradeRow], path: Path) -> None:
         columns += [c for c in row.cells if c not in columns]
     with open(path, "w", newline="") as handle:
         writer = csv.writer(handle)
-        writer.writerow(["student", "lab", *columns, "late_penalty", "total", "max_score", "notes"])
+        writer.writerow(["student", "lab", *columns, "late_penalty", "total", "max_score", "flagged", "notes"])
         for row in rows:
             scores = ["" if row.cells.get(c) is None else f"{row.cells[c]:g}" for c in columns]
-            notes = [*row.notes, *(f"{cell}: {why}" for cell, why in row.reasons.items())]
+            notes = [n for n in row.notes if not n.startswith(FLAG)] + [f"{c}: {why}" for c, why in row.reasons.items()]
             writer.writerow([row.student, row.lab, *scores, f"{row.late_penalty:g}", f"{row.total:g}",
-                             f"{sum(row.max_cells.values()):g}", " | ".join(notes)])
+                             f"{sum(row.max_cells.values()):g}", " | ".join(row.flags), " | ".join(notes)])
 
 
 def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None) -> None:
@@ -295,7 +301,8 @@ def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = No
     print(f"{'student':<{width}}  {'lab':<16}{'autograded':>12}  lost points in")
     for row in rows:
         score = f"{row.auto_score:g}/{row.auto_max:g}"
-        print(f"{row.student:<{width}}  {row.lab:<16}{score:>12}  {', '.join(row.lost) or '-'}")
+        flagged = "FLAGGED FOR REVIEW; " if row.flags else ""
+        print(f"{row.student:<{width}}  {row.lab:<16}{score:>12}  {flagged}{', '.join(row.lost) or '-'}")
         for line in [*row.notes, *(f"{cell}: {why}" for cell, why in row.reasons.items())]:
             print(f"{'':<{width}}  {'':<16}{'':>12}    {line[:150]}")
     for lab_id, students in (failures or {}).items():

@@ -22,9 +22,22 @@ gradebook) games every blank (``None``); something suspicious that games nothing
 visible checks redefined, a cell wrapped in a try/except that discards every error) has ``()``:
 it is flagged for review and costs no points.
 
-Edited and deleted test cells need no detector: nbgrader's OverwriteCells, with
-``add_missing_cells = True`` in nbgrader_config.py, restores them from the gradebook. Hard-coded
-answers for the visible cases need none either: the hidden tests use random inputs.
+Edited and deleted test cells need no detector: the sanitize step (RestoreLabCells, then
+nbgrader's OverwriteCells) restores them from the gradebook. Hard-coded answers for the visible
+cases need none either: the hidden tests use random inputs.
+
+In the grading executor:
+
+1. ``static_findings(nb, lab)`` on the submitted notebook (before or after sanitizing: locked
+   cells are skipped either way, because nbgrader restores them);
+2. ``INTEGRITY_SETUP`` silently, at every kernel start (restarts too, before replaying cells),
+   after the kernel's own set-up code (``__import__('solutions')``, limits);
+3. after each graded test cell, ``kc.execute("", silent=True, store_history=False,
+   user_expressions={PROBE_NAME: RUNTIME_PROBE})`` and ``runtime_findings(<the user expression's
+   reply>, <the test cell's grade_id>)``. Reports are cumulative within one kernel: keep the first
+   of equal findings, and keep the findings of a kernel that died;
+4. every autograded test cell of a blank in ``finding.blanks`` (every one if ``None``) scores 0,
+   and the submission is flagged with the findings' reasons.
 """
 
 from __future__ import annotations
@@ -40,7 +53,7 @@ from pathlib import Path
 from nbformat import NotebookNode
 
 from autograder import cells
-from autograder.integrity_monitor import CONTAINER_DUNDERS, FORBIDDEN_DUNDERS, HEADER, REPORT_EVENT
+from autograder.integrity_monitor import CONTAINER_DUNDERS, FORBIDDEN_DUNDERS, HEADER, REPORT_EVENT, benign_command
 from autograder.labs import Lab
 
 
@@ -95,6 +108,9 @@ def runtime_findings(probe_result, cell: str) -> list[Finding]:
         entries = json.loads(text) if isinstance(text, str) and text else None
     except ValueError:
         entries = None
+    if isinstance(entries, list) and entries and isinstance(entries[0], dict) and entries[0].get("monitor") == "failed":
+        return [Finding(cell, None, f"The integrity monitor failed in the kernel ({entries[0].get('error', '?')}); "
+                                    "the notebook has probably tampered with what it inspects.")]
     if not isinstance(entries, list) or not entries or entries[0] != HEADER:
         detail = "no report" if not entries else "a report in the wrong format"
         return [Finding(cell, None, f"The integrity monitor gave {detail} after this test cell; the notebook has "
@@ -142,7 +158,7 @@ MODULE_REFERENCE = {
 """Module attributes that are routes to the reference or to the hidden tests' variables."""
 MODULE_SHARED = {
     "sys": {"excepthook", "displayhook", "breakpointhook", "unraisablehook", "settrace", "setprofile",
-            "addaudithook", "audit", "__excepthook__", "__displayhook__", "setrecursionlimit", "setswitchinterval"},
+            "addaudithook", "audit", "__excepthook__", "__displayhook__"},
     "os": {"system", "popen", "execl", "execle", "execlp", "execlpe", "execv", "execve", "execvp", "execvpe",
            "spawnl", "spawnle", "spawnlp", "spawnlpe", "spawnv", "spawnve", "spawnvp", "spawnvpe", "posix_spawn",
            "posix_spawnp", "fork", "forkpty", "kill", "killpg", "chdir", "fchdir", "putenv", "unsetenv", "chroot"},
@@ -160,9 +176,10 @@ PATH_GENERIC_METHODS = frozenset({"open", "rename", "replace", "mkdir", "rmdir",
 ALLOWED_MODULE_STORES = frozenset({"matplotlib.rcParams", "matplotlib.pyplot.rcParams"})
 
 SAFE_LINE_MAGICS = frozenset({"matplotlib", "xmode", "precision", "pprint", "who", "whos", "who_ls", "pinfo",
-                              "pinfo2", "psearch", "lsmagic", "magic", "time", "timeit", "autoreload", "history"})
-SAFE_CELL_MAGICS = frozenset({"time", "timeit", "capture"})
-CODE_MAGICS = frozenset({"time", "timeit"})
+                              "pinfo2", "psearch", "lsmagic", "magic", "time", "timeit", "autoreload", "history",
+                              "debug", "pdb", "tb", "page"})
+SAFE_CELL_MAGICS = frozenset({"time", "timeit", "capture", "debug"})
+CODE_MAGICS = frozenset({"time", "timeit", "debug"})
 MAGIC_CALLS = frozenset({"run_line_magic", "run_cell_magic", "system", "getoutput"})
 
 SPECIAL_BASES = frozenset({"tuple", "list", "dict", "float", "int", "ndarray", "str", "complex"})
@@ -261,7 +278,8 @@ class _Scan:
         for _, _, tree in self.cells:
             for stmt in tree.body:
                 names = {n.id for n in ast.walk(stmt) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
-                names |= {n.attr for n in ast.walk(stmt) if isinstance(n, ast.Attribute)}
+                if isinstance(stmt, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                    names -= _local_names(stmt)
                 for bound in _bound_names(stmt):
                     uses.setdefault(bound, set()).update(names)
         return uses
@@ -289,7 +307,8 @@ class _Scan:
         seen = set()
         for hit in self.hits:
             line = getattr(hit.node, "lineno", None)
-            reason = hit.what[0].upper() + hit.what[1:] + (f" (line {line})." if line else ".")
+            what = hit.what if hit.cell else f"in a cell the student added, {hit.what}"
+            reason = what[0].upper() + what[1:] + (f" (line {line})." if line else ".")
             blank = next((b for label, b, _ in self.cells if label == hit.cell), None)
             finding = Finding(hit.cell, self._blanks(hit, blank), reason)
             if (finding.cell, finding.reason) not in seen:
@@ -500,7 +519,9 @@ class _Visitor:
             return None
         container = node.value
         path = self.module_of(container)
-        if path is not None and path not in ALLOWED_MODULE_STORES:
+        if path == "os.environ":
+            self.hit(node, "none", "sets an environment variable, which grading ignores", context)
+        elif path is not None and path not in ALLOWED_MODULE_STORES:
             self.hit(node, "shared", f"writes into {path}", context)
         elif isinstance(container, ast.Call) and isinstance(container.func, ast.Name) and container.func.id in (
                 "vars", "globals") and not self.shadowed(container.func.id, context):
@@ -531,6 +552,9 @@ class _Visitor:
                 self.hit(node, "shared", f"uses {module}.{parts[1]}, which tampers with the kernel or the machine",
                          context)
                 return
+        if top != "sys" and "sys" in parts[1:-1] and parts[parts.index("sys", 1) + 1] in MODULE_REFERENCE["sys"]:
+            self.hit(node, "reference", f"uses {path}, sys reached through another module", context)
+            return
         if top == "os" and len(parts) > 1 and parts[1] == "environ" and len(parts) > 2 and parts[2] in (
                 "update", "setdefault", "pop", "clear", "__setitem__"):
             self.hit(node, "shared", "changes environment variables", context)
@@ -645,12 +669,19 @@ class _Visitor:
             return False
         args = [a.value for a in node.args]
         if func.attr in ("system", "getoutput"):
-            self.hit(node, "shared", f"runs the shell command !{args[0] if args else ''}", context)
+            command = args[0] if args else ""
+            kind = "none" if benign_command(command) else "shared"
+            self.hit(node, kind, f"runs the shell command !{command}, which grading refuses", context)
             return True
         name = args[0] if args else ""
         line = args[1] if len(args) > 1 else ""
+        if func.attr == "run_line_magic" and name in ("pip", "conda", "mamba") and benign_command(f"{name} {line}"):
+            self.hit(node, "none", f"runs %{name} {line}, which grading refuses", context)
+            return True
         if func.attr == "run_line_magic":
-            if name in SAFE_LINE_MAGICS or (name == "load_ext" and line.strip() == "autoreload"):
+            safe = (name in SAFE_LINE_MAGICS or (name == "load_ext" and line.strip() == "autoreload")
+                    or (name == "config" and line.strip().startswith("InlineBackend.")))
+            if safe:
                 if name in CODE_MAGICS:
                     self.nested(_strip_magic_options(line), node, context)
                 return True
@@ -769,6 +800,30 @@ def _bound_names(stmt: ast.AST | None) -> list[str]:
             for child in handler.body:
                 names += _bound_names(child)
     return names
+
+
+def _local_names(definition: ast.AST) -> set[str]:
+    """Names local to a function or class body (parameters, assignments, nested definitions), minus
+    those declared global."""
+    local, declared = set(), set()
+    for node in ast.walk(definition):
+        if node is definition:
+            continue
+        if isinstance(node, ast.arg):
+            local.add(node.arg)
+        elif isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
+            local.add(node.id)
+        elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+            local.add(node.name)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            local.update((a.asname or a.name).split(".")[0] for a in node.names)
+        elif isinstance(node, (ast.Global, ast.Nonlocal)):
+            declared.update(node.names)
+    if isinstance(definition, (ast.FunctionDef, ast.AsyncFunctionDef)):
+        args = definition.args
+        local.update(a.arg for a in args.posonlyargs + args.args + args.kwonlyargs)
+        local.update(a.arg for a in (args.vararg, args.kwarg) if a is not None)
+    return local - declared
 
 
 def _target_names(target: ast.AST) -> list[str]:

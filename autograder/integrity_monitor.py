@@ -12,9 +12,11 @@ student cell runs. It
    added after it. It watches what code from the student's cells does, wherever it runs
    (including inside a hidden test that calls the student's function): imports of ``solutions``
    and ``autograder``, reads of the reference's files, writes outside the submission's folder
-   (the gradebook, other students' folders), shell commands, ``exec``/``compile``, frame
-   walking, ``gc`` searches, tracing, and attribute writes on library classes and functions.
-   The worst of these are refused (the operation raises ``PermissionError``); all are recorded.
+   (the gradebook, other students' folders, files grading reads), shell commands,
+   ``exec``/``compile``, frame walking, ``gc`` searches, tracing, and swapping the code of a
+   library function. The worst of these are refused (the operation raises ``PermissionError``);
+   all are recorded. Plain attribute assignments (``np.allclose = ...``) raise no audit event:
+   the snapshot comparison finds those.
 
 The snapshot and the findings live only in the hook's closure: no module attribute or notebook
 name leads to them (``gc`` searches and frame walks from student code are what could, and the
@@ -58,12 +60,12 @@ COURSE_CODE_DIRS = ("course", "autograder", "solutions")
 
 FORBIDDEN_DUNDERS = frozenset({
     "__eq__", "__ne__", "__lt__", "__le__", "__gt__", "__ge__", "__bool__", "__float__", "__int__",
-    "__index__", "__complex__", "__abs__", "__sub__", "__rsub__", "__array__", "__array_ufunc__",
-    "__array_function__", "__array_interface__", "__array_struct__", "__array_priority__",
-    "__array_wrap__", "__array_finalize__", "__instancecheck__", "__subclasscheck__", "__getattr__",
-    "__getattribute__",
+    "__index__", "__complex__", "__array__", "__array_ufunc__", "__array_function__",
+    "__array_interface__", "__array_struct__", "__array_priority__", "__array_wrap__",
+    "__array_finalize__", "__instancecheck__", "__subclasscheck__", "__getattr__", "__getattribute__",
 })
-"""Methods that let a returned object fool a comparison or a conversion to an array."""
+"""Methods that let a returned object fool a comparison or a conversion to an array. (Arithmetic
+ones such as ``__sub__`` are allowed: the checks convert to arrays before any arithmetic.)"""
 CONTAINER_DUNDERS = frozenset({"__getitem__", "__iter__", "__len__"})
 """Also forbidden on subclasses of tuple, list, dict, float, int and ndarray."""
 
@@ -99,9 +101,32 @@ TRACE_EVENTS = frozenset({"sys.settrace", "sys.setprofile"})
 WATCHED = (frozenset({"import", "open", "exec", "compile", "object.__setattr__", "object.__delattr__",
                       "object.__getattr__", "sys.addaudithook", "os.chdir", "ctypes.dlopen",
                       "ctypes.dlsym", "ctypes.cdata", "ctypes.addressof", "ctypes.call_function",
-                      "ctypes.string_at", "ctypes.wstring_at", REPORT_EVENT})
+                      "ctypes.string_at", "ctypes.wstring_at", "_thread.start_new_thread", REPORT_EVENT})
            | SPAWN_EVENTS | FRAME_EVENTS | GC_EVENTS | TRACE_EVENTS | frozenset(WRITE_EVENTS))
 FRAME_ATTRIBUTES = frozenset({"tb_frame", "gi_frame", "cr_frame", "ag_frame"})
+BENIGN_COMMANDS = frozenset({"pip", "pip3", "conda", "mamba", "ls", "pwd", "echo", "which", "nvidia-smi", "date",
+                             "whoami", "uname", "hostname"})
+"""Shell commands an honest student leaves in a notebook. They are refused during grading like any
+other, and flagged, but cost no points."""
+
+
+def benign_command(command) -> bool:
+    """Whether a shell command is one of BENIGN_COMMANDS, with no paths up or out, and no pipes,
+    redirections, substitutions or second commands."""
+    if isinstance(command, (bytes, bytearray)):
+        command = os.fsdecode(bytes(command))
+    if not isinstance(command, str):
+        try:
+            command = " ".join(os.fsdecode(part) for part in command)
+        except TypeError:
+            return False
+    words = command.split()
+    if not words or any(c in command for c in ";&|<>`$\n") or ".." in command:
+        return False
+    first = os.path.basename(words[0])
+    if first in ("python", "python3") and words[1:3] == ["-m", "pip"]:
+        first, words = "pip", words[2:]
+    return first in BENIGN_COMMANDS and not any(w.startswith(("/", "~")) for w in words[1:])
 
 
 def install() -> None:
@@ -137,7 +162,7 @@ def _quote(text: str) -> str:
 
 
 def _function_of(obj):
-    """The Python function behind a function, method, dispatcher or partial, or None."""
+    """The Python function behind a function, a method or a NumPy dispatcher, or None."""
     for _ in range(4):
         if isinstance(obj, types.FunctionType):
             return obj
@@ -319,10 +344,10 @@ class _Monitor:
                 return "student"
         module = sys.modules.get(getattr(cls, "__module__", "") or "")
         file = getattr(module, "__file__", None)
-        if module is None or module is sys.modules.get("__main__"):
+        if module is not None and module is sys.modules.get("__main__"):
             return "student"
         if file is None:
-            return "lib"
+            return "lib"  # no Python code from a notebook cell in it (checked above): a C type
         kind = self.file_kind(file)
         return "student" if kind in ("student", "skip") else ("lib" if kind == "trusted" else kind)
 
@@ -586,7 +611,43 @@ class _Monitor:
             out.append(("A trace or profile function was installed (sys.settrace or sys.setprofile).", None))
         out += self._shell_findings()
         out += self._class_dunder_findings()
+        out += self._namespace_findings()
         return out
+
+    def _namespace_findings(self) -> list[tuple[str, object]]:
+        """Names in the notebook that hold the reference (a module, function or class of
+        ``solutions`` or ``autograder``), directly or in a function's closure or defaults. The
+        hidden tests' ``check_<blank>`` functions, which the test cells import, are allowed."""
+        out: list[tuple[str, object]] = []
+        if self.user_ns is None:
+            return out
+        for name, value in list(self.user_ns.items()):
+            if name.startswith("_") and name in ("__builtins__", "__builtin__", "_ih", "_oh", "_dh"):
+                continue
+            for held in _held_objects(value):
+                owner = _hidden_owner(held)
+                if owner is None:
+                    continue
+                if (owner.startswith("autograder.hidden_tests.") and name.startswith("check_")
+                        and getattr(held, "__name__", None) == name):
+                    continue
+                out.append((f"The notebook's name {name} holds {owner}, part of the hidden reference or tests.",
+                            self._names_blanks({name})))
+                break
+        return out
+
+    def _names_blanks(self, wanted: set) -> tuple[str, ...] | None:
+        """The blanks whose code uses one of ``wanted`` (through helpers, not other blanks)."""
+        functions = {k: v for k, v in self.user_ns.items() if isinstance(v, types.FunctionType)}
+        using = {n for n in wanted if n in self.blanks}
+        changed = True
+        while changed:
+            changed = False
+            for name, function in functions.items():
+                if name not in using and _code_names(function.__code__) & (wanted | (using - self.blanks)):
+                    using.add(name)
+                    changed = True
+        return tuple(sorted(using & self.blanks)) or None
 
     def _shell_findings(self) -> list[tuple[str, object]]:
         out: list[tuple[str, object]] = []
@@ -676,18 +737,7 @@ class _Monitor:
             return (owner,)
         if self.user_ns is None:
             return None
-        functions = {k: v for k, v in self.user_ns.items() if isinstance(v, types.FunctionType)}
-        wanted = {cls.__name__, owner}
-        using = set()
-        changed = True
-        while changed:  # through helpers, not through other blanks (the tests isolate each blank)
-            changed = False
-            for name, function in functions.items():
-                if name not in using and _code_names(function.__code__) & (wanted | (using - self.blanks)):
-                    using.add(name)
-                    changed = True
-        blanks = tuple(sorted(using & self.blanks))
-        return blanks or None
+        return self._names_blanks({cls.__name__, owner})
 
     def core_findings(self) -> list:
         """Builtins and the monitor's own code, checked with dict methods and ``is`` only.
@@ -813,12 +863,22 @@ class _Monitor:
         if event in SPAWN_EVENTS:
             frames = self.student_frames(frame)
             if frames:
+                command = _command_of(event, args, frame)
+                if command is not None and benign_command(command):
+                    shown = os.fsdecode(bytes(command)) if isinstance(command, (bytes, bytearray)) else command
+                    self.add(f"Runs the shell command {shown!r} (refused during grading).", ())
+                    return PermissionError("Not allowed during grading: shell commands.")
                 return self._blocked(f"Runs an operating-system command ({event}).", frames)
             return None
         if event.startswith("ctypes."):
             frames = self.student_frames(frame, passthrough=("ctypes",), direct=True)
             if frames:
                 return self._blocked("Uses ctypes to reach raw memory or C functions.", frames)
+            return None
+        if event == "_thread.start_new_thread":
+            frames = self.student_frames(frame, passthrough=("threading", "_thread", "concurrent"), direct=True)
+            if frames:
+                self.add("Starts a thread, which can change the kernel between the checks.", self.blanks_of(frames))
             return None
         if event in GC_EVENTS:
             frames = self.student_frames(frame, direct=True)
@@ -836,7 +896,7 @@ class _Monitor:
                 self.add("Runs code built at run time (exec, eval or compile).", self.blanks_of(frames))
             return None
         if event in FRAME_EVENTS:
-            frames = self.student_frames(frame, passthrough=("inspect", "traceback"), direct=True)
+            frames = self.student_frames(frame, passthrough=("inspect",), direct=True)
             if frames:
                 self.add("Walks the call stack (sys._getframe or inspect), which reaches the hidden tests' variables.",
                          self.blanks_of(frames))
@@ -868,6 +928,21 @@ _C_CALLABLES = (types.BuiltinFunctionType, types.BuiltinMethodType, types.Method
                 types.WrapperDescriptorType, types.MethodDescriptorType, types.ClassMethodDescriptorType)
 
 
+def _command_of(event, args, frame):
+    """The shell command behind a process event, when it can be told."""
+    if event == "os.system" and args:
+        return args[0]
+    if event == "subprocess.Popen" and len(args) > 1:
+        return args[1]
+    f = frame
+    while f is not None:  # IPython's !command: system_piped(cmd), getoutput(cmd)
+        if f.f_code.co_name in ("system_piped", "system_raw", "getoutput", "system") and isinstance(
+                f.f_locals.get("cmd"), str):
+            return f.f_locals["cmd"]
+        f = f.f_back
+    return None
+
+
 def _qualified(cls) -> str:
     return f"{getattr(cls, '__module__', '?')}.{getattr(cls, '__qualname__', '?')}"
 
@@ -895,6 +970,41 @@ def _ipython_owned(value) -> bool:
 def _is_plain_callable(value) -> bool:
     return isinstance(value, (types.FunctionType, types.MethodType, types.BuiltinFunctionType,
                               types.BuiltinMethodType)) or type(value).__name__ == "partial"
+
+
+def _held_objects(value) -> list:
+    """``value``, and what a function or partial holds in its closure, defaults and arguments."""
+    held = [value]
+    function = _function_of(value)
+    if function is not None:
+        held += [cell.cell_contents for cell in function.__closure__ or () if _cell_filled(cell)]
+        held += list(function.__defaults__ or ()) + list((function.__kwdefaults__ or {}).values())
+    if type(value).__name__ == "partial":
+        held += [getattr(value, "func", None), *getattr(value, "args", ()), *getattr(value, "keywords", {}).values()]
+    if isinstance(value, (list, tuple, set, frozenset)) and len(value) < 64:
+        held += list(value)
+    if isinstance(value, dict) and len(value) < 64:
+        held += list(value.values())
+    return held
+
+
+def _cell_filled(cell) -> bool:
+    try:
+        cell.cell_contents
+    except ValueError:
+        return False
+    return True
+
+
+def _hidden_owner(obj) -> str | None:
+    """The hidden module that ``obj`` is, or that defined it; None for anything else."""
+    if isinstance(obj, types.ModuleType):
+        name = getattr(obj, "__name__", "") or ""
+    elif isinstance(obj, (types.FunctionType, types.MethodType, type)) or type(obj).__name__ == "_ArrayFunctionDispatcher":
+        name = getattr(obj, "__module__", "") or ""
+    else:
+        return None
+    return name if isinstance(name, str) and name.split(".")[0] in HIDDEN_PACKAGES else None
 
 
 def _code_names(code) -> set:

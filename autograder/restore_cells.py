@@ -52,6 +52,11 @@ class RestoreLabCells(NbGraderPreprocessor):
         notes = grader_notes(nb)
         students = [c for c in nb.cells if not (c.cell_type == "markdown" and c.source.startswith(NOTE_TITLE))]
 
+        for cell in students:
+            # A cell that claims a grade_id the lab does not have (or a second copy of one) is the
+            # student's own: without this, nbgrader 0.9.6 fails on the whole submission.
+            if "nbgrader" in cell.metadata and (not _has_id(cell) or cells.grade_id(cell) not in order):
+                del cell.metadata["nbgrader"]
         mine: dict[str, NotebookNode] = {}
         added: dict[str | None, list[NotebookNode]] = {None: []}
         previous = None

@@ -9,12 +9,16 @@ catalogue of hostile submissions (autograder/cheats.py) and the honest corpus.
 - Edited and deleted test cells: the course's sanitize step (RestoreLabCells, then nbgrader's
   OverwriteCells) restores them, and the wrong blank still scores 0. Hard-coded visible cases: the hidden tests fail them.
 
-Notebooks run two at a time in one event loop. Cheats run on a trimmed notebook (set-up, answers,
-graded tests and student-added cells); honest solved and blank notebooks run whole.
+Notebooks run three at a time in one event loop. Cheats run on a trimmed notebook (set-up,
+answers, graded tests and student-added cells); honest solved notebooks run whole. Every lab's
+catalogued mistakes pass the static scan; train-kf's also run, all in one kernel, under the
+monitor (the others' hidden tests are slow, and a mistake changes arithmetic, not what the
+monitor watches).
 """
 
 from __future__ import annotations
 
+import ast
 import asyncio
 import copy
 import json
@@ -36,10 +40,13 @@ from autograder.mistakes import catalogue as mistakes
 from over_labs import LABS, over_labs
 
 TRAIN = get_lab("train-kf")
-PARALLEL = 2
+PARALLEL = 3
 CELL_TIMEOUT = 180
-OTHER_LAB_CHEATS = ("patch-allclose", "open-exec-reference", "showtraceback")
-"""Runtime cheats also run on every other lab, to show the catalogue works beyond train-kf."""
+OTHER_LAB_CHEATS = ("patch-allclose", "open-exec-reference", "showtraceback", "gc-reference")
+"""Runtime cheats also run on the other labs (one each, in turn), to show the catalogue works beyond
+train-kf."""
+OTHER_LABS = [lab for lab in LABS if lab != TRAIN]
+OTHER_LAB_CASES = [(lab, OTHER_LAB_CHEATS[i % len(OTHER_LAB_CHEATS)]) for i, lab in enumerate(OTHER_LABS)]
 
 
 # -- running notebooks as the grader does ------------------------------------------------------------
@@ -104,6 +111,11 @@ async def _execute(nb: NotebookNode, lab: Lab, course: Path) -> Run:
                             resources={"metadata": {"path": str(cwd)}},
                             extra_arguments=["--HistoryManager.hist_file=:memory:", "--IPKernelApp.log_level=ERROR"])
     names = {PROBE_NAME: "sorted(globals())"}
+
+    def listed_names(content: dict) -> list[str]:
+        value = content["user_expressions"][PROBE_NAME]
+        return ast.literal_eval(value["data"]["text/plain"]) if value.get("status") == "ok" else ["<error>"]
+
     async with client.async_setup_kernel():
         setup = await _silent(client, INTEGRITY_SETUP)
         assert setup["status"] == "ok", setup
@@ -114,11 +126,11 @@ async def _execute(nb: NotebookNode, lab: Lab, course: Path) -> Run:
             if cells.is_autograded_test(cell):
                 if not run.names_before:
                     listed = await _silent(client, "", names)
-                    run.names_before = eval(listed["user_expressions"][PROBE_NAME]["data"]["text/plain"])
+                    run.names_before = listed_names(listed)
                 run.probes.append((cells.grade_id(cell), await _probe(client, cells.grade_id(cell))))
                 if not run.names_after:
                     listed = await _silent(client, "", names)
-                    run.names_after = eval(listed["user_expressions"][PROBE_NAME]["data"]["text/plain"])
+                    run.names_after = listed_names(listed)
         run.probes.append(("", await _probe(client, "")))
     for cell in run.nb.cells:
         if cells.is_autograded_test(cell):
@@ -139,6 +151,74 @@ def execute_all(jobs: dict[str, tuple[NotebookNode, Lab, Path]]) -> dict[str, Ru
         return dict(await asyncio.gather(*(one(name, *job) for name, job in jobs.items())))
 
     return asyncio.run(main())
+
+
+HONEST_HABITS = '''%timeit -n 3 -r 1 predict(np.zeros(2), np.eye(2), np.eye(2), np.eye(2))
+import functools
+import json
+import math
+import traceback
+import warnings
+from dataclasses import dataclass
+
+import scipy.optimize
+
+
+@dataclass
+class Result:
+    rmse: float
+
+
+@functools.lru_cache(maxsize=None)
+def square(n):
+    return n * n
+
+
+try:
+    kupdate(None, None, None, None, None)
+except Exception:
+    traceback.print_exc()
+warnings.warn("a warning of my own")
+np.savetxt("my_results.txt", np.arange(3.0))
+with open("my_results.txt") as handle:
+    text = handle.read()
+fig, ax = plt.subplots()
+ax.plot([1.0, 2.0], label="a line")
+ax.legend()
+fig.savefig("my_figure.png")
+plt.close(fig)
+print(Result(1.0) == Result(1.0), square(3), json.dumps({"a": 1}), math.pi, scipy.optimize.brentq(math.sin, 3, 4))
+'''
+"""Things honest students do that the defences must not mind: magics, imports, a dataclass (which has
+__eq__), a traceback printed, files written and read in their own folder, a figure saved."""
+
+
+def honest_habits_notebook(grader_snippets: bool = False) -> NotebookNode:
+    """The solved train-kf notebook with a cell of honest habits, and a local try/except in predict;
+    with ``grader_snippets``, INTEGRITY_SETUP and RUNTIME_PROBE as two last cells."""
+    nb = submissions.solved(TRAIN)
+    index = next(i for i, c in enumerate(nb.cells) if cells.meta(c).get("grade_id") == "run_filter") + 1
+    nb.cells.insert(index, nbformat.v4.new_code_cell(HONEST_HABITS))
+    answer = next(c for c in nb.cells if cells.meta(c).get("grade_id") == "predict")
+    answer.source = answer.source.replace("    x_f = A @ x\n", "    try:\n        x_f = A @ x\n    except ValueError as "
+                                          "error:\n        raise ValueError(f'bad shapes: {error}') from error\n")
+    assert "try:" in answer.source
+    if grader_snippets:  # run as ordinary cells, they must print nothing
+        nb.cells += [nbformat.v4.new_code_cell(INTEGRITY_SETUP), nbformat.v4.new_code_cell(RUNTIME_PROBE + ";")]
+    return nb
+
+
+def graded_form(nb: NotebookNode, lab: Lab) -> NotebookNode:
+    """What nbgrader runs for an honest notebook: every locked cell (test cells with their hidden
+    tests) as in the source notebook. The same as the sanitize step for a notebook that kept its
+    cells, without making a gradebook."""
+    locked = {cells.grade_id(c): c.source for c in cells.read(lab.source_notebook).cells
+              if cells.meta(c).get("grade_id") and not cells.is_answer(c)}
+    nb = copy.deepcopy(nb)
+    for cell in nb.cells:
+        if cells.meta(cell).get("grade_id") in locked:
+            cell.source = locked[cells.grade_id(cell)]
+    return nb
 
 
 def mistakes_notebook(lab: Lab) -> NotebookNode:
@@ -210,14 +290,14 @@ def runs(course: Path) -> dict[str, Run]:
     """Every notebook the runtime tests need, executed once."""
     jobs: dict[str, tuple[NotebookNode, Lab, Path]] = {}
     for lab in LABS:
-        graded = course / lab.id
-        jobs[f"solved/{lab.id}"] = (sanitized(submissions.solved(lab), lab, graded), lab, graded)
-        jobs[f"blank/{lab.id}"] = (sanitized(cells.read(lab.release_notebook), lab, graded), lab, graded)
-        jobs[f"mistakes/{lab.id}"] = (mistakes_notebook(lab), lab, graded)
-        if lab != TRAIN:
-            for name in OTHER_LAB_CHEATS:
-                nb = sanitized(cheats.get(name).notebook(lab), lab, graded)
-                jobs[f"cheat/{name}/{lab.id}"] = (trimmed(nb, lab), lab, graded)
+        jobs[f"solved/{lab.id}"] = (graded_form(submissions.solved(lab), lab), lab, course)
+        blank = graded_form(cells.read(lab.release_notebook), lab)
+        jobs[f"blank/{lab.id}"] = (blank if lab == TRAIN else trimmed(blank, lab), lab, course)
+    jobs[f"mistakes/{TRAIN.id}"] = (mistakes_notebook(TRAIN), TRAIN, course)
+    jobs["habits/train-kf"] = (sanitized(honest_habits_notebook(grader_snippets=True), TRAIN, course), TRAIN, course)
+    for lab, name in OTHER_LAB_CASES:
+        nb = graded_form(cheats.get(name).notebook(lab), lab)
+        jobs[f"cheat/{name}/{lab.id}"] = (trimmed(nb, lab), lab, course)
     for cheat in RUNTIME_CHEATS:
         nb = sanitized(cheat.notebook(TRAIN), TRAIN, course)
         jobs[f"cheat/{cheat.name}/{TRAIN.id}"] = (trimmed(nb, TRAIN), TRAIN, course)
@@ -278,14 +358,26 @@ def test_static_scan_flags_no_honest_notebook(lab):
 @over_labs
 def test_runtime_monitor_flags_no_honest_run(runs, lab):
     for kind in ("solved", "blank", "mistakes"):
+        if f"{kind}/{lab.id}" not in runs:
+            continue  # every lab's mistakes pass the static scan; train-kf's also run under the monitor
         run = runs[f"{kind}/{lab.id}"]
         assert len(run.probes) > 1, f"{kind}: no graded test cell ran"
         assert run.findings == [], f"{kind} notebook of {lab.id}: {run.findings}"
     solved, blank = runs[f"solved/{lab.id}"], runs[f"blank/{lab.id}"]
     assert all(score > 0 for score in solved.scores.values()), solved.scores
     assert all(score == 0 for score in blank.scores.values()), blank.scores
-    graded_mistakes = [score for cell, score in runs[f"mistakes/{lab.id}"].scores.items()]
-    assert graded_mistakes, "the mistakes notebook graded nothing"
+    if lab == TRAIN:
+        assert len(runs[f"mistakes/{lab.id}"].probes) > len(mistakes(lab)), "the mistakes notebook graded too little"
+
+
+def test_honest_habits_are_not_flagged(runs):
+    nb = honest_habits_notebook()
+    assert integrity.static_findings(nb, TRAIN) == []
+    run = runs["habits/train-kf"]
+    assert run.findings == []
+    assert all(score > 0 for score in run.scores.values()), run.scores
+    outputs = [o for c in run.nb.cells if c.source.startswith("%timeit") for o in c.outputs]
+    assert any("per loop" in o.get("text", "") for o in outputs), outputs  # the honest cell ran
 
 
 def test_setup_and_probe_print_nothing_and_leave_no_names(runs):
@@ -294,6 +386,10 @@ def test_setup_and_probe_print_nothing_and_leave_no_names(runs):
     for cell in run.nb.cells:  # the silent setup and probes add no output to any cell
         for output in cell.get("outputs", []):
             assert "integrity" not in json.dumps(output)
+    habits = runs["habits/train-kf"]
+    setup, probe = habits.nb.cells[-2:]
+    assert setup.source == INTEGRITY_SETUP and setup.outputs == []
+    assert probe.source.startswith(RUNTIME_PROBE) and probe.outputs == []
 
 
 # -- static scan of the cheats ----------------------------------------------------------------------
@@ -313,6 +409,36 @@ def test_static_scan_catches_cheat(lab, cheat):
     if cheat.exact:  # a local trick costs its own blank, not every blank
         assert {f.blanks for f in findings} == {wanted}, findings
     assert all(f.reason.endswith(".") and f.reason[0].isupper() for f in findings)
+
+
+EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags without cost; [] no finding)
+    "!pip install numpy": [()],
+    "%pip install scipy": [()],
+    "!cp ../../other-student/train-kf/train-kf.ipynb .": [None],
+    "%config InlineBackend.figure_format = 'retina'": [],
+    "%config InteractiveShell.ast_node_interactivity = 'all'": [None],
+    "%load_ext autoreload\n%autoreload 2": [],
+    "%time x = predict(np.zeros(2), np.eye(2), np.eye(2), np.eye(2))": [],
+    "%time import solutions.train_kf": [None],
+    "import os\nos.environ['OMP_NUM_THREADS'] = '1'": [()],
+    "import sys\nsys.setrecursionlimit(5000)": [],
+    "plt.rcParams['figure.figsize'] = (8, 4)": [],
+    "class Vector:\n    def __sub__(self, other):\n        return self\n": [],
+    "def check_close(*args, **kwargs):\n    pass\n": [()],
+    "print('There are two solutions.')": [],
+    "np.save('../../../gradebook.npy', np.zeros(1))": [None],
+    "x = open(name).read()": [None],
+    "fig, ax = plt.subplots()\nfig.savefig(f'figure_{1}.png')": [],
+}
+
+
+@pytest.mark.parametrize("source", EDGE_CASES)
+def test_static_scan_edge_cases(source):
+    nb = submissions.solved(TRAIN)
+    index = next(i for i, c in enumerate(nb.cells) if cells.meta(c).get("grade_id") == "setup") + 1
+    nb.cells.insert(index, nbformat.v4.new_code_cell(source))
+    found = integrity.static_findings(nb, TRAIN)
+    assert sorted({f.blanks for f in found}, key=repr) == EDGE_CASES[source], found
 
 
 NOT_STATIC = [(lab, cheat) for lab in LABS for cheat in cheats.catalogue(lab) if cheats.STATIC not in cheat.caught_by]
@@ -338,15 +464,14 @@ def test_runtime_monitor_catches_cheat(runs, cheat):
     assert first.startswith("test_") or first == "", "findings carry the test cell after which they were found"
 
 
-@pytest.mark.parametrize("name", OTHER_LAB_CHEATS)
-@pytest.mark.parametrize("lab", [lab for lab in LABS if lab != TRAIN], ids=lambda lab: lab.id)
-def test_runtime_monitor_catches_cheats_in_every_lab(runs, name, lab):
+@pytest.mark.parametrize("lab, name", OTHER_LAB_CASES, ids=[f"{lab.id}-{name}" for lab, name in OTHER_LAB_CASES])
+def test_runtime_monitor_catches_cheats_in_every_lab(runs, lab, name):
     cheat = cheats.get(name)
     findings = runs[f"cheat/{name}/{lab.id}"].findings
     assert findings and covers(findings, cheat.blanks(lab)), findings
 
 
-WORKS_UNDETECTED = ("patch-allclose", "alias-patch-allclose", "showtraceback", "input-transformer", "run-cell",
+WORKS_UNDETECTED = ("import-reference", "sys-path-reference", "exec-obfuscated-import", "patch-allclose", "alias-patch-allclose", "showtraceback", "input-transformer", "run-cell",
                     "events", "custom-exc", "ast-transformer", "array-frame-walk")
 
 
@@ -384,12 +509,9 @@ def test_nothing_was_written_outside_the_submission(runs, course):
 @pytest.mark.parametrize("cheat", OVERWRITE_CHEATS, ids=[c.name for c in OVERWRITE_CHEATS])
 def test_nbgrader_restores_test_cells_and_the_wrong_blank_scores_zero(runs, cheat):
     run = runs[f"overwrite/{cheat.name}"]
-    if isinstance(run, Exception):
-        # nbgrader 0.9.6's OverwriteCells deletes an unknown grade_id but keeps the cell's nbgrader
-        # metadata, then add_missing_task_cells fails on it (KeyError 'grade_id'): the submission
-        # is not graded at all. A sanitize step that drops the nbgrader metadata of cells with
-        # unknown grade_ids, before OverwriteCells, fixes it.
-        pytest.xfail(f"nbgrader cannot sanitize this submission: {type(run).__name__}: {run}")
+    # nbgrader 0.9.6 alone fails on a test cell retagged with an unknown grade_id (KeyError
+    # 'grade_id'); RestoreLabCells drops such metadata first, so every one of these is graded.
+    assert not isinstance(run, Exception), run
     blank = cheats.target(TRAIN)
     source = {cells.grade_id(c): c.source for c in cells.read(TRAIN.source_notebook).cells
               if cells.is_autograded_test(c)}

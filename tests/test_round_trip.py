@@ -111,3 +111,9 @@ def test_plain_nbgrader_autogrades_from_the_course_root(tmp_path):
     subprocess.run([*nbgrader, "autograde", lab.id], cwd=tmp_path, env=env, check=True, capture_output=True)
     [row] = grading.read_grades(tmp_path, [lab], ["student1"])
     assert row.auto_score == row.auto_max > 0
+
+
+def test_no_honest_submission_is_flagged(graded):
+    rows, _ = graded
+    flagged = {key: row.flags for key, row in rows.items() if row.flags}
+    assert flagged == {}, "the integrity checks flagged honest work (the solved notebooks and every catalogued mistake)"

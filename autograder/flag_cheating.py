@@ -1,0 +1,53 @@
+"""Taking away the points that a dishonest submission games, and flagging it for review.
+
+Runs right after GradingExecute and before nbgrader saves the scores. It joins the static scan of
+the submission's code with the findings of the kernel's integrity monitor (autograder/integrity.py),
+puts an error in the test cell of every blank a finding games (so nbgrader scores it 0, and the
+gradebook and grades.csv agree), and writes each reason as a "Flagged for review" note at the top
+of the notebook, where the instructor's table and the feedback show it.
+"""
+
+from __future__ import annotations
+
+from nbformat import NotebookNode
+from nbformat.v4 import new_output
+from nbgrader.preprocessors import NbGraderPreprocessor
+
+from autograder import cells
+from autograder.integrity import Finding, static_findings
+from autograder.labs import Lab
+from autograder.restore_cells import add_grader_notes
+
+FLAG = "Flagged for review:"
+ERROR_NAME = "FlaggedForReview"
+
+
+class FlagCheating(NbGraderPreprocessor):
+    """Zero the test cells of the blanks that integrity findings say are gamed; note the reasons."""
+
+    def preprocess(self, nb: NotebookNode, resources: dict) -> tuple[NotebookNode, dict]:
+        lab = Lab(resources["nbgrader"]["assignment"])
+        findings: list[Finding] = []
+        for finding in static_findings(nb, lab) + resources.get("integrity_findings", []):
+            if finding.reason not in [f.reason for f in findings]:
+                findings.append(finding)
+        blanks = cells.blank_names(cells.read(lab.source_notebook))
+        gamed: dict[str, list[str]] = {}
+        for finding in findings:
+            for blank in blanks if finding.blanks is None else finding.blanks:
+                gamed.setdefault(f"test_{blank}", []).append(finding.reason)
+        for cell in nb.cells:
+            if cell.cell_type == "code" and "grade_id" in cells.meta(cell) and cells.grade_id(cell) in gamed:
+                why = " ".join(gamed[cells.grade_id(cell)])
+                cell.outputs.append(new_output("error", ename=ERROR_NAME, evalue=f"This test was not counted. {why}",
+                                               traceback=[f"{ERROR_NAME}: This test was not counted. {why}"]))
+        add_grader_notes(nb, [f"{FLAG} {f.reason} ({_games(f)})" for f in findings])
+        return nb, resources
+
+
+def _games(finding: Finding) -> str:
+    if finding.blanks is None:
+        return "it games every blank"
+    if not finding.blanks:
+        return "it costs no points"
+    return "it games " + ", ".join(finding.blanks)
