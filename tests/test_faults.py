@@ -1,6 +1,8 @@
 """Faulty submissions are graded alongside honest ones: each gets a clear reason, loses only what
 its fault costs, and nobody else's grade changes (autograder/faults.py has the catalogue)."""
 
+import shutil
+
 import nbformat
 import pytest
 
@@ -25,7 +27,7 @@ def graded(tmp_path_factory, short_timeouts):
     faults.write_faults(LAB, BLANK, class_dir)
     workdir = tmp_path_factory.mktemp("course")
     rows = grading.grade(class_dir, workdir, jobs=3)
-    return {row.student: row for row in rows}, workdir
+    return {row.student: row for row in rows}, workdir, class_dir
 
 
 @pytest.fixture(scope="module")
@@ -37,7 +39,7 @@ def short_timeouts():
 
 
 def test_honest_submissions_are_graded_normally(graded):
-    graded, _ = graded
+    graded, _, _ = graded
     assert graded[submissions.SOLVED].auto_score == graded[submissions.SOLVED].auto_max
     assert graded[submissions.SOLVED].notes == () and graded[submissions.SOLVED].reasons == {}
     assert graded[submissions.BLANK].auto_score == 0
@@ -45,7 +47,7 @@ def test_honest_submissions_are_graded_normally(graded):
 
 @pytest.mark.parametrize("fault", FAULTS, ids=[f.slug for f in FAULTS])
 def test_each_fault_costs_what_it_should_and_says_why(graded, fault):
-    graded, _ = graded
+    graded, _, _ = graded
     row = graded[fault.student_id(LAB)]
     solved = graded[submissions.SOLVED]
     expected_lost = {ALL: sorted(solved.autograded), "blank": [f"test_{BLANK}"], None: []}[fault.loses]
@@ -56,7 +58,15 @@ def test_each_fault_costs_what_it_should_and_says_why(graded, fault):
 
 def test_feedback_shows_the_graders_note_first(graded):
     fault = next(f for f in FAULTS if f.slug == "kernel-dies")
-    _, workdir = graded
+    _, workdir, _ = graded
     html = (workdir / "feedback" / fault.student_id(LAB) / LAB.id / f"{LAB.id}.html").read_text()
     assert html.index("Note from the grader") < html.index("Lab train-kf")
     assert "The kernel died in cell" in html
+
+
+def test_regrading_one_student_leaves_every_other_row_as_it_was(graded, tmp_path):
+    rows, workdir, class_dir = graded
+    student = next(f for f in FAULTS if f.slug == "kernel-dies").student_id(LAB)
+    shutil.copytree(class_dir / student, tmp_path / student)
+    again = {row.student: row for row in grading.grade(tmp_path, workdir)}
+    assert again == rows, "regrading one student changed a row (the regraded one must come out the same too)"
