@@ -516,4 +516,5 @@ def statistical_checks(pf_step: PfStep, seed: int) -> None:
 
 def check_pf_step(func: Callable, seed: int = PF_STEP_SEED) -> None:
     """The statistical test of pf_step, with the reference tracking_dynamics."""
-    statistical_checks(isolate(func, ref, BLANKS), seed)
+    # the statistical checks turn warnings into failures with a hint about log-weights
+    statistical_checks(isolate(func, ref, BLANKS, warnings_fail=False), seed)
