@@ -412,13 +412,19 @@ def plot_flow(flow: Flow, t: float, ax: Axes | None = None, extent: tuple[float,
     if colorbar:
         ax.figure.colorbar(colours, ax=ax, label=label, shrink=0.8, pad=0.01)
     x0, x1, y0, y1 = extent if extent is not None else (xk[0], xk[-1], yk[0], yk[-1])
+    _map_axes(ax, (x0, x1, y0, y1), f"The current behind the island at t = {t / 60:.0f} min")
+    return ax
+
+
+def _map_axes(ax: Axes, extent: tuple[float, float, float, float], title: str) -> None:
+    """Limits (km), equal aspect, axis labels and title of a map of the sea."""
+    x0, x1, y0, y1 = extent
     ax.set_xlim(x0, x1)
     ax.set_ylim(y0, y1)
     ax.set_aspect("equal")
     ax.set_xlabel("x, downstream (km)")
     ax.set_ylabel("y (km)")
-    ax.set_title(f"The current behind the island at t = {t / 60:.0f} min")
-    return ax
+    ax.set_title(title)
 
 
 def _ellipse(ax: Axes, centre: np.ndarray, P: np.ndarray, colour: str, n_sigma: float = 2.0, label: str | None = None) -> None:
@@ -471,12 +477,7 @@ def plot_tracks(
             for j, n in enumerate(range(a, min(b, len(estimate)), ellipses_every)):
                 _ellipse(right, np.asarray(estimate)[n] / 1e3, np.asarray(P)[n] / 1e6, colour,
                          label=f"{name}, 2-sigma ellipse" if j == 0 else None)
-    right.set_xlim(zx0, zx1)
-    right.set_ylim(zy0, zy1)
-    right.set_aspect("equal")
-    right.set_xlabel("x, downstream (km)")
-    right.set_ylabel("y (km)")
-    right.set_title(f"Zoom: minutes {a} to {b - 1} (dashed box on the left)")
+    _map_axes(right, (zx0, zx1, zy0, zy1), f"Zoom: minutes {a} to {b - 1} (dashed box on the left)")
     right.legend(loc="best", fontsize=7, framealpha=0.9)
     fig.tight_layout()
     return fig
