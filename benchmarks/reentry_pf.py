@@ -13,7 +13,7 @@ It prints (1) a whole filter run, N = 5000 and 300 steps, for each, with the rat
 on the machine. tests/ checks that ``plain`` and ``loop`` pass the same statistical checks as
 the reference, so they are the same algorithm.
 
-Options: ``--repeats R`` (best of R, default 3), ``--quick`` (fewer sizes, for a smoke test).
+Options: ``--repeats R`` (median of R, default 3), ``--quick`` (fewer sizes, for a smoke test).
 """
 
 from __future__ import annotations
@@ -21,6 +21,7 @@ from __future__ import annotations
 import argparse
 import bisect
 import math
+import statistics
 import sys
 import time
 from collections.abc import Callable
@@ -97,20 +98,20 @@ def run_filter(step: Step, b: np.ndarray, N: int, seed: int) -> float:
     return float(x[2] @ w)
 
 
-def best_time(func: Callable[[], object], repeats: int) -> float:
-    """The shortest of ``repeats`` wall-clock timings of func() [s]."""
+def median_time(func: Callable[[], object], repeats: int) -> float:
+    """The median of ``repeats`` wall-clock timings of func() [s]."""
     times = []
     for _ in range(repeats):
         start = time.perf_counter()
         func()
         times.append(time.perf_counter() - start)
-    return min(times)
+    return statistics.median(times)
 
 
 def whole_run_table(b: np.ndarray, N: int, repeats: int) -> dict[str, float]:
     """Seconds for a whole run of each implementation (loop: one repeat, it is slow)."""
     return {
-        name: best_time(lambda step=step: run_filter(step, b, N, seed=1), 1 if name == "loop" else repeats)
+        name: median_time(lambda step=step: run_filter(step, b, N, seed=1), 1 if name == "loop" else repeats)
         for name, step in IMPLEMENTATIONS.items()
     }
 
@@ -120,7 +121,7 @@ def step_time(step: Step, N: int, repeats: int) -> float:
     b = falling_object.load().b
     rng = np.random.default_rng(2)
     x, w = reentry_pf.initial_cloud(b[0], N, rng)
-    return best_time(lambda: step(x, w, b[1], rng), repeats)
+    return median_time(lambda: step(x, w, b[1], rng), repeats)
 
 
 def main(argv: list[str] | None = None) -> None:
@@ -132,7 +133,7 @@ def main(argv: list[str] | None = None) -> None:
     steps = b.shape[0] - 1
     N = 500 if args.quick else falling_object.N_PARTICLES
 
-    print(f"1. Whole filter run: N = {N}, {steps} steps, best of {args.repeats} (loop: 1)")
+    print(f"1. Whole filter run: N = {N}, {steps} steps, median of {args.repeats} (loop: 1)")
     runs = whole_run_table(b, N, args.repeats)
     print(f"{'implementation':<16}{'time [s]':>10}{'per step [ms]':>15}{'vs reference':>14}")
     for name, seconds in runs.items():
@@ -142,7 +143,7 @@ def main(argv: list[str] | None = None) -> None:
 
     sizes = [10**3, 10**4] if args.quick else [10**3, 10**4, 10**5, 10**6]
     loop_limit = 10**4 if args.quick else 10**5
-    print(f"\n2. One step against N, best of {args.repeats} (loop only up to N = {loop_limit:.0e})")
+    print(f"\n2. One step against N, median of {args.repeats} (loop only up to N = {loop_limit:.0e})")
     print(f"{'N':>9}{'reference [ms]':>16}{'ns/particle':>13}{'plain [ms]':>12}{'ref/plain':>11}{'loop [ms]':>12}")
     for n in sizes:
         ref = step_time(reentry_pf.pf_step, n, args.repeats)
