@@ -1,41 +1,44 @@
-"""Dishonest submissions, graded by the real pipeline alongside an honest one: each earns nothing
+"""Dishonest submissions, graded by the real pipeline alongside honest ones: each earns nothing
 for the blanks it games, and each that the integrity checks catch is flagged with its reason
-(autograder/cheats.py has the catalogue; tests/test_integrity.py tests the detector itself)."""
+(autograder/cheats.py has the catalogue; tests/test_integrity.py tests the detector itself).
+
+Every train-kf cheat is graded. In the other labs, the cheats that the static scan catches go
+through the same lab-independent flagging as train-kf's (test_integrity.py checks the scan on every
+lab), so only those that must be stopped while the notebook runs or by the sanitize step are
+graded here; benchmarks/grading_throughput.py grades every cheat of every lab.
+"""
 
 import nbformat
 import pytest
 
-from autograder import cheats, grading, submissions
-from autograder.cheats import RUNTIME, STATIC
-from autograder.labs import get_lab
+from autograder import cheats, grading, submissions, synthetic_class
+from autograder.cheats import STATIC
+from autograder.labs import all_labs, get_lab
 
-LAB = get_lab("train-kf")
-CHEATS = [c for c in cheats.catalogue(LAB)]
+TRAIN = get_lab("train-kf")
+CASES = [(TRAIN, cheat) for cheat in cheats.catalogue(TRAIN)] + [
+    (lab, cheat) for lab in all_labs() if lab != TRAIN for cheat in cheats.catalogue(lab) if STATIC not in cheat.caught_by
+]
 
 
 @pytest.fixture(scope="module")
 def graded(tmp_path_factory):
     class_dir = tmp_path_factory.mktemp("class")
-    for student, nb in [(submissions.SOLVED, submissions.solved(LAB))] + [(c.name, c.notebook(LAB)) for c in CHEATS]:
-        path = class_dir / student / LAB.id / LAB.notebook_name
+    honest = [(submissions.SOLVED, lab, submissions.solved(lab)) for lab in all_labs()]
+    for student, lab, nb in honest + [(cheat.name, lab, cheat.notebook(lab)) for lab, cheat in CASES]:
+        path = class_dir / student / lab.id / lab.notebook_name
         path.parent.mkdir(parents=True)
         nbformat.write(nb, path)
     rows = grading.grade(class_dir, tmp_path_factory.mktemp("course"), jobs=2)
-    return {row.student: row for row in rows}
+    return {(row.student, row.lab): row for row in rows}
 
 
-def test_the_honest_submission_keeps_full_marks_and_is_not_flagged(graded):
-    row = graded[submissions.SOLVED]
+@pytest.mark.parametrize("lab", all_labs(), ids=lambda lab: lab.id)
+def test_the_honest_submission_keeps_full_marks_and_is_not_flagged(graded, lab):
+    row = graded[(submissions.SOLVED, lab.id)]
     assert row.auto_score == row.auto_max and row.flags == []
 
 
-@pytest.mark.parametrize("cheat", CHEATS, ids=[c.name for c in CHEATS])
-def test_a_cheat_earns_nothing_for_what_it_games_and_is_flagged(graded, cheat):
-    row = graded[cheat.name]
-    gamed = cheat.blanks(LAB)
-    tests = sorted(row.autograded) if gamed is None else [f"test_{blank}" for blank in gamed]
-    assert all(row.cells[t] == 0 for t in tests), {t: row.cells[t] for t in tests}
-    if cheat.caught_by & {STATIC, RUNTIME}:
-        assert row.flags, f"{cheat.name} was not flagged: {row.notes}"
-    else:  # defeated without a flag: restored test cells, or the hidden tests' random inputs
-        assert row.flags == [], row.flags
+@pytest.mark.parametrize("lab, cheat", CASES, ids=[f"{lab.id}-{cheat.name}" for lab, cheat in CASES])
+def test_a_cheat_earns_nothing_for_what_it_games_and_is_flagged_when_caught(graded, lab, cheat):
+    assert synthetic_class.cheat_outcome(lab, cheat).errors(graded[(cheat.name, lab.id)]) == []

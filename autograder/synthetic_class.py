@@ -1,0 +1,100 @@
+"""A synthetic class of one lab that mixes every kind of submission, and what grading must make of each.
+
+A class holds every catalogued fault (careless work: stuck, crashing, memory-hungry, unreadable...),
+every catalogued cheat (hostile work), then the solved notebook and the catalogued mistakes in turn
+(honest work) until it has ``size`` submissions. Each submission comes with its ``Outcome``, so a
+graded class can be checked against the catalogues: the throughput benchmark grades 200 per lab and
+checks every row, and tests/test_cheating_graded.py uses the same rule for the cheats.
+"""
+
+from __future__ import annotations
+
+import itertools
+from dataclasses import dataclass
+from pathlib import Path
+
+import nbformat
+
+from autograder import cells, cheats, faults, submissions
+from autograder.cheats import RUNTIME, STATIC, Cheat
+from autograder.grading import GradeRow
+from autograder.labs import Lab
+from autograder.mistakes import catalogue as mistake_catalogue
+
+FAULT, CHEAT, MISTAKE, SOLVED = "fault", "cheat", "mistake", "solved"
+HONEST = (MISTAKE, SOLVED)
+
+
+@dataclass(frozen=True)
+class Outcome:
+    """What grading must make of one submission."""
+
+    student: str
+    kind: str
+    """FAULT, CHEAT, MISTAKE or SOLVED."""
+    zero: tuple[str, ...] | None
+    """The test cells that must score 0; None: every autograded cell."""
+    only: bool
+    """Every other autograded cell must keep full marks."""
+    flagged: bool
+    """Whether the submission must be flagged for review (it must not be otherwise)."""
+
+    def errors(self, row: GradeRow) -> list[str]:
+        """How ``row`` differs from this outcome (empty: it is as catalogued)."""
+        zero = sorted(row.autograded) if self.zero is None else list(self.zero)
+        errors = [f"{test} scored {row.cells[test]}, not 0" for test in zero if row.cells[test] != 0]
+        if self.only:
+            errors += [f"{test} lost marks ({row.reasons.get(test, 'no reason')})" for test in row.lost if test not in zero]
+        if bool(row.flags) != self.flagged:
+            errors.append(f"flagged: {row.flags}" if row.flags else "not flagged")
+        return [f"{self.student}: {error}" for error in errors]
+
+
+def cheat_outcome(lab: Lab, cheat: Cheat) -> Outcome:
+    """A cheat earns nothing for the blanks it games; it is flagged exactly when the integrity
+    checks catch it (the sanitize step and the hidden tests defeat the others without a flag)."""
+    gamed = cheat.blanks(lab)
+    return Outcome(cheat.name, CHEAT, None if gamed is None else tuple(f"test_{b}" for b in gamed),
+                   only=False, flagged=bool(cheat.caught_by & {STATIC, RUNTIME}))
+
+
+def fault_outcome(lab: Lab, fault: faults.Fault, blank: str) -> Outcome:
+    """A fault in ``blank`` costs what the catalogue says and nothing else; it is never flagged."""
+    zero = {faults.ALL: None, "blank": (f"test_{blank}",), None: ()}[fault.loses]
+    return Outcome(fault.student_id(lab), FAULT, zero, only=True, flagged=False)
+
+
+def write(lab: Lab, size: int, folder: Path) -> list[Outcome]:
+    """Write a class of ``size`` submissions of ``lab`` as ``folder/<student>/<lab>/...``; their outcomes."""
+    hostile = len(faults.FAULTS) + len(cheats.catalogue(lab))
+    if size < hostile:
+        raise ValueError(f"a class of {lab.id} needs at least {hostile} submissions: one per fault and per cheat")
+    blank = cells.blank_names(cells.read(lab.source_notebook))[0]
+    faults.write_faults(lab, blank, folder)
+    outcomes = [fault_outcome(lab, fault, blank) for fault in faults.FAULTS]
+    notebooks = []
+    for cheat in cheats.catalogue(lab):
+        notebooks.append(cheat.notebook(lab))
+        outcomes.append(cheat_outcome(lab, cheat))
+    honest = itertools.cycle([(SOLVED, submissions.solved(lab), None)]
+                             + [(MISTAKE, submissions.with_mistake(lab, m), m.blank) for m in mistake_catalogue(lab)])
+    for k in range(size - len(outcomes)):
+        kind, nb, wrong = next(honest)
+        notebooks.append(nb)
+        outcomes.append(Outcome(f"student{k:03d}", kind, () if wrong is None else (f"test_{wrong}",),
+                                only=True, flagged=False))
+    for outcome, nb in zip(outcomes[len(faults.FAULTS):], notebooks, strict=True):
+        path = folder / outcome.student / lab.id / lab.notebook_name
+        path.parent.mkdir(parents=True)
+        nbformat.write(nb, path)
+    return outcomes
+
+
+def errors(rows: list[GradeRow], outcomes: list[Outcome]) -> dict[str, list[str]]:
+    """The students whose graded rows differ from their ``outcomes``, and how (a missing row is one way)."""
+    by_student = {row.student: row for row in rows}
+    found = {}
+    for outcome in outcomes:
+        row = by_student.get(outcome.student)
+        found[outcome.student] = [f"{outcome.student}: no grade"] if row is None else outcome.errors(row)
+    return {student: errs for student, errs in found.items() if errs}
