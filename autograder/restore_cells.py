@@ -42,6 +42,20 @@ def _has_id(cell: NotebookNode) -> bool:
     return "grade_id" in cells.meta(cell)
 
 
+def _keep_cell_ids_unique(nb: NotebookNode, restored: list[NotebookNode]) -> None:
+    """Give the student's cells that share a cell id with a restored lab cell an id of their own.
+
+    (A test cell that lost its nbgrader metadata keeps its id; the copy put back has it too, and
+    nbformat would otherwise warn about the duplicate on every later read.)"""
+    taken = {c.get("id") for c in restored}
+    used = {c.get("id") for c in nb.cells}
+    for cell in nb.cells:
+        if cell.get("id") in taken and not any(cell is r for r in restored):
+            new_id = next(f"{cell.id[:56]}-{k}" for k in range(1, len(used) + 2) if f"{cell.id[:56]}-{k}" not in used)
+            used.add(new_id)
+            cell.id = new_id
+
+
 class RestoreLabCells(NbGraderPreprocessor):
     """Reorder a submission to the lab's order and restore missing lab cells (see the module doc)."""
 
@@ -77,5 +91,6 @@ class RestoreLabCells(NbGraderPreprocessor):
 
         by_id = {cells.grade_id(c): c for c in released.cells if _has_id(c)}
         nb.cells = added[None] + [c for i in order for c in [mine.get(i, by_id[i]), *added.get(i, [])]]
+        _keep_cell_ids_unique(nb, restored=[by_id[i] for i in missing])
         add_grader_notes(nb, notes)
         return nb, resources

@@ -517,6 +517,9 @@ def test_nbgrader_restores_test_cells_and_the_wrong_blank_scores_zero(runs, chea
               if cells.is_autograded_test(c)}
     restored = [c for c in run.nb.cells if cells.is_autograded_test(c) and cells.grade_id(c) == f"test_{blank}"]
     assert len(restored) == 1 and restored[0].source.endswith(source[f"test_{blank}"])
+    ids = [c.id for c in run.nb.cells]
+    assert len(ids) == len(set(ids)), "a restored cell shares its cell id with the student's copy"
+    nbformat.validate(run.nb)
     assert set(run.scores) == set(source)
     assert run.scores[f"test_{blank}"] == 0
     assert all(score > 0 for cell, score in run.scores.items() if cell != f"test_{blank}"), run.scores
