@@ -49,8 +49,9 @@ def _keep_cell_ids_unique(nb: NotebookNode, restored: list[NotebookNode]) -> Non
     nbformat would otherwise warn about the duplicate on every later read.)"""
     taken = {c.get("id") for c in restored}
     used = {c.get("id") for c in nb.cells}
+    put_back = {id(c) for c in restored}
     for cell in nb.cells:
-        if cell.get("id") in taken and not any(cell is r for r in restored):
+        if cell.get("id") in taken and id(cell) not in put_back:
             new_id = next(f"{cell.id[:56]}-{k}" for k in range(1, len(used) + 2) if f"{cell.id[:56]}-{k}" not in used)
             used.add(new_id)
             cell.id = new_id

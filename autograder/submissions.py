@@ -35,6 +35,14 @@ def with_mistake(lab: Lab, mistake: Mistake) -> NotebookNode:
     return nb
 
 
+def write(nb: NotebookNode, folder: Path, student: str, lab: Lab) -> Path:
+    """Write ``nb`` as ``student``'s submission of ``lab``: ``folder/<student>/<lab>/<lab>.ipynb``."""
+    path = folder / student / lab.id / lab.notebook_name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    nbformat.write(nb, path)
+    return path
+
+
 def write_class(labs: list[Lab], folder: Path) -> list[str]:
     """Write a demo class as ``folder/<student>/<lab>/<lab>.ipynb`` and return the student ids.
 
@@ -49,7 +57,5 @@ def write_class(labs: list[Lab], folder: Path) -> list[str]:
         submissions.append((SOLVED, lab, solved(lab)))
         submissions += [(m.student_id(lab), lab, with_mistake(lab, m)) for m in catalogue(lab)]
     for student, lab, nb in submissions:
-        path = folder / student / lab.id / lab.notebook_name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        nbformat.write(nb, path)
+        write(nb, folder, student, lab)
     return sorted({student for student, _, _ in submissions})

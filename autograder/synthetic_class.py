@@ -13,7 +13,6 @@ import itertools
 from dataclasses import dataclass
 from pathlib import Path
 
-import nbformat
 
 from autograder import cells, cheats, faults, submissions
 from autograder.cheats import RUNTIME, STATIC, Cheat
@@ -22,7 +21,6 @@ from autograder.labs import Lab
 from autograder.mistakes import catalogue as mistake_catalogue
 
 FAULT, CHEAT, MISTAKE, SOLVED = "fault", "cheat", "mistake", "solved"
-HONEST = (MISTAKE, SOLVED)
 
 
 @dataclass(frozen=True)
@@ -72,29 +70,22 @@ def write(lab: Lab, size: int, folder: Path) -> list[Outcome]:
     blank = cells.blank_names(cells.read(lab.source_notebook))[0]
     faults.write_faults(lab, blank, folder)
     outcomes = [fault_outcome(lab, fault, blank) for fault in faults.FAULTS]
-    notebooks = []
     for cheat in cheats.catalogue(lab):
-        notebooks.append(cheat.notebook(lab))
+        submissions.write(cheat.notebook(lab), folder, cheat.name, lab)
         outcomes.append(cheat_outcome(lab, cheat))
     honest = itertools.cycle([(SOLVED, submissions.solved(lab), None)]
                              + [(MISTAKE, submissions.with_mistake(lab, m), m.blank) for m in mistake_catalogue(lab)])
     for k in range(size - len(outcomes)):
         kind, nb, wrong = next(honest)
-        notebooks.append(nb)
+        submissions.write(nb, folder, f"student{k:03d}", lab)
         outcomes.append(Outcome(f"student{k:03d}", kind, () if wrong is None else (f"test_{wrong}",),
                                 only=True, flagged=False))
-    for outcome, nb in zip(outcomes[len(faults.FAULTS):], notebooks, strict=True):
-        path = folder / outcome.student / lab.id / lab.notebook_name
-        path.parent.mkdir(parents=True)
-        nbformat.write(nb, path)
     return outcomes
 
 
 def errors(rows: list[GradeRow], outcomes: list[Outcome]) -> dict[str, list[str]]:
     """The students whose graded rows differ from their ``outcomes``, and how (a missing row is one way)."""
     by_student = {row.student: row for row in rows}
-    found = {}
-    for outcome in outcomes:
-        row = by_student.get(outcome.student)
-        found[outcome.student] = [f"{outcome.student}: no grade"] if row is None else outcome.errors(row)
+    found = {o.student: o.errors(by_student[o.student]) if o.student in by_student else [f"{o.student}: no grade"]
+             for o in outcomes}
     return {student: errs for student, errs in found.items() if errs}

@@ -8,7 +8,6 @@ lab), so only those that must be stopped while the notebook runs or by the sanit
 graded here; benchmarks/grading_throughput.py grades every cheat of every lab.
 """
 
-import nbformat
 import pytest
 
 from autograder import cheats, grading, submissions, synthetic_class
@@ -26,9 +25,7 @@ def graded(tmp_path_factory):
     class_dir = tmp_path_factory.mktemp("class")
     honest = [(submissions.SOLVED, lab, submissions.solved(lab)) for lab in all_labs()]
     for student, lab, nb in honest + [(cheat.name, lab, cheat.notebook(lab)) for lab, cheat in CASES]:
-        path = class_dir / student / lab.id / lab.notebook_name
-        path.parent.mkdir(parents=True)
-        nbformat.write(nb, path)
+        submissions.write(nb, class_dir, student, lab)
     rows = grading.grade(class_dir, tmp_path_factory.mktemp("course"), jobs=2)
     return {(row.student, row.lab): row for row in rows}
 

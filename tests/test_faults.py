@@ -3,7 +3,6 @@ its fault costs, and nobody else's grade changes (autograder/faults.py has the c
 
 import shutil
 
-import nbformat
 import pytest
 
 from autograder import cells, faults, grading, submissions, synthetic_class
@@ -21,9 +20,7 @@ def graded(tmp_path_factory, short_timeouts):
     wait), with 10 s cell timeouts."""
     class_dir = tmp_path_factory.mktemp("class")
     for student, nb in ((submissions.SOLVED, submissions.solved(LAB)), (submissions.BLANK, cells.read(LAB.release_notebook))):
-        path = class_dir / student / LAB.id / LAB.notebook_name
-        path.parent.mkdir(parents=True)
-        nbformat.write(nb, path)
+        submissions.write(nb, class_dir, student, LAB)
     faults.write_faults(LAB, BLANK, class_dir)
     workdir = tmp_path_factory.mktemp("course")
     rows = grading.grade(class_dir, workdir, jobs=3)
