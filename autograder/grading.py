@@ -33,7 +33,7 @@ from autograder import cells, late, versions
 from autograder.execute import GradingExecute
 from autograder.flag_cheating import FLAG
 from autograder.labs import ROOT, Lab
-from autograder.restore_cells import add_grader_notes, grader_notes
+from autograder.restore_cells import add_grader_notes, forget_grader_notes, grader_notes
 
 
 # nbgrader 0.9.6 builds gradebook objects that SQLAlchemy 2 no longer adds to the session through
@@ -134,6 +134,7 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab]) -> dic
         for folder in sorted(p for p in submissions.glob(f"*/{lab.id}") if p.is_dir()):
             student = folder.parent.name
             nb, notes = read_submission(folder, lab)
+            forget_grader_notes(nb)
             add_grader_notes(nb, notes)
             target = workdir / "submitted" / student / lab.id
             if target.exists():

@@ -10,6 +10,8 @@ What it changed goes into a grader's note at the top, which the student sees in 
 
 from __future__ import annotations
 
+import re
+
 from nbformat import NotebookNode
 from nbformat.v4 import new_markdown_cell
 from nbgrader.preprocessors import NbGraderPreprocessor
@@ -18,24 +20,50 @@ from autograder import cells
 from autograder.labs import Lab
 
 NOTE_TITLE = "**Note from the grader.**"
+# The notes themselves, as plain text, are kept in the note cell's metadata under this key. Only a
+# cell carrying it is the grader's note: a student cannot forge one by typing the title.
+NOTES_KEY = "autograder_notes"
+# CommonMark lets a backslash escape any ASCII punctuation character.
+MARKDOWN_PUNCTUATION = re.compile(r"([!-/:-@\[-`{-~])")
+
+
+def is_grader_note(cell: NotebookNode) -> bool:
+    """Whether ``cell`` is a grader's note written by ``add_grader_notes``."""
+    return cell.cell_type == "markdown" and NOTES_KEY in cell.metadata
 
 
 def grader_notes(nb: NotebookNode) -> list[str]:
-    """The notes in a notebook's grader's note (its first cell), if it has one."""
-    if nb.cells and nb.cells[0].cell_type == "markdown" and nb.cells[0].source.startswith(NOTE_TITLE):
-        return [line[2:] for line in nb.cells[0].source.splitlines()[1:] if line.startswith("- ")]
+    """The notes, as plain text, in a notebook's grader's note (its first cell), if it has one."""
+    if nb.cells and is_grader_note(nb.cells[0]):
+        return list(nb.cells[0].metadata[NOTES_KEY])
     return []
 
 
+def as_markdown(text: str) -> str:
+    """``text`` escaped so that Markdown shows it exactly as written."""
+    return MARKDOWN_PUNCTUATION.sub(r"\\\1", text)
+
+
+def forget_grader_notes(nb: NotebookNode) -> None:
+    """Make any grader's note in a submitted notebook an ordinary cell of the student's.
+
+    Only the grader writes notes; one that arrives with the submission was made by hand."""
+    for cell in nb.cells:
+        cell.metadata.pop(NOTES_KEY, None)
+
+
 def add_grader_notes(nb: NotebookNode, notes: list[str]) -> None:
-    """Add notes to the notebook's grader's note, creating it as the first cell if needed."""
+    """Add notes to the notebook's grader's note, creating it as the first cell if needed.
+
+    The notes are shown as written: code names such as ``__import__`` are not read as Markdown."""
     if not notes:
         return
     existing = grader_notes(nb)
     if existing:
         nb.cells.pop(0)
-    body = "\n".join(f"- {note}" for note in existing + notes)
-    nb.cells.insert(0, new_markdown_cell(f"{NOTE_TITLE} Your notebook was graded with these changes:\n{body}"))
+    body = "\n".join(f"- {as_markdown(note)}" for note in existing + notes)
+    nb.cells.insert(0, new_markdown_cell(f"{NOTE_TITLE} Your notebook was graded with these changes:\n{body}",
+                                         metadata={NOTES_KEY: existing + notes}))
 
 
 def _has_id(cell: NotebookNode) -> bool:
@@ -65,7 +93,7 @@ class RestoreLabCells(NbGraderPreprocessor):
         released = cells.read(lab.release_notebook)
         order = [cells.grade_id(c) for c in released.cells if _has_id(c)]
         notes = grader_notes(nb)
-        students = [c for c in nb.cells if not (c.cell_type == "markdown" and c.source.startswith(NOTE_TITLE))]
+        students = [c for c in nb.cells if not is_grader_note(c)]
 
         for cell in students:
             # A cell that claims a grade_id the lab does not have (or a second copy of one) is the

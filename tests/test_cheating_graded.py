@@ -8,10 +8,14 @@ lab), so only those that must be stopped while the notebook runs or by the sanit
 graded here; benchmarks/grading_throughput.py grades every cheat of every lab.
 """
 
+import html
+import re
+
 import pytest
 
 from autograder import cheats, grading, submissions, synthetic_class
 from autograder.cheats import STATIC
+from autograder.flag_cheating import FLAG
 from autograder.labs import all_labs, get_lab
 
 TRAIN = get_lab("train-kf")
@@ -26,16 +30,31 @@ def graded(tmp_path_factory):
     honest = [(submissions.SOLVED, lab, submissions.solved(lab)) for lab in all_labs()]
     for student, lab, nb in honest + [(cheat.name, lab, cheat.notebook(lab)) for lab, cheat in CASES]:
         submissions.write(nb, class_dir, student, lab)
-    rows = grading.grade(class_dir, tmp_path_factory.mktemp("course"), jobs=2)
-    return {(row.student, row.lab): row for row in rows}
+    workdir = tmp_path_factory.mktemp("course")
+    rows = grading.grade(class_dir, workdir, jobs=2)
+    return {(row.student, row.lab): row for row in rows}, workdir
 
 
 @pytest.mark.parametrize("lab", all_labs(), ids=lambda lab: lab.id)
 def test_the_honest_submission_keeps_full_marks_and_is_not_flagged(graded, lab):
-    row = graded[(submissions.SOLVED, lab.id)]
+    rows, _ = graded
+    row = rows[(submissions.SOLVED, lab.id)]
     assert row.auto_score == row.auto_max and row.flags == []
 
 
 @pytest.mark.parametrize("lab, cheat", CASES, ids=[f"{lab.id}-{cheat.name}" for lab, cheat in CASES])
 def test_a_cheat_earns_nothing_for_what_it_games_and_is_flagged_when_caught(graded, lab, cheat):
-    assert synthetic_class.cheat_outcome(lab, cheat).errors(graded[(cheat.name, lab.id)]) == []
+    rows, _ = graded
+    assert synthetic_class.cheat_outcome(lab, cheat).errors(rows[(cheat.name, lab.id)]) == []
+
+
+def test_the_feedback_shows_each_flag_as_written(graded):
+    """Reasons name code such as ``__import__``, which Markdown would otherwise show as bold "import"."""
+    rows, workdir = graded
+    flagged = [row for row in rows.values() if row.flags]
+    assert any("__import__" in flag for row in flagged for flag in row.flags)
+    for row in flagged:
+        page = (workdir / "feedback" / row.student / row.lab / f"{row.lab}.html").read_text()
+        text = html.unescape(re.sub(r"<[^>]*>", "", page))
+        for flag in row.flags:
+            assert f"{FLAG} {flag}" in text, (row.student, flag)
