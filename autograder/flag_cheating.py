@@ -41,13 +41,14 @@ class FlagCheating(NbGraderPreprocessor):
                 why = " ".join(gamed[cells.grade_id(cell)])
                 cell.outputs.append(new_output("error", ename=ERROR_NAME, evalue=f"This test was not counted. {why}",
                                                traceback=[f"{ERROR_NAME}: This test was not counted. {why}"]))
-        add_grader_notes(nb, [f"{FLAG} {f.reason} ({_games(f)})" for f in findings])
+        add_grader_notes(nb, [f"{FLAG} {f.reason.rstrip('.')}. {_cost(f)}" for f in findings])
         return nb, resources
 
 
-def _games(finding: Finding) -> str:
+def _cost(finding: Finding) -> str:
+    """What a finding costs, as the sentence that follows its reason."""
     if finding.blanks is None:
-        return "it games every blank"
+        return "It costs the points of every blank."
     if not finding.blanks:
-        return "it costs no points"
-    return "it games " + ", ".join(finding.blanks)
+        return "It costs no points."
+    return "It costs the points of " + ", ".join(finding.blanks) + "."
