@@ -96,7 +96,8 @@ def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
 
     A notebook under another name is taken if it is the only one. A file that is not a readable
     notebook (not JSON, truncated, invalid) is replaced by the blank release notebook, so that it
-    is graded as an empty submission, with the reason in its notes.
+    is graded as an empty submission, with the reason in its notes. A grader's note that arrives
+    inside the file becomes an ordinary cell of the student's: only the grader writes notes.
     """
     expected = folder / lab.notebook_name
     found = sorted(folder.glob("*.ipynb"))
@@ -119,6 +120,7 @@ def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
             f"{path.name} could not be read as a notebook ({type(error).__name__}: {reason}); "
             "it was graded as an empty submission."
         ]
+    forget_grader_notes(nb)
     return nb, notes
 
 
@@ -134,7 +136,6 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab]) -> dic
         for folder in sorted(p for p in submissions.glob(f"*/{lab.id}") if p.is_dir()):
             student = folder.parent.name
             nb, notes = read_submission(folder, lab)
-            forget_grader_notes(nb)
             add_grader_notes(nb, notes)
             target = workdir / "submitted" / student / lab.id
             if target.exists():

@@ -13,7 +13,6 @@ import itertools
 from dataclasses import dataclass
 from pathlib import Path
 
-
 from autograder import cells, cheats, faults, submissions
 from autograder.cheats import RUNTIME, STATIC, Cheat
 from autograder.grading import GradeRow
