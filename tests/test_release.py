@@ -9,6 +9,7 @@ from pathlib import Path
 
 import nbformat
 import pytest
+from nbclient import NotebookClient
 
 from autograder import cells, data, grading, leaks
 from autograder.bundle import LeakFound, write_bundle
@@ -46,6 +47,23 @@ def test_release_keeps_every_blank_as_a_stub_and_every_test_cell(lab):
             assert "check_" not in cell.source, f"{cells.grade_id(cell)} still shows its hidden tests"
     written = [c for c in release.cells if cells.is_answer(c) and c.cell_type == "markdown"]
     assert all(c.source == "YOUR ANSWER HERE" for c in written), "model answers and rubrics are stripped"
+
+
+@over_labs
+def test_the_release_run_before_writing_anything_stops_only_where_a_blank_is_needed(lab, tmp_path):
+    """A student who runs every cell of the fresh release sees each failing cell name the blanks it
+    needs (``require``); no cell fails any other way, and nothing writes to stderr."""
+    folder = tmp_path / lab.id
+    folder.mkdir()
+    nb = cells.read(lab.release_notebook)
+    NotebookClient(nb, timeout=120, allow_errors=True, resources={"metadata": {"path": str(folder)}}).execute()
+    failed = {}
+    for cell in nb.cells:
+        for output in cell.get("outputs", []):
+            if output.output_type == "error" or (output.output_type == "stream" and output.name == "stderr"):
+                failed[cells.grade_id(cell) if "grade_id" in cells.meta(cell) else cell.id] = output.get("ename", "stderr")
+    assert failed, "the fresh release should stop at the blanks"
+    assert set(failed.values()) == {"NotWrittenYet"}, {c: e for c, e in failed.items() if e != "NotWrittenYet"}
 
 
 def test_student_bundle_has_no_leaks_and_installs_nothing_hidden(tmp_path):
