@@ -63,6 +63,10 @@ c.Execute.timeout = int(os.environ.get("GRADING_CELL_TIMEOUT", "30"))
 c.GradingExecute.memory_limit_gb = 4.0
 c.GradingExecute.notebook_timeout = 300
 c.GradingExecute.max_output_bytes = 1_000_000
+# A kernel gets 3 minutes to start, not nbclient's 60 s: on a loaded machine (more grading jobs
+# than cores, or other work beside them) a start took longer than 60 s, and nbgrader then drops the
+# whole submission from the batch.
+c.Execute.startup_timeout = 180
 # The kernel's own log goes to the grader's terminal, never into the graded notebook. At WARNING
 # level ipykernel 7 prints a notice about unencrypted loopback TCP for every submission, which
 # buries the grading summary; errors still show.
