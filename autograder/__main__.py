@@ -12,7 +12,7 @@ from autograder.labs import ROOT
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m autograder", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
-    commands.add_parser("labs", help="list the labs: blanks, points, visible checks, hidden tests, catalogued mistakes")
+    commands.add_parser("labs", help="list the labs: blanks, points, visible checks, hidden tests, catalogued mistakes, and the claims each checks")
     commands.add_parser("release", help="generate release/<lab>/ for every lab with nbgrader, then check it for leaks")
     bundle = commands.add_parser("bundle", help="write the solution-free tree that students get, and check it for leaks")
     bundle.add_argument("out", type=Path, help="a new folder")

@@ -6,7 +6,7 @@ import ast
 import importlib
 from dataclasses import dataclass
 
-from autograder import cells
+from autograder import cells, claims
 from autograder.labs import Lab
 from autograder.mistakes import catalogue
 
@@ -27,6 +27,8 @@ class Inventory:
     hidden_assertions: int
     """Check-helper calls that the hidden tests make when they grade the reference."""
     mistakes: int
+    claims: dict[str, str]
+    """Claim id -> what its check verifies, for every claim the lab's text marks."""
 
 
 def _helper_calls(code: str) -> int:
@@ -78,14 +80,19 @@ def inventory(lab: Lab) -> Inventory:
         hidden_tests=len(blanks),
         hidden_assertions=_assertions_on_reference(lab, hidden, blanks),
         mistakes=len(catalogue(lab)),
+        claims={cid: c.summary for cid, c in claims.checks(lab).items()},
     )
 
 
 def print_inventory(labs: list[Lab]) -> None:
-    header = ("lab", "blanks", "auto points", "written answers", "visible checks", "hidden tests", "hidden asserts", "mistakes")
+    header = ("lab", "blanks", "auto points", "written answers", "visible checks", "hidden tests", "hidden asserts", "mistakes", "claims")
     print("".join(f"{h:>16}" if k else f"{h:<16}" for k, h in enumerate(header)))
-    for lab in labs:
-        i = inventory(lab)
+    inventories = [inventory(lab) for lab in labs]
+    for i in inventories:
         row = (i.lab, i.blanks, f"{i.autograded_points:g}", f"{i.written_answers} ({i.written_points:g} pt)",
-               i.visible_checks, i.hidden_tests, i.hidden_assertions, i.mistakes)
+               i.visible_checks, i.hidden_tests, i.hidden_assertions, i.mistakes, len(i.claims))
         print("".join(f"{v:>16}" if k else f"{v:<16}" for k, v in enumerate(row)))
+    for i in inventories:
+        print(f"\nClaims that {i.lab} states, each recomputed by a check (autograder/claims/):")
+        for cid, summary in i.claims.items():
+            print(f"  {cid}: {summary}")
