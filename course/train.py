@@ -13,6 +13,7 @@ from typing import Callable
 
 import matplotlib.pyplot as plt
 import numpy as np
+import scipy.stats
 from matplotlib.figure import Figure
 
 MINUTES_PER_HOUR = 60.0
@@ -131,35 +132,47 @@ def print_rmse_table(data: TrainData, x_a: np.ndarray) -> None:
     print(f"{'Kalman filter':<20}{kf[0]:>15.2f}{kf[1]:>16.2f}")
 
 
+def _clipped(ax, minute: np.ndarray, values: np.ndarray, limit: float, **style) -> None:
+    """Plot points; those beyond +-limit are drawn as triangles on the panel's edge."""
+    inside = np.abs(values) <= limit
+    ax.plot(minute[inside], values[inside], "o", **style)
+    for sign, marker in ((1, "^"), (-1, "v")):
+        out = sign * values > limit
+        ax.plot(minute[out], np.full(out.sum(), sign * limit), marker, **{**style, "label": None})
+
+
 def plot_estimates(data: TrainData, x_a: np.ndarray, B_a: np.ndarray) -> Figure:
     """The handout's plotstuff.m: position and velocity against time, with a +-2 sigma band.
 
-    x_a (T, 2) and B_a (T, 2, 2) are the filter's analyses at minutes 1..T. A third panel shows
-    the position error, where the band is easier to see than on the 100-mile scale.
+    x_a (T, 2) and B_a (T, 2, 2) are the filter's analyses at minutes 1..T. The two lower panels
+    show the errors (estimate or fix minus truth), on a scale set by the filter's band: GPS errors
+    beyond it are drawn as triangles on the panel's edge.
     """
     sd = np.sqrt(np.diagonal(B_a, axis1=1, axis2=2))
-    fig, axes = plt.subplots(3, 1, figsize=(9, 9), sharex=True, constrained_layout=True)
-    panels = [
-        (axes[0], data.x_true, data.x_gps, x_a[:, 0], sd[:, 0], "position [mi]"),
-        (axes[1], data.v_true, data.v_gps, x_a[:, 1], sd[:, 1], "velocity [mph]"),
-    ]
-    for ax, truth, gps, estimate, s, label in panels:
-        ax.fill_between(data.minute, estimate - 2 * s, estimate + 2 * s, color="tab:blue", alpha=0.25,
-                        label="Kalman filter ±2σ")
-        ax.plot(data.minute, truth, color="black", lw=2, label="truth")
-        ax.plot(data.minute, gps, "o", ms=4, color="tab:orange", label="GPS fix")
-        ax.plot(data.minute, estimate, color="tab:blue", lw=1.5, label="Kalman filter estimate")
-        ax.set_ylabel(label)
-        ax.legend(loc="best", fontsize="small")
-    ax = axes[2]
-    ax.fill_between(data.minute, -2 * sd[:, 0], 2 * sd[:, 0], color="tab:blue", alpha=0.25, label="±2σ of the filter")
-    ax.plot(data.minute, data.x_gps - data.x_true, "o", ms=4, color="tab:orange", label="GPS error")
-    ax.plot(data.minute, x_a[:, 0] - data.x_true, color="tab:blue", lw=1.5, label="filter error")
-    ax.axhline(0.0, color="black", lw=1)
-    ax.set_ylabel("position error [mi]")
-    ax.set_xlabel("time [min]")
-    ax.legend(loc="best", fontsize="small", ncols=3)
-    axes[0].set_title("Tracking the train: truth, GPS and the Kalman filter")
+    fig, axes = plt.subplots(4, 1, figsize=(9, 11), sharex=True, layout="constrained")
+    truth, gps = data.truth, data.gps
+    units = ("mi", "mph")
+    for k, name in enumerate(("position", "velocity")):
+        ax = axes[k]
+        ax.fill_between(data.minute, x_a[:, k] - 2 * sd[:, k], x_a[:, k] + 2 * sd[:, k], color="tab:blue",
+                        alpha=0.25, label="Kalman filter ±2σ band")
+        ax.plot(data.minute, truth[:, k], color="black", lw=2, label="truth")
+        ax.plot(data.minute, gps[:, k], "o", ms=4, color="tab:orange", label="GPS fix (GPS error below)")
+        ax.plot(data.minute, x_a[:, k], color="tab:blue", lw=1.5, label="Kalman filter estimate (error below)")
+        ax.set_ylabel(f"{name} [{units[k]}]")
+        ax = axes[k + 2]
+        limit = max(3.0 * sd[:, k].max(), 1.3 * np.abs(x_a[:, k] - truth[:, k]).max())
+        ax.fill_between(data.minute, -2 * sd[:, k], 2 * sd[:, k], color="tab:blue", alpha=0.25)
+        _clipped(ax, data.minute, gps[:, k] - truth[:, k], limit, ms=4, color="tab:orange")
+        ax.plot(data.minute, x_a[:, k] - truth[:, k], color="tab:blue", lw=1.5)
+        ax.axhline(0.0, color="black", lw=1)
+        ax.set_ylim(-1.05 * limit, 1.05 * limit)
+        ax.set_ylabel(f"{name} error [{units[k]}]")
+        ax.set_title(f"{name.capitalize()} errors (GPS errors beyond ±{limit:.1f} {units[k]} shown as ▲/▼ on the edge)",
+                     fontsize="medium")
+    axes[-1].set_xlabel("time [min]")
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=4, fontsize="small")
+    fig.suptitle("Tracking the train: truth, GPS and the Kalman filter")
     return fig
 
 
@@ -201,14 +214,107 @@ def covariance_scaling_experiment(
 
 def plot_covariance_scaling(result: ScalingResult) -> Figure:
     """RMSE against the factor applied to Q or to R, one panel for position and one for velocity."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4), constrained_layout=True)
-    for k, (ax, unit) in enumerate(zip(axes, ["position RMSE [mi]", "velocity RMSE [mph]"])):
-        ax.semilogx(result.scales, result.rmse_scaled_Q[:, k], "o-", label="filter with Q × factor")
-        ax.semilogx(result.scales, result.rmse_scaled_R[:, k], "s-", label="filter with R × factor")
+    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), layout="constrained")
+    for k, (ax, name) in enumerate(zip(axes, ["position RMSE [mi]", "velocity RMSE [mph]"])):
+        ax.semilogx(result.scales, result.rmse_scaled_Q[:, k], "o-", color="tab:blue", label="filter told Q × factor")
+        ax.semilogx(result.scales, result.rmse_scaled_R[:, k], "s-", color="tab:purple", label="filter told R × factor")
         ax.axhline(result.rmse_gps[k], color="tab:orange", ls="--", label="GPS only")
-        ax.axvline(1.0, color="grey", lw=1, ls=":")
+        ax.axvline(1.0, color="grey", lw=1, ls=":", label="the true covariances")
+        ax.set_ylim(0.0, None)
+        ax.set_title(name.split(" RMSE")[0].capitalize())
         ax.set_xlabel("factor applied to the filter's covariance (1 = the true value)")
-        ax.set_ylabel(unit)
-        ax.legend(fontsize="small")
-    fig.suptitle("What happens when the filter's covariances are wrong")
+        ax.set_ylabel(name)
+    fig.legend(*axes[0].get_legend_handles_labels(), loc="outside lower center", ncols=4, fontsize="small")
+    fig.suptitle("What happens when the filter's covariances are wrong (mean RMSE over the simulated hours)")
+    return fig
+
+
+def white_noise_acceleration(q: float, dt_min: float = 1.0) -> np.ndarray:
+    """Q (2 x 2) of the continuous white-noise acceleration model, for a step of dt_min minutes.
+
+    The acceleration is white noise of spectral density q (mph^2 per hour); over a step of
+    T = dt_min/60 hours the velocity variance grows by q T and the position, which integrates the
+    velocity, by q T^3/3.
+    """
+    T = dt_min / MINUTES_PER_HOUR
+    # Q = q [[T^3/3, T^2/2], [T^2/2, T]]
+    return q * np.array([[T**3 / 3.0, T**2 / 2.0], [T**2 / 2.0, T]])
+
+
+def print_model_comparison(data: TrainData, estimates: dict[str, np.ndarray]) -> None:
+    """Print the RMSE over the hour of the GPS and of each named filter's estimates (T, 2)."""
+    print(f"{'RMSE over the hour':<34}{'position [mi]':>15}{'velocity [mph]':>16}")
+    for name, estimate in {"GPS only": data.gps, **estimates}.items():
+        error = rmse(estimate, data.truth)
+        print(f"{name:<34}{error[0]:>15.3f}{error[1]:>16.3f}")
+
+
+@dataclass(frozen=True)
+class ConsistencyResult:
+    """The filter's errors against its own covariances over many simulated hours."""
+
+    minute: np.ndarray
+    """Minutes 1..T, shape (T,)."""
+    inside: np.ndarray
+    """Fraction of each hour in which the truth lies inside the +-2 sigma band, shape (n_hours, 2)."""
+    nees: np.ndarray
+    """NEES of each hour at each minute, shape (n_hours, T)."""
+
+
+def consistency_experiment(
+    run_filter: RunFilter, nees: Callable[[np.ndarray, np.ndarray], np.ndarray], Q: np.ndarray, n_hours: int,
+    rng: np.random.Generator, n_minutes: int = 60,
+) -> ConsistencyResult:
+    """Run ``run_filter`` on ``n_hours`` simulated hours and measure its errors against its own B^a.
+
+    ``nees(errors (T, n), covariances (T, n, n)) -> (T,)`` is your NEES function and Q your
+    process noise for one-minute steps.
+    """
+    A, H, R = model_matrix(), gps_operator(), gps_covariance()
+    x0, B0 = initial_belief()
+    inside, values = np.empty((n_hours, 2)), np.empty((n_hours, n_minutes))
+    for i in range(n_hours):
+        data = simulate(n_minutes, rng)
+        x_a, B_a = run_filter(data.gps, x0, B0, A, Q, H, R)
+        errors = x_a - data.truth
+        inside[i] = np.mean(np.abs(errors) <= 2.0 * np.sqrt(np.diagonal(B_a, axis1=1, axis2=2)), axis=0)
+        values[i] = nees(errors, B_a)
+    return ConsistencyResult(np.arange(1, n_minutes + 1), inside, values)
+
+
+def nees_band(n_hours: int, dim: int = 2, level: float = 0.95) -> tuple[float, float]:
+    """The central ``level`` interval of the NEES averaged over ``n_hours`` independent hours.
+
+    For a consistent filter each hour's NEES at a given minute is chi-square with ``dim`` degrees of
+    freedom, so the average over the hours is chi-square with n_hours * dim degrees, divided by n_hours.
+    """
+    tail = (1.0 - level) / 2.0
+    return tuple(scipy.stats.chi2.ppf([tail, 1.0 - tail], n_hours * dim) / n_hours)
+
+
+def plot_consistency(result: ConsistencyResult) -> Figure:
+    """Left: how often the truth is inside the +-2 sigma band, per hour. Right: NEES against time."""
+    fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained")
+    ax = axes[0]
+    bins = np.linspace(0.0, 1.0, 21)
+    ax.hist([result.inside[:, 0], result.inside[:, 1]], bins=bins, color=["tab:blue", "tab:red"],
+            label=[f"{name}: {result.inside[:, k].mean():.1%} over all hours"
+                   for k, name in enumerate(("position", "velocity"))])
+    ax.axvline(0.9545, color="black", ls="--", label="95.45%, a consistent filter's average")
+    ax.set_xlabel("fraction of the hour with the truth inside ±2σ")
+    ax.set_ylabel("number of hours")
+    ax.set_title(f"Inside the ±2σ band, {len(result.inside)} simulated hours")
+    ax.legend(loc="upper left", fontsize="small")
+    ax = axes[1]
+    n_hours = len(result.nees)
+    low, high = nees_band(n_hours)
+    ax.fill_between(result.minute, low, high, color="lightgrey", label=f"95% χ² band for the mean of {n_hours} hours")
+    ax.plot(result.minute, result.nees.mean(axis=0), "o-", ms=3, color="tab:green", label="NEES, mean over the hours")
+    ax.axhline(2.0, color="black", ls="--", label="2, the state dimension")
+    ax.set_ylim(0.0, 2.0 * high)
+    ax.set_xlabel("time [min]")
+    ax.set_ylabel("NEES (dimensionless)")
+    ax.set_title("Normalised estimation error squared")
+    ax.legend(loc="lower center", ncols=2, fontsize="small")
+    fig.suptitle("Is the filter's ±2σ band honest?")
     return fig

@@ -97,6 +97,14 @@ def run_filter(
     return xs, Bs
 
 
+def nees(errors: np.ndarray, covariances: np.ndarray) -> np.ndarray:
+    """NEES (T,) of errors (T, n) against covariances (T, n, n): e_t^T B_t^-1 e_t at each time."""
+    # B_t^-1 e_t, one solve per time (np.linalg.solve works on stacks of matrices)
+    scaled = np.linalg.solve(covariances, errors[:, :, None])[:, :, 0]
+    # eps_t = e_t^T B_t^-1 e_t
+    return np.sum(errors * scaled, axis=1)
+
+
 def write_data(directory: Path) -> list[Path]:
     """Build the shipped hour of train data from DATA_SEED into ``directory``."""
     path = Path(directory) / train.DATA_FILE.name

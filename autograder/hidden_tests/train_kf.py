@@ -11,7 +11,7 @@ import solutions.train_kf as ref
 from autograder.hidden import isolate
 from course.checks import check_array, check_close, check_pair, random_spd
 
-BLANKS = ("gain_information_form", "gain_covariance_form", "process_noise", "predict", "kupdate", "run_filter")
+BLANKS = ("gain_information_form", "gain_covariance_form", "process_noise", "predict", "kupdate", "run_filter", "nees")
 SIZES = ((1, 1), (2, 2), (3, 1), (4, 2), (5, 3))
 """(n, m): state and observation dimensions of the random cases."""
 
@@ -87,3 +87,15 @@ def check_run_filter(func: Callable) -> None:
                     show_expected=False)
         check_close(check_array(Bs, f"the covariances for {case}", (T, n, n)), want_B,
                     f"the covariances for {case}", show_expected=False)
+
+
+def check_nees(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1107)
+    for n, T in zip((1, 2, 3, 4, 5), (1, 7, 20, 3, 60)):
+        errors = rng.standard_normal((T, n))
+        covariances = np.stack([random_spd(rng, n) for _ in range(T)])
+        value = check_array(func(errors.copy(), covariances.copy()), f"nees(errors, covariances) with T = {T}, n = {n}",
+                            (T,), "One NEES value per time: errors (T, n) and covariances (T, n, n) give shape (T,).")
+        check_close(value, ref.nees(errors, covariances), f"the NEES of {T} random errors with n = {n}",
+                    show_expected=False)

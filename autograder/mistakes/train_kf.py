@@ -35,4 +35,11 @@ MISTAKES = (
     Mistake("run_filter", "update-before-predict", "assimilates each fix before forecasting to its time",
             "x, B = predict(x, B, A, Q)\n        x, B = kupdate(x, B, y[t], H, R)",
             "x, B = kupdate(x, B, y[t], H, R)\n        x, B = predict(x, B, A, Q)"),
+    Mistake("nees", "times-B", "e^T B e: multiplies by the covariance instead of solving with it",
+            "np.linalg.solve(covariances, errors[:, :, None])", "(covariances @ errors[:, :, None])"),
+    Mistake("nees", "diagonal-only", "sum of e_i^2 / B_ii: ignores the correlation between position and velocity",
+            "np.linalg.solve(covariances, errors[:, :, None])[:, :, 0]",
+            "errors / np.diagonal(covariances, axis1=1, axis2=2)"),
+    Mistake("nees", "root", "returns the Mahalanobis distance sqrt(e^T B^-1 e), not its square",
+            "return np.sum(errors * scaled, axis=1)", "return np.sqrt(np.sum(errors * scaled, axis=1))"),
 )
