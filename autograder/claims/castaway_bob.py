@@ -241,7 +241,7 @@ def _() -> None:
 
 @claim("castaway-bob/rank4-best-in-both")
 def _() -> None:
-    """The rank-4 filter has the lowest mean RMSE in both currents, and the lowest RMSE of the four on at least 70 % of drifts in each ("about 4 in 5 or more": 90 % and 81 % measured on seed 31, 84 % and 80 % on the notebook's; 70 % is about 3 sd of a rate over 100 drifts below 80 %)."""
+    """The rank-4 filter has the lowest mean RMSE in both currents, and the lowest RMSE of the four on at least 70 % of drifts in each ("about 4 in 5 or more": 90-97 % and 81-91 % measured on 4 seeds of 100 drifts; 70 % is about 3 sd of such a rate below 80 %)."""
     for condition, minimum in (("current", 0.7), ("slack", 0.7)):
         means = {name: float(np.mean(_rmse(condition, name))) for name in ocean.NAMES}
         assert min(means, key=means.get) == RANK4, f"{condition}: mean RMSEs {means}"
@@ -297,10 +297,10 @@ def _() -> None:
 
 @claim("castaway-bob/current-map-gain-in-current")
 def _() -> None:
-    """In the current the rank-4 filter beats the CV control by 2.5-5 m on average, and on at least 85 % of drifts."""
+    """In the current the rank-4 filter beats the CV control by 2.5-5 m on average, and on at least 80 % of drifts (90-97 % measured on 4 seeds; a rate over 100 drifts has sd <= 3 %)."""
     diff = _rmse("current", CV) - _rmse("current", RANK4)
     _between(float(np.mean(diff)), 2.5, 5.0, "CV minus rank-4 mean RMSE in the current [m]")
-    rate_at_least(diff > 0, 0.85, "current: the rank-4 filter better than the CV control on a drift")
+    rate_at_least(diff > 0, 0.8, "current: the rank-4 filter better than the CV control on a drift")
 
 
 @claim("castaway-bob/velocity-state-no-gain-in-slack")
@@ -314,10 +314,10 @@ def _() -> None:
 
 @claim("castaway-bob/rank4-gain-in-slack")
 def _() -> None:
-    """In slack water the rank-4 filter beats the CV control by 2-4.5 m on average, and on at least 75 % of drifts."""
+    """In slack water the rank-4 filter beats the CV control by 2-4.5 m on average, and on at least 80 % of drifts (91-95 % measured on 4 seeds)."""
     diff = _rmse("slack", CV) - _rmse("slack", RANK4)
     _between(float(np.mean(diff)), 2.0, 4.5, "CV minus rank-4 mean RMSE in slack water [m]")
-    rate_at_least(diff > 0, 0.75, "slack water: the rank-4 filter better than the CV control on a drift")
+    rate_at_least(diff > 0, 0.8, "slack water: the rank-4 filter better than the CV control on a drift")
 
 
 @claim("castaway-bob/cv-step-near-best")
