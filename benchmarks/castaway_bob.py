@@ -4,7 +4,7 @@
 
 1. the flow build (PhiFlow, seeded): its time, the shipped file's size, and whether the rebuild
    is byte-identical to the shipped file (skip with ``--no-build``);
-2. the RMSE of the moving average, the rank-2 and the rank-4 filter over ``--drifts`` seeded
+2. the RMSE of the moving average, the rank-2 filter, the constant-velocity control and the rank-4 filter over ``--drifts`` seeded
    drifts (default 100) in the shipped current, and again in slack water (the same flow pattern
    at a tenth of the speed), with the spread over drifts and paired differences with 95 %
    intervals;
@@ -33,6 +33,8 @@ from solutions import castaway_bob as ref  # noqa: E402
 from solutions import castaway_bob_flow  # noqa: E402
 
 SEED = 2024
+RUN_CV = ocean.constant_velocity_filter(ref.kalman_step, ref.transition_matrix, ref.observation_matrix)
+"""The comparison's control: four states, no current map."""
 
 
 def build_time() -> None:
@@ -48,13 +50,13 @@ def build_time() -> None:
 
 
 def table(flow: ocean.Flow, drifts: list[ocean.Drift], sigma_walk: float, title: str) -> None:
-    result = ocean.compare(drifts, flow, ref.fixed_lag_mean, ref.run_rank2, ref.run_rank4, ref.track_rmse,
+    result = ocean.compare(drifts, flow, ref.trailing_mean, ref.run_rank2, RUN_CV, ref.run_rank4, ref.track_rmse,
                            ref.ellipse_area, sigma_walk=sigma_walk)
     raw = np.array([ref.track_rmse(d.fixes, d.position) for d in drifts])
     print(f"\n{title} (rank-2 sigma_walk = {sigma_walk:g} m)")
     print(ocean.format_comparison(result, raw))
     names = ocean.NAMES
-    for a, b in ((names[1], names[0]), (names[2], names[1]), (names[2], names[0])):
+    for a, b in ((names[1], names[0]), (names[2], names[1]), (names[3], names[2]), (names[3], names[0])):
         diff = result.rmse[a] - result.rmse[b]
         half = 1.96 * diff.std(ddof=1) / np.sqrt(len(diff))
         print(f"  {a} - {b}: {diff.mean():+6.1f} m +- {half:.1f} (95 %), {a} better on "
@@ -62,7 +64,7 @@ def table(flow: ocean.Flow, drifts: list[ocean.Drift], sigma_walk: float, title:
 
 
 def sweep(flow: ocean.Flow, drifts: list[ocean.Drift], label: str) -> None:
-    ma = np.mean([ref.track_rmse(ref.fixed_lag_mean(d.fixes), d.position) for d in drifts])
+    ma = np.mean([ref.track_rmse(ref.trailing_mean(d.fixes), d.position) for d in drifts])
     values = (5, 10, 15, 20, 30, 45, 60)
     rmse = [np.mean([ref.track_rmse(ref.run_rank2(d.fixes, sigma_walk=s)[0], d.position) for d in drifts])
             for s in values]
@@ -95,7 +97,7 @@ def main(argv: list[str] | None = None) -> None:
 
     start = time.perf_counter()
     notebook_drifts = ocean.simulate_drifts(flow, np.random.default_rng(1), 50)
-    ocean.compare(notebook_drifts, flow, ref.fixed_lag_mean, ref.run_rank2, ref.run_rank4, ref.track_rmse,
+    ocean.compare(notebook_drifts, flow, ref.trailing_mean, ref.run_rank2, RUN_CV, ref.run_rank4, ref.track_rmse,
                   ref.ellipse_area)
     print(f"\none 50-drift simulation + comparison: {time.perf_counter() - start:.2f} s")
 

@@ -41,6 +41,8 @@ SIGMA_GPS = 50.0
 """Standard deviation of the GPS error, m (each axis): the handout's "50 m radius"."""
 SIGMA_WALK = 30.0
 """Default random-walk step of the rank-2 filter, m per minute: 0.5 m/s current x 60 s."""
+SIGMA_V0 = 0.5
+"""Prior standard deviation of the constant-velocity control's first velocity, m/s (the current's speed)."""
 N_FIXES = 120
 """Fixes in a drift: two hours."""
 SUBSTEPS = 3
@@ -228,24 +230,63 @@ def simulate_drift(flow: Flow, rng: np.random.Generator, **options) -> Drift:
 Tracks = dict[str, tuple[np.ndarray, np.ndarray | None]]
 """Estimator name -> (estimated positions (n, 2) [m], position covariances (n, 2, 2) [m^2] or None)."""
 
-NAMES = ("moving average", "rank-2 KF", "rank-4 KF")
+NAMES = ("moving average", "rank-2 KF", "CV control", "rank-4 KF")
+"""The estimators compared: the trailing mean of 3 fixes, the rank-2 random-walk filter, the
+constant-velocity control (4 states, no current map) and the rank-4 filter (4 states, the current known)."""
+
+
+def constant_velocity_filter(
+    kalman_step: Callable[..., tuple[np.ndarray, np.ndarray]],
+    transition_matrix: Callable[[float, float], np.ndarray],
+    observation_matrix: Callable[[], np.ndarray],
+    sigma_v: float = SIGMA_F,
+    sigma_v0: float = SIGMA_V0,
+    sigma_gps: float = SIGMA_GPS,
+    dt: float = DT,
+) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
+    """The control of the comparison: the rank-4 filter's four states without the current map.
+
+    The state [x, y, vx, vy] holds Bob's velocity over the ground, which the filter must learn from
+    the fixes: A = transition_matrix(dt, 1) (alpha = 1, no damping), the velocity a random walk of
+    sigma_v [m/s] per step, Q = diag(0, 0, sigma_v^2, sigma_v^2), no input. It starts from the first
+    fix with velocity 0 +- sigma_v0 [m/s]. Built from the given blanks; returns run(y (n, 2) [m]) ->
+    estimates (n, 4), covariances (n, 4, 4).
+    """
+    # x[k+1] = A(dt, alpha = 1) x[k] + [0, 0, e_x, e_y],  e ~ N(0, sigma_v^2 I_2);  y[k] = H x[k] + n_y
+    A, H = transition_matrix(dt, 1.0), observation_matrix()
+    Q = np.diag([0.0, 0.0, sigma_v**2, sigma_v**2])
+    R = sigma_gps**2 * np.eye(2)
+
+    def run(y: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        n = len(y)
+        xs, Ps = np.empty((n, 4)), np.empty((n, 4, 4))
+        xs[0] = [y[0][0], y[0][1], 0.0, 0.0]
+        Ps[0] = np.diag([sigma_gps**2, sigma_gps**2, sigma_v0**2, sigma_v0**2])
+        for k in range(1, n):
+            xs[k], Ps[k] = kalman_step(xs[k - 1], Ps[k - 1], y[k], A, H, Q, R)
+        return xs, Ps
+
+    return run
 
 
 def run_estimators(
     drift: Drift,
     flow: Flow,
-    fixed_lag_mean: Callable[[np.ndarray], np.ndarray],
+    trailing_mean: Callable[[np.ndarray], np.ndarray],
     run_rank2: Estimator,
+    run_cv: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
     run_rank4: Estimator,
     sigma_walk: float = SIGMA_WALK,
 ) -> Tracks:
-    """Run the three estimators on one drift; returns their position tracks and covariances."""
+    """Run the four estimators of ``NAMES`` on one drift; returns their position tracks and covariances."""
     rank2, P2 = run_rank2(drift.fixes, sigma_walk=sigma_walk)
+    cv, Pcv = run_cv(drift.fixes)
     rank4, P4 = run_rank4(drift.fixes, flow, drift.t)
     return {
-        NAMES[0]: (np.asarray(fixed_lag_mean(drift.fixes)), None),
+        NAMES[0]: (np.asarray(trailing_mean(drift.fixes)), None),
         NAMES[1]: (np.asarray(rank2)[:, :2], np.asarray(P2)[:, :2, :2]),
-        NAMES[2]: (np.asarray(rank4)[:, :2], np.asarray(P4)[:, :2, :2]),
+        NAMES[2]: (np.asarray(cv)[:, :2], np.asarray(Pcv)[:, :2, :2]),
+        NAMES[3]: (np.asarray(rank4)[:, :2], np.asarray(P4)[:, :2, :2]),
     }
 
 
@@ -264,19 +305,20 @@ class Comparison:
 def compare(
     drifts: list[Drift],
     flow: Flow,
-    fixed_lag_mean: Callable[[np.ndarray], np.ndarray],
+    trailing_mean: Callable[[np.ndarray], np.ndarray],
     run_rank2: Estimator,
+    run_cv: Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]],
     run_rank4: Estimator,
     track_rmse: Callable[[np.ndarray, np.ndarray], float],
     ellipse_area: Callable[..., np.ndarray],
     sigma_walk: float = SIGMA_WALK,
 ) -> Comparison:
-    """Score the three estimators on every drift with the given RMSE and ellipse-area functions."""
+    """Score the four estimators on every drift with the given RMSE and ellipse-area functions."""
     rmse: dict[str, list[float]] = {name: [] for name in NAMES}
     area: dict[str, list[float]] = {name: [] for name in NAMES[1:]}
     inside: dict[str, list[float]] = {name: [] for name in NAMES[1:]}
     for drift in drifts:
-        tracks = run_estimators(drift, flow, fixed_lag_mean, run_rank2, run_rank4, sigma_walk)
+        tracks = run_estimators(drift, flow, trailing_mean, run_rank2, run_cv, run_rank4, sigma_walk)
         for name, (estimate, P) in tracks.items():
             rmse[name].append(float(track_rmse(estimate, drift.position)))
             if P is not None:
@@ -378,11 +420,66 @@ def plot_gain_trace(
     return ax
 
 
+@dataclass(frozen=True)
+class RoundingResult:
+    """Per precision ratio (n_ratios,): the fraction of problems whose updated covariance has a
+    negative eigenvalue, and the median of max|P - P^T| / max|P|, for the short form (I - K H) P
+    and for the Joseph form (13), both with the same rounded gain."""
+
+    ratios: np.ndarray
+    short_indefinite: np.ndarray
+    joseph_indefinite: np.ndarray
+    short_asymmetry: np.ndarray
+    joseph_asymmetry: np.ndarray
+
+
+def rounding_experiment(
+    kalman_gain: Callable[[np.ndarray, np.ndarray, np.ndarray], np.ndarray],
+    joseph_covariance: Callable[[np.ndarray, np.ndarray, np.ndarray, np.ndarray], np.ndarray],
+    rng: np.random.Generator,
+    ratios: tuple[float, ...] = (1e-2, 1e-4, 1e-6, 1e-8),
+    n_problems: int = 300,
+) -> RoundingResult:
+    """The short form and the Joseph form (13) of the update when the gain carries rounding errors.
+
+    Each problem is a random 4-state prior P [m^2, typical variance 10^4 m^2] seen through Bob's H,
+    with fixes of variance R = ratio * tr(P) / 4 * I_2. K = kalman_gain(P, H, R) is rounded to
+    single precision (a relative error of about 6e-8, as if the filter ran in float32), and both
+    updates are computed in double precision from that same gain.
+    """
+    H = np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
+    stats = np.empty((4, len(ratios)))
+    for i, ratio in enumerate(ratios):
+        neg_short, neg_joseph, asym_short, asym_joseph = [], [], [], []
+        for _ in range(n_problems):
+            F = rng.standard_normal((4, 4))
+            P = 1e4 * (F @ F.T + 0.1 * np.eye(4))
+            R = ratio * np.trace(P) / 4.0 * np.eye(2)
+            K = kalman_gain(P, H, R).astype(np.float32).astype(float)
+            for P_new, neg, asym in (((np.eye(4) - K @ H) @ P, neg_short, asym_short),
+                                     (joseph_covariance(P, K, H, R), neg_joseph, asym_joseph)):
+                asym.append(np.abs(P_new - P_new.T).max() / np.abs(P_new).max())
+                neg.append(np.linalg.eigvalsh(0.5 * (P_new + P_new.T)).min() < 0.0)
+        stats[:, i] = np.mean(neg_short), np.mean(neg_joseph), np.median(asym_short), np.median(asym_joseph)
+    return RoundingResult(np.array(ratios), *stats)
+
+
+def format_rounding(result: RoundingResult) -> str:
+    """The rounding experiment as a table, one row per precision ratio."""
+    lines = [f"{'R / prior variance':>19}{'negative eigenvalue':>22}{'':>10}{'median asymmetry':>20}",
+             f"{'':>19}{'short':>11}{'Joseph':>11}{'':>10}{'short':>10}{'Joseph':>10}"]
+    for k, ratio in enumerate(result.ratios):
+        lines.append(f"{ratio:>19.0e}{result.short_indefinite[k]:>10.0%} {result.joseph_indefinite[k]:>10.0%}"
+                     f"{'':>10}{result.short_asymmetry[k]:>10.0e}{result.joseph_asymmetry[k]:>10.0e}")
+    return "\n".join(lines)
+
+
 # ----------------------------------------------------------------------------------------------
 # Figures
 # ----------------------------------------------------------------------------------------------
 
-COLOURS = {"truth": "black", "gps": "tab:gray", NAMES[0]: "tab:orange", NAMES[1]: "tab:blue", NAMES[2]: "tab:red"}
+COLOURS = {"truth": "black", "gps": "tab:gray", NAMES[0]: "tab:orange", NAMES[1]: "tab:blue", NAMES[2]: "tab:green",
+           NAMES[3]: "tab:red"}
 
 
 def plot_flow(flow: Flow, t: float, ax: Axes | None = None, extent: tuple[float, float, float, float] | None = None,
@@ -496,5 +593,30 @@ def plot_errors(drift: Drift, tracks: Tracks, ax: Axes | None = None) -> Axes:
     ax.set_ylabel("position error (m)")
     ax.set_title("How far each estimate is from Bob")
     ax.set_ylim(bottom=0.0)
-    ax.legend(loc="upper right", fontsize=8, ncol=2)
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
+    return ax
+
+
+def plot_comparison(results: dict[str, Comparison], ax: Axes | None = None) -> Axes:
+    """Each estimator's RMSE [m] on every drift (dots) and its mean (bar), per current.
+
+    ``results`` maps a current's label to its ``Comparison``; drifts are jittered sideways.
+    """
+    if ax is None:
+        _, ax = plt.subplots(figsize=(9, 4.2))
+    rng = np.random.default_rng(0)  # the sideways jitter only
+    width = 0.8 / len(NAMES)
+    for g, (label, result) in enumerate(results.items()):
+        for k, name in enumerate(NAMES):
+            centre = g + (k - (len(NAMES) - 1) / 2) * width
+            r = result.rmse[name]
+            ax.plot(centre + rng.uniform(-0.3, 0.3, len(r)) * width, r, ".", color=COLOURS[name], ms=3, alpha=0.6)
+            ax.hlines(np.mean(r), centre - 0.45 * width, centre + 0.45 * width, color=COLOURS[name], lw=2.5,
+                      label=name if g == 0 else None)
+    ax.set_xticks(range(len(results)), list(results))
+    ax.set_xlabel("current")
+    ax.set_ylabel("RMSE over a drift (m)")
+    ax.set_ylim(bottom=0.0)
+    ax.set_title("Every drift's RMSE (dots) and the mean (bar) of each estimator")
+    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
     return ax

@@ -38,8 +38,10 @@ def observation_matrix() -> np.ndarray:
     return np.array([[1.0, 0.0, 0.0, 0.0], [0.0, 1.0, 0.0, 0.0]])
 
 
-def fixed_lag_mean(y: np.ndarray, order: int = 3) -> np.ndarray:
-    """Figure 1's estimator: the mean of the last `order` fixes, the current one included.
+def trailing_mean(y: np.ndarray, order: int = 3) -> np.ndarray:
+    """Figure 1's estimator: the trailing mean of the last `order` fixes, the current one included.
+
+    The handout calls it a "fixed-lag mean"; it is a causal moving average, not a fixed-lag smoother.
 
     y (n, 2) [m] -> estimates (n, 2) [m]; the first fixes average the fixes there are so far.
     """

@@ -54,26 +54,26 @@ def test_observation_matrix_picks_the_position():
 
 
 # ------------------------------------------------------------------------------------------------
-# Blank 2: the fixed-lag mean
+# Blank 2: the trailing mean
 # ------------------------------------------------------------------------------------------------
 
 
 @pytest.mark.parametrize("order", [1, 2, 3, 5])
-def test_fixed_lag_mean_equals_brute_force_sums(order):
+def test_trailing_mean_equals_brute_force_sums(order):
     y = np.random.default_rng(order).normal(size=(17, 2))
     expected = []
     for n in range(17):
         first = max(0, n - order + 1)
         expected.append(sum(y[k] for k in range(first, n + 1)) / (n + 1 - first))
-    np.testing.assert_allclose(ref.fixed_lag_mean(y, order=order), expected, rtol=1e-12)
+    np.testing.assert_allclose(ref.trailing_mean(y, order=order), expected, rtol=1e-12)
 
 
-def test_fixed_lag_mean_is_causal_and_of_order_one_is_the_fixes():
+def test_trailing_mean_is_causal_and_of_order_one_is_the_fixes():
     y = np.random.default_rng(1).normal(size=(12, 2))
     changed = y.copy()
     changed[8:] += 100.0
-    np.testing.assert_array_equal(ref.fixed_lag_mean(y)[:8], ref.fixed_lag_mean(changed)[:8])
-    np.testing.assert_array_equal(ref.fixed_lag_mean(y, order=1), y)
+    np.testing.assert_array_equal(ref.trailing_mean(y)[:8], ref.trailing_mean(changed)[:8])
+    np.testing.assert_array_equal(ref.trailing_mean(y, order=1), y)
 
 
 # ------------------------------------------------------------------------------------------------
@@ -106,15 +106,44 @@ def test_joseph_form_equals_the_simple_form_at_the_optimal_gain_only(n, m):
     assert np.linalg.eigvalsh(joseph).min() > 0
 
 
-def test_joseph_form_is_the_covariance_of_the_updated_error_by_monte_carlo():
+def _joseph_monte_carlo_whitened(seed: int, n_samples: int = 200_000, covariance=ref.joseph_covariance) -> np.ndarray:
+    """(1/N) sum z z^T of the updated errors whitened by covariance(P, K, H, R): I_3 if that is their covariance."""
     # x ~ N(0, P), y = H x + v, v ~ N(0, R); the error of x^ = K y is (I - K H) x - K v
-    rng = np.random.default_rng(5)
+    rng = np.random.default_rng(seed)
     P, H, R = random_spd(rng, 3), rng.standard_normal((2, 3)), random_spd(rng, 2)
     K = rng.standard_normal((3, 2))
-    x = rng.multivariate_normal(np.zeros(3), P, size=200_000)
-    v = rng.multivariate_normal(np.zeros(2), R, size=200_000)
+    x = rng.multivariate_normal(np.zeros(3), P, size=n_samples)
+    v = rng.multivariate_normal(np.zeros(2), R, size=n_samples)
     error = x - (x @ H.T + v) @ K.T
-    np.testing.assert_allclose(np.cov(error.T), ref.joseph_covariance(P, K, H, R), rtol=0.03, atol=0.03)
+    # z = L^-1 e with L L^T = the Joseph covariance: z ~ N(0, I_3) exactly if (13) is the error's covariance
+    z = np.linalg.solve(np.linalg.cholesky(covariance(P, K, H, R)), error.T)
+    return z @ z.T / n_samples  # the mean is known (0), so no centring
+
+
+# False-fail probability of the Monte Carlo test, for a correct (13). With N = 200 000 whitened errors
+# z ~ N(0, I_3), each diagonal entry of (1/N) sum z z^T is chi2_N / N, and each off-diagonal entry
+# z_j z_k = ((z_j + z_k)^2 - (z_j - z_k)^2) / 4 is (A - B) / (2N) with A, B independent chi2_N. The
+# Laurent-Massart bounds P(X - N >= 2 sqrt(N t) + 2t) <= e^-t and P(N - X >= 2 sqrt(N t)) <= e^-t with
+# t = 17 keep every chi2_N / N within TOL = 2 sqrt(t / N) + 2t / N = 0.0186 of 1 but for probability
+# e^-17 = 4.1e-8 per tail; an off-diagonal entry is then within TOL of 0. Over 3 diagonal entries
+# (2 tails each) and 3 off-diagonal ones (2 variables x 2 tails each), 18 tails: <= 18 x 4.1e-8 = 7.5e-7.
+MC_SAMPLES, MC_T = 200_000, 17.0
+MC_TOL = 2.0 * np.sqrt(MC_T / MC_SAMPLES) + 2.0 * MC_T / MC_SAMPLES
+
+
+def test_joseph_form_is_the_covariance_of_the_updated_error_by_monte_carlo():
+    whitened = _joseph_monte_carlo_whitened(5, MC_SAMPLES)
+    np.testing.assert_allclose(whitened, np.eye(3), rtol=0, atol=MC_TOL)
+
+
+def test_the_monte_carlo_check_can_fail():
+    # the same statistic rejects (13) without its K K_v K^T term
+    def no_gps_term(P, K, H, R):
+        I_KH = np.eye(P.shape[0]) - K @ H
+        return I_KH @ P @ I_KH.T
+
+    whitened = _joseph_monte_carlo_whitened(5, MC_SAMPLES, no_gps_term)
+    assert np.abs(whitened - np.eye(3)).max() > 10 * MC_TOL
 
 
 @pytest.mark.parametrize("n, m", SIZES)

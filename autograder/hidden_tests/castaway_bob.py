@@ -16,7 +16,7 @@ from course.checks import check_array, check_close, check_pair, random_spd
 BLANKS = (
     "transition_matrix",
     "observation_matrix",
-    "fixed_lag_mean",
+    "trailing_mean",
     "kalman_gain",
     "joseph_covariance",
     "kalman_step",
@@ -44,14 +44,14 @@ def check_observation_matrix(func: Callable) -> None:
     check_close(H, ref.observation_matrix(), "observation_matrix()", show_expected=False)
 
 
-def check_fixed_lag_mean(func: Callable) -> None:
+def check_trailing_mean(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(5102)
     for n, order in ((1, 3), (2, 3), (7, 1), (9, 2), (40, 3), (25, 5), (6, 10)):
         y = rng.normal(0.0, 50.0, (n, 2)) + 1000.0 * rng.standard_normal(2)
-        label = f"fixed_lag_mean(y, order={order}) on {n} random fixes"
+        label = f"trailing_mean(y, order={order}) on {n} random fixes"
         estimates = check_array(func(y.copy(), order=order), label, (n, 2), "There is one estimate per fix.")
-        check_close(estimates, ref.fixed_lag_mean(y, order=order), label, show_expected=False)
+        check_close(estimates, ref.trailing_mean(y, order=order), label, show_expected=False)
 
 
 def _matrix_cases(rng: np.random.Generator):
