@@ -98,7 +98,7 @@ def ct_jacobian(m: np.ndarray, T: float = T_RADAR) -> np.ndarray:
     return F
 
 
-def process_noise(T: float = T_RADAR) -> np.ndarray:
+def ct_process_noise(T: float = T_RADAR) -> np.ndarray:
     """Q (5 x 5): L1 [[T^3/3, T^2/2], [T^2/2, T]] for each axis, and T L2 for the turn rate."""
     block = L1 * np.array([[T**3 / 3.0, T**2 / 2.0], [T**2 / 2.0, T]])
     Q = np.zeros((5, 5))
@@ -113,7 +113,7 @@ def radar(X: np.ndarray) -> np.ndarray:
     return np.stack((np.hypot(X[..., 0], X[..., 1]), np.arctan2(X[..., 1], X[..., 0])), axis=-1)
 
 
-def radar_jacobian(m: np.ndarray) -> np.ndarray:
+def radar_h_jacobian(m: np.ndarray) -> np.ndarray:
     """The Jacobian of radar at m (..., 5), shape (..., 2, 5)."""
     xi, eta = m[..., 0], m[..., 1]
     r2 = xi**2 + eta**2
@@ -174,7 +174,7 @@ class Scenario:
 
     @property
     def Q(self) -> np.ndarray:
-        return process_noise(self.T)
+        return ct_process_noise(self.T)
 
     @property
     def R(self) -> np.ndarray:
@@ -250,15 +250,15 @@ def run_ekf(update: Update, sc: Scenario, m0: np.ndarray, y: np.ndarray, vectori
     for k in range(1, len(sc.times)):
         m, P = ekf_predict(m, P, sc.T, sc.Q)
         if vectorised:
-            m, P = update(m, P, y[:, k], radar, radar_jacobian, sc.R, RADAR_ANGLES)
+            m, P = update(m, P, y[:, k], radar, radar_h_jacobian, sc.R, RADAR_ANGLES)
         else:
-            pairs = [update(m[r], P[r], y[r, k], radar, radar_jacobian, sc.R, RADAR_ANGLES) for r in range(len(m))]
+            pairs = [update(m[r], P[r], y[r, k], radar, radar_h_jacobian, sc.R, RADAR_ANGLES) for r in range(len(m))]
             m, P = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
         estimates[:, k] = m
     return estimates
 
 
-def run_particle_filter(step: Callable, sc: Scenario, m0: np.ndarray, y: np.ndarray, rng: np.random.Generator,
+def run_bootstrap_pf(step: Callable, sc: Scenario, m0: np.ndarray, y: np.ndarray, rng: np.random.Generator,
                         particles: int = 5000, vectorised: bool = True) -> np.ndarray:
     """The bootstrap particle filter with your ``step(X, logw, y, rng, f, h, Q, R, angles)``: weighted means (runs, K, 5).
 
@@ -428,7 +428,7 @@ def plot_position_error(times: np.ndarray, curves: dict, title: str) -> Figure:
 
 def plot_rmse_against_interval(T: np.ndarray, sweep: dict, runs: int) -> Figure:
     """The lecture's metric for the position and the velocity against the measurement interval T."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 4.5), constrained_layout=True)
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5), layout="constrained")
     for ax, (index, quantity, unit) in zip(axes, [(0, "position", "m"), (1, "velocity", "m/s")]):
         for name in FILTERS:
             if name in sweep:
@@ -436,6 +436,7 @@ def plot_rmse_against_interval(T: np.ndarray, sweep: dict, runs: int) -> Figure:
         ax.set_xlabel("measurement interval T [s]")
         ax.set_ylabel(f"{quantity}: sqrt(mean_k RMSE_k^2 / 5) [{unit}]")
         ax.set_xticks(T)
-    axes[0].legend(loc="upper left", fontsize="small", ncols=2)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=len(labels), fontsize="small")
     fig.suptitle(f"Error against the measurement interval ({runs} runs per T)")
     return fig

@@ -31,7 +31,7 @@ from course.air_traffic import symmetric_sqrt, systematic_resample, wrap_angle
 DATA_SEED = 20261122
 """Seed of the shipped Monte Carlo table (course/data/nonlinear_filters_air_traffic.json)."""
 DATA_RUNS = 400
-SWEEP_T = (2.0, 5.0, 10.0, 15.0)
+SWEEP_T = (5.0, 10.0, 15.0, 20.0)
 SWEEP_RUNS = 50
 PARTICLES = 5000
 
@@ -189,7 +189,7 @@ def monte_carlo(runs: int, seed: int, T: float = air_traffic.T_RADAR, particles:
     estimates = {}
     for name in filters:
         if name == "pf":
-            estimates[name] = air_traffic.run_particle_filter(bootstrap_pf_step, sc, m0, y, particle_rng, particles)
+            estimates[name] = air_traffic.run_bootstrap_pf(bootstrap_pf_step, sc, m0, y, particle_rng, particles)
         elif name == "ekf":
             estimates[name] = air_traffic.run_ekf(ekf_update, sc, m0, y)
         else:

@@ -162,7 +162,7 @@ def test_the_update_wraps_bearings_across_the_cut():
     a = ref.sigma_point_update(m, P, y, air_traffic.radar, air_traffic.R_RADAR, Z, w, (1,))
     b = ref.sigma_point_update(m, P, y, h_shifted, air_traffic.R_RADAR, Z, w, (1,))
     np.testing.assert_allclose(a[0], b[0], rtol=1e-9, atol=1e-9)
-    e = ref.ekf_update(m, P, y, air_traffic.radar, air_traffic.radar_jacobian, air_traffic.R_RADAR, (1,))
+    e = ref.ekf_update(m, P, y, air_traffic.radar, air_traffic.radar_h_jacobian, air_traffic.R_RADAR, (1,))
     # the bearing innovation is 2.16e-3 rad, not about 2 pi: the update moves eta by metres, not kilometres
     assert abs(e[0][1] - m[1]) < 100 and abs(a[0][1] - m[1]) < 100
 
@@ -174,13 +174,13 @@ def test_steps_on_a_stack_of_runs_equal_the_steps_one_run_at_a_time():
     P = np.stack([random_spd(rng, 5) * 50 for _ in range(4)])
     y = air_traffic.radar(m) + 3.0
     f = lambda X: air_traffic.ct_step(X, 5.0)  # noqa: E731
-    Q, R = air_traffic.process_noise(5.0), air_traffic.R_RADAR
+    Q, R = air_traffic.ct_process_noise(5.0), air_traffic.R_RADAR
     batch = [ref.sigma_point_predict(m, P, f, Z, w, Q), ref.sigma_point_update(m, P, y, air_traffic.radar, R, Z, w, (1,)),
-             ref.ekf_update(m, P, y, air_traffic.radar, air_traffic.radar_jacobian, R, (1,))]
+             ref.ekf_update(m, P, y, air_traffic.radar, air_traffic.radar_h_jacobian, R, (1,))]
     for r in range(4):
         single = [ref.sigma_point_predict(m[r], P[r], f, Z, w, Q),
                   ref.sigma_point_update(m[r], P[r], y[r], air_traffic.radar, R, Z, w, (1,)),
-                  ref.ekf_update(m[r], P[r], y[r], air_traffic.radar, air_traffic.radar_jacobian, R, (1,))]
+                  ref.ekf_update(m[r], P[r], y[r], air_traffic.radar, air_traffic.radar_h_jacobian, R, (1,))]
         for (bm, bP), (sm, sP) in zip(batch, single):
             np.testing.assert_allclose(bm[r], sm, rtol=1e-12)
             np.testing.assert_allclose(bP[r], sP, rtol=1e-10, atol=1e-9)
@@ -236,7 +236,7 @@ def test_ct_step_is_the_flow_of_the_coordinated_turn_ode(omega):
 def test_jacobians_match_finite_differences(omega):
     m = np.array([3000.0, -4000.0, 100.0, 30.0, omega])
     F = air_traffic.ct_jacobian(m, 5.0)
-    H = air_traffic.radar_jacobian(m)
+    H = air_traffic.radar_h_jacobian(m)
     steps = np.array([1.0, 1.0, 1e-3, 1e-3, 1e-6])
     for j, step in enumerate(steps):
         e = np.zeros(5)
@@ -256,7 +256,7 @@ def test_process_noise_is_the_discretised_white_acceleration():
         return air_traffic.L1 * phi @ np.array([[0.0, 0.0], [0.0, 1.0]]) @ phi.T
 
     block = quad_vec(integrand, 0, T)[0]
-    Q = air_traffic.process_noise(T)
+    Q = air_traffic.ct_process_noise(T)
     np.testing.assert_allclose(Q[np.ix_([0, 2], [0, 2])], block, rtol=1e-10)
     np.testing.assert_allclose(Q[np.ix_([1, 3], [1, 3])], block, rtol=1e-10)
     assert np.isclose(Q[4, 4], T * air_traffic.L2) and np.count_nonzero(Q) == 9
