@@ -194,3 +194,45 @@ def _() -> None:
     for name in air_traffic.FILTERS:
         if name != "ekf":
             assert shipped.sweep[name][last, 0] > shipped.sweep[name][first, 0], name
+
+
+@claim("nonlinear-filters/orders-of-magnitude")
+def _() -> None:
+    """The seven filters' velocity metrics span more than two orders of magnitude (shipped table)."""
+    v = [_shipped().table[name]["velocity"] for name in air_traffic.FILTERS]
+    assert max(v) > 100 * min(v), f"velocity metrics {v}"
+
+
+@claim("nonlinear-filters/cut-matches-published")
+def _() -> None:
+    """Every radius and weight of the solved CUT6 and CUT8 is one the authors' MATLAB prints (CUTpoints, n = 5), to 1e-8."""
+    published = {
+        "cut6": [(2.121320343559643, 0.03292181069958846), (1.1338934190276817 * np.sqrt(5), 0.014703360768175577),
+                 (3.0 * np.sqrt(2), 0.000685871056241427)],
+        "cut8": [(1 / np.sqrt(0.1866956121576737), 0.010529034221546607), (np.sqrt(5 / 1.420294749459945), 0.015144019639537572),
+                 (np.sqrt(2 / 0.29836021128926843), 0.0052828996967816825), (np.sqrt(5 / 0.5123685659872401), 0.0010671298950159158),
+                 (2 * np.sqrt(3), 0.0006510416666666666), (np.sqrt(13 / 0.8065591548429262), 0.00013776017592074394)],
+    }
+    for name, pairs in published.items():
+        Z, w = getattr(cut, f"{name}_points")()
+        radius = np.linalg.norm(Z, axis=1)
+        for r, weight in pairs:
+            at = np.isclose(radius, r, rtol=1e-8)
+            assert at.any() and np.allclose(w[at], weight, rtol=1e-8), f"{name}: radius {r}, weight {weight}"
+        assert np.all(np.isclose(radius[1:, None], [r for r, _ in pairs], rtol=1e-8).any(axis=1)), f"{name}: extra radii"
+
+
+@claim("nonlinear-filters/pf-kept-near-lecture")
+def _() -> None:
+    """The PF without its lost runs is within a factor 2 of the lecture's PF row in position, velocity and turn rate (shipped table)."""
+    kept = _shipped().table["pf"]["excluding_lost"]
+    for quantity in air_traffic.QUANTITIES:
+        ratio = kept[quantity] / air_traffic.LECTURE_TABLE[quantity]["pf"]
+        assert 0.5 < ratio < 2, f"{quantity}: ours {kept[quantity]}, ratio {ratio:.2f}"
+
+
+@claim("nonlinear-filters/initial-error-settles")
+def _() -> None:
+    """Every filter's position RMSE_k is 1.3-1.7 km at t = 0 and below 500 m at t = 10 s (shipped curves)."""
+    for name, curve in _shipped().rmse_curves.items():
+        assert 1300 < curve[0, 0] < 1700 and curve[2, 0] < 500, f"{name}: {curve[0, 0]:.0f} m, then {curve[2, 0]:.0f} m"
