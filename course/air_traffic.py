@@ -1,0 +1,442 @@
+"""The air-traffic problem of the nonlinear-filters lab: an aircraft turning in front of a radar.
+
+Units: metres (m), seconds (s), radians (rad). The state is x = [xi, eta, xi_dot, eta_dot, Omega]:
+position (m), velocity (m/s) and turn rate (rad/s). A radar at the origin measures the range (m)
+and the bearing atan2(eta, xi) (rad). The set-up follows the air-traffic example of Adurthi,
+Singla and Singh (the coordinated-turn model of Bar-Shalom, Li and Kirubarajan).
+
+Functions act on the last axis, so that one call moves every sigma point, particle or Monte Carlo
+run at once: ``ct_step(X, T)`` takes X of shape (..., 5).
+"""
+
+from __future__ import annotations
+
+import json
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+import matplotlib.pyplot as plt
+import numpy as np
+from matplotlib.figure import Figure
+
+DEG = np.pi / 180.0
+T_RADAR = 5.0
+"""The lecture's measurement interval, s."""
+L1, L2 = 0.16, 0.01
+"""Process-noise intensities of the coordinated-turn model: acceleration (m^2/s^3) and turn rate (rad^2/s^3)."""
+R_RADAR = np.diag([10.0**2, (1.0 * DEG) ** 2])
+"""Radar noise covariance: 10 m in range, 1 deg in bearing."""
+X0_TRUE = np.array([25000.0, 10000.0, -120.0, 0.0, 0.0])
+"""The aircraft at t = 0: 25 km east, 10 km north, flying west at 120 m/s, not turning."""
+M0 = np.array([25000.0, 10000.0, -120.0, 0.0, 1e-6])
+"""The centre of the filters' initial beliefs (each run draws its initial mean around it)."""
+P0 = np.diag([1000.0**2, 1000.0**2, 100.0, 100.0, (1.0 * DEG) ** 2])
+"""The filters' initial covariance."""
+LEGS = ((125.0, 0.0), (90.0, 1.0 * DEG), (125.0, 0.0), (30.0, -3.0 * DEG), (125.0, 0.0))
+"""The flight plan: (duration s, turn rate rad/s) of each leg, 495 s in all."""
+LOST_KM = 1.0
+"""A run is lost when its position error at the last radar return exceeds this many km."""
+FILTERS = ("pf", "ekf", "ckf", "ukf", "cut4", "cut6", "cut8")
+LABELS = {"pf": "PF (mean)", "ekf": "EKF", "ckf": "CKF", "ukf": "UKF", "cut4": "CUT4", "cut6": "CUT6", "cut8": "CUT8"}
+COLOURS = {"pf": "black", "ekf": "tab:grey", "ckf": "tab:red", "ukf": "tab:orange", "cut4": "tab:purple",
+           "cut6": "tab:blue", "cut8": "tab:green"}
+LECTURE_TABLE = {
+    "position": {"pf": 115.47, "ckf": 989.15, "ukf": 685.90, "cut4": 245.30, "cut6": 138.82, "cut8": 135.89},
+    "velocity": {"pf": 24.16, "ckf": 17330.23, "ukf": 12849.90, "cut4": 6127.86, "cut6": 2153.53, "cut8": 34.73},
+    "turn_rate": {"pf": 0.0393, "ckf": 2.873, "ukf": 2.396, "cut4": 1.329, "cut6": 0.636, "cut8": 0.090},
+}
+"""The lecture's table for T = 5 s (its 'RMSE' is sqrt(mean over time of RMSE_k^2 / 5))."""
+DATA_FILE = Path(__file__).parent / "data" / "nonlinear_filters_air_traffic.json"
+
+
+def wrap_angle(a: np.ndarray) -> np.ndarray:
+    """Angles wrapped to (-pi, pi], rad."""
+    return np.pi - np.mod(np.pi - a, 2.0 * np.pi)
+
+
+def _turn_terms(omega: np.ndarray, T: float) -> tuple[np.ndarray, np.ndarray]:
+    """sin(Omega T)/Omega and (1 - cos(Omega T))/Omega, with their limits T and 0 as Omega -> 0."""
+    wt = omega * T
+    small = np.abs(wt) < 1e-4
+    safe = np.where(small, 1.0, omega)
+    # Taylor series: sin(wT)/w = T (1 - (wT)^2/6), (1 - cos wT)/w = T wT/2 (1 - (wT)^2/12)
+    s = np.where(small, T * (1.0 - wt**2 / 6.0), np.sin(wt) / safe)
+    c = np.where(small, T * wt / 2.0 * (1.0 - wt**2 / 12.0), (1.0 - np.cos(wt)) / safe)
+    return s, c
+
+
+def ct_step(X: np.ndarray, T: float = T_RADAR) -> np.ndarray:
+    """The coordinated-turn model's exact step over T seconds: X (..., 5) to the states T s later."""
+    xi, eta, vxi, veta, omega = np.moveaxis(X, -1, 0)
+    s, c = _turn_terms(omega, T)
+    cos, sin = np.cos(omega * T), np.sin(omega * T)
+    return np.stack((xi + s * vxi - c * veta,
+                     eta + c * vxi + s * veta,
+                     cos * vxi - sin * veta,
+                     sin * vxi + cos * veta,
+                     omega), axis=-1)
+
+
+def ct_jacobian(m: np.ndarray, T: float = T_RADAR) -> np.ndarray:
+    """The Jacobian of ct_step at m (..., 5), shape (..., 5, 5)."""
+    _, _, vxi, veta, omega = np.moveaxis(m, -1, 0)
+    s, c = _turn_terms(omega, T)
+    wt = omega * T
+    cos, sin = np.cos(wt), np.sin(wt)
+    small = np.abs(wt) < 1e-4
+    safe = np.where(small, 1.0, omega)
+    # d/dOmega of s and c, with their series near Omega = 0
+    ds = np.where(small, -T**2 * wt / 3.0, (T * cos - s) / safe)
+    dc = np.where(small, T**2 * (0.5 - wt**2 / 8.0), (T * sin - c) / safe)
+    F = np.zeros(m.shape[:-1] + (5, 5))
+    F[..., 0, 0] = F[..., 1, 1] = F[..., 4, 4] = 1.0
+    F[..., 0, 2], F[..., 0, 3], F[..., 0, 4] = s, -c, ds * vxi - dc * veta
+    F[..., 1, 2], F[..., 1, 3], F[..., 1, 4] = c, s, dc * vxi + ds * veta
+    F[..., 2, 2], F[..., 2, 3], F[..., 2, 4] = cos, -sin, -T * (sin * vxi + cos * veta)
+    F[..., 3, 2], F[..., 3, 3], F[..., 3, 4] = sin, cos, T * (cos * vxi - sin * veta)
+    return F
+
+
+def ct_process_noise(T: float = T_RADAR) -> np.ndarray:
+    """Q (5 x 5): L1 [[T^3/3, T^2/2], [T^2/2, T]] for each axis, and T L2 for the turn rate."""
+    block = L1 * np.array([[T**3 / 3.0, T**2 / 2.0], [T**2 / 2.0, T]])
+    Q = np.zeros((5, 5))
+    Q[np.ix_([0, 2], [0, 2])] = block
+    Q[np.ix_([1, 3], [1, 3])] = block
+    Q[4, 4] = T * L2
+    return Q
+
+
+def radar(X: np.ndarray) -> np.ndarray:
+    """Range (m) and bearing atan2(eta, xi) (rad) of states X (..., 5) seen from the origin: (..., 2)."""
+    return np.stack((np.hypot(X[..., 0], X[..., 1]), np.arctan2(X[..., 1], X[..., 0])), axis=-1)
+
+
+def radar_h_jacobian(m: np.ndarray) -> np.ndarray:
+    """The Jacobian of radar at m (..., 5), shape (..., 2, 5)."""
+    xi, eta = m[..., 0], m[..., 1]
+    r2 = xi**2 + eta**2
+    r = np.sqrt(r2)
+    H = np.zeros(m.shape[:-1] + (2, 5))
+    H[..., 0, 0], H[..., 0, 1] = xi / r, eta / r
+    H[..., 1, 0], H[..., 1, 1] = -eta / r2, xi / r2
+    return H
+
+
+RADAR_ANGLES = (1,)
+"""Which radar components are angles (their residuals are wrapped)."""
+
+
+def symmetric_sqrt(P: np.ndarray) -> np.ndarray:
+    """The symmetric square root S = S^T with S S = P of covariances P (..., n, n)."""
+    values, vectors = np.linalg.eigh(0.5 * (P + np.swapaxes(P, -1, -2)))
+    return (vectors * np.sqrt(np.clip(values, 0.0, None))[..., None, :]) @ np.swapaxes(vectors, -1, -2)
+
+
+def systematic_resample(weights: np.ndarray, rng: np.random.Generator) -> np.ndarray:
+    """Systematic resampling: parent indices (..., N) for normalised weights (..., N).
+
+    One uniform draw u per run; the j-th offspring takes the parent whose cumulative weight
+    interval holds (u + j)/N. Each parent i gets floor(N w_i) or ceil(N w_i) offspring.
+    """
+    N = weights.shape[-1]
+    batch = weights.shape[:-1]
+    cumulative = np.cumsum(weights, axis=-1)
+    cumulative[..., -1] = 1.0
+    points = (rng.random(batch + (1,)) + np.arange(N)) / N
+    # one sorted search over all runs: run r's cumulative weights, shifted by r, lie in [r, r + 1]
+    shift = np.arange(int(np.prod(batch))).reshape(batch + (1,)).astype(float)
+    index = np.searchsorted((cumulative + shift).ravel(), (points + shift).ravel(), side="right")
+    return np.minimum(index.reshape(batch + (N,)) - N * shift.astype(int), N - 1)
+
+
+def ekf_predict(m: np.ndarray, P: np.ndarray, T: float, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The EKF's time step through the coordinated-turn model: m (..., 5), P (..., 5, 5)."""
+    F = ct_jacobian(m, T)
+    # m_{k+1|k} = f(m_{k|k}),  P_{k+1|k} = F P F^T + Q
+    P_new = F @ P @ np.swapaxes(F, -1, -2) + Q
+    return ct_step(m, T), 0.5 * (P_new + np.swapaxes(P_new, -1, -2))
+
+
+# ------------------------------------------------------------------------------------------------
+# The truth and the radar data
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class Scenario:
+    """The flight sampled every T seconds: times (K,) s and true states (K, 5), Q and R for step T."""
+
+    T: float
+    times: np.ndarray
+    truth: np.ndarray
+
+    @property
+    def Q(self) -> np.ndarray:
+        return ct_process_noise(self.T)
+
+    @property
+    def R(self) -> np.ndarray:
+        return R_RADAR
+
+
+def scenario(T: float = T_RADAR) -> Scenario:
+    """The noise-free flight plan LEGS, sampled every T s (T a whole number of seconds) from t = 0 to 495 s.
+
+    The truth is built in one-second coordinated-turn steps (exact, since the model is the exact
+    flow for a constant turn rate), with the turn rate of the leg that the next second belongs to.
+    """
+    if T != int(T) or T < 1:
+        raise ValueError("T must be a whole number of seconds")
+    rates = np.concatenate([np.full(int(duration), rate) for duration, rate in LEGS])
+    states = [X0_TRUE.copy()]
+    for rate in rates:
+        current = states[-1].copy()
+        current[4] = rate
+        states[-1] = current
+        states.append(ct_step(current, 1.0))
+    states[-1][4] = 0.0
+    states = np.array(states)
+    times = np.arange(0, len(rates) + 1, int(T), dtype=float)
+    return Scenario(float(T), times, states[times.astype(int)])
+
+
+def simulate_runs(sc: Scenario, runs: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
+    """Each run's initial mean m0 (runs, 5), drawn from N(M0, P0), and radar data y (runs, K, 2)."""
+    # P0 and R are diagonal, so their entrywise square roots are their square roots
+    m0 = M0 + rng.standard_normal((runs, 5)) @ np.sqrt(P0)
+    y = radar(sc.truth) + rng.standard_normal((runs, len(sc.times), 2)) @ np.sqrt(R_RADAR)
+    y[..., 1] = wrap_angle(y[..., 1])
+    return m0, y
+
+
+# ------------------------------------------------------------------------------------------------
+# Filters: frameworks that take your functions
+# ------------------------------------------------------------------------------------------------
+
+Predict = Callable[..., tuple[np.ndarray, np.ndarray]]
+Update = Callable[..., tuple[np.ndarray, np.ndarray]]
+
+
+def run_sigma_point_filter(predict: Predict, update: Update, Z: np.ndarray, w: np.ndarray, sc: Scenario,
+                           m0: np.ndarray, y: np.ndarray, vectorised: bool = True) -> np.ndarray:
+    """A sigma-point filter with the points Z (N, 5), weights w (N,): estimates (runs, K, 5).
+
+    ``predict(m, P, f, Z, w, Q)`` and ``update(m, P, y, h, R, Z, w, angles)`` are your
+    sigma_point_predict and sigma_point_update. With vectorised=False they see one run at a time.
+    """
+    f = lambda X: ct_step(X, sc.T)  # noqa: E731
+    m, P = m0.copy(), np.broadcast_to(P0, m0.shape + (5,)).copy()
+    estimates = np.empty(y.shape[:2] + (5,))
+    estimates[:, 0] = m
+    for k in range(1, len(sc.times)):
+        if vectorised:
+            m, P = predict(m, P, f, Z, w, sc.Q)
+            m, P = update(m, P, y[:, k], radar, sc.R, Z, w, RADAR_ANGLES)
+        else:
+            pairs = [update(*predict(m[r], P[r], f, Z, w, sc.Q), y[r, k], radar, sc.R, Z, w, RADAR_ANGLES)
+                     for r in range(len(m))]
+            m, P = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+        estimates[:, k] = m
+    return estimates
+
+
+def run_ekf(update: Update, sc: Scenario, m0: np.ndarray, y: np.ndarray, vectorised: bool = True) -> np.ndarray:
+    """The EKF (the given ekf_predict and your ``update(m, P, y, h, H_jacobian, R, angles)``): (runs, K, 5)."""
+    m, P = m0.copy(), np.broadcast_to(P0, m0.shape + (5,)).copy()
+    estimates = np.empty(y.shape[:2] + (5,))
+    estimates[:, 0] = m
+    for k in range(1, len(sc.times)):
+        m, P = ekf_predict(m, P, sc.T, sc.Q)
+        if vectorised:
+            m, P = update(m, P, y[:, k], radar, radar_h_jacobian, sc.R, RADAR_ANGLES)
+        else:
+            pairs = [update(m[r], P[r], y[r, k], radar, radar_h_jacobian, sc.R, RADAR_ANGLES) for r in range(len(m))]
+            m, P = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+        estimates[:, k] = m
+    return estimates
+
+
+def run_bootstrap_pf(step: Callable, sc: Scenario, m0: np.ndarray, y: np.ndarray, rng: np.random.Generator,
+                        particles: int = 5000, vectorised: bool = True) -> np.ndarray:
+    """The bootstrap particle filter with your ``step(X, logw, y, rng, f, h, Q, R, angles)``: weighted means (runs, K, 5).
+
+    Each run starts from ``particles`` draws of N(m0, P0) with equal weights.
+    """
+    f = lambda X: ct_step(X, sc.T)  # noqa: E731
+    runs = len(m0)
+    X = m0[:, None, :] + rng.standard_normal((runs, particles, 5)) @ np.sqrt(P0)
+    logw = np.full((runs, particles), -np.log(particles))
+    estimates = np.empty(y.shape[:2] + (5,))
+    estimates[:, 0] = m0
+    for k in range(1, len(sc.times)):
+        if vectorised:
+            X, logw = step(X, logw, y[:, k], rng, f, radar, sc.Q, sc.R, RADAR_ANGLES)
+        else:
+            pairs = [step(X[r], logw[r], y[r, k], rng, f, radar, sc.Q, sc.R, RADAR_ANGLES) for r in range(runs)]
+            X, logw = np.array([p[0] for p in pairs]), np.array([p[1] for p in pairs])
+        # the estimate: the weighted mean of the particles
+        estimates[:, k] = np.einsum("rn,rni->ri", np.exp(logw), X)
+    return estimates
+
+
+# ------------------------------------------------------------------------------------------------
+# Errors and the lecture's table
+# ------------------------------------------------------------------------------------------------
+
+QUANTITIES = ("position", "velocity", "turn_rate")
+UNITS = {"position": "m", "velocity": "m/s", "turn_rate": "rad/s"}
+
+
+def errors(estimates: np.ndarray, sc: Scenario) -> np.ndarray:
+    """Per run and time, the position error (m), velocity error (m/s) and turn-rate error (rad/s): (runs, K, 3)."""
+    d = estimates - sc.truth
+    return np.stack((np.hypot(d[..., 0], d[..., 1]), np.hypot(d[..., 2], d[..., 3]), np.abs(d[..., 4])), axis=-1)
+
+
+def lecture_metric(err: np.ndarray, axis: int | tuple[int, ...] = (0, 1)) -> np.ndarray:
+    """The lecture's 'RMSE': sqrt(mean over time of RMSE_k^2 / 5), RMSE_k over runs; err (runs, K, 3) gives (3,).
+
+    The factor 1/5 (the state dimension) is in the authors' code; the slide calls the number a 2-norm.
+    With axis=1 it is the same number for each run on its own, (runs, 3).
+    """
+    return np.sqrt(np.mean(err**2, axis=axis) / 5.0)
+
+
+def rmse_over_time(err: np.ndarray) -> np.ndarray:
+    """RMSE_k over runs at each time: err (runs, K, 3) gives (K, 3)."""
+    return np.sqrt(np.mean(err**2, axis=0))
+
+
+def lost_runs(err: np.ndarray) -> np.ndarray:
+    """Which runs are lost: a position error above LOST_KM at the last radar return, (runs,) bool."""
+    return err[:, -1, 0] > 1000.0 * LOST_KM
+
+
+def summarise(err: np.ndarray) -> dict:
+    """The lecture's metric, the plain time-averaged RMSE, both without the lost runs, the medians, the lost count."""
+    lost = lost_runs(err)
+    kept = err[~lost] if np.any(~lost) else err[:0]
+    per_run = lecture_metric(err, axis=1)
+
+    def named(values: np.ndarray) -> dict:
+        return {q: float(v) for q, v in zip(QUANTITIES, values)}
+
+    return {
+        **named(lecture_metric(err)),
+        "time_averaged_rmse": named(np.mean(rmse_over_time(err), axis=0)),
+        "excluding_lost": named(lecture_metric(kept) if len(kept) else np.full(3, np.nan)),
+        "median": named(np.median(per_run, axis=0)),
+        "lost_runs": int(np.sum(lost)),
+    }
+
+
+# ------------------------------------------------------------------------------------------------
+# The shipped Monte Carlo table
+# ------------------------------------------------------------------------------------------------
+
+
+@dataclass(frozen=True)
+class ShippedResults:
+    """The reference's Monte Carlo results: the T = 5 s table, RMSE_k curves, and the sweep over T."""
+
+    runs: int
+    seed: int
+    particles: int
+    table: dict
+    times: np.ndarray
+    rmse_curves: dict
+    sweep_T: np.ndarray
+    sweep_runs: int
+    sweep: dict
+
+
+def load(path: Path = DATA_FILE) -> ShippedResults:
+    """Load the shipped Monte Carlo results (built by the instructor's ``python -m autograder data``)."""
+    raw = json.loads(Path(path).read_text())
+    return ShippedResults(
+        runs=raw["runs"], seed=raw["seed"], particles=raw["particles"], table=raw["filters"],
+        times=np.array(raw["times"]), rmse_curves={k: np.array(v) for k, v in raw["rmse_curves"].items()},
+        sweep_T=np.array(raw["sweep"]["T"]), sweep_runs=raw["sweep"]["runs"],
+        sweep={k: np.array(v) for k, v in raw["sweep"]["filters"].items()},
+    )
+
+
+def print_table(table: dict, runs: int) -> None:
+    """Print the lecture's metric for every filter beside the lecture's, with factors relative to the PF."""
+    print(f"The lecture's metric, sqrt(mean_k RMSE_k^2 / 5), over {runs} runs (lecture's value in brackets)")
+    print(f"{'filter':<10}{'position [m]':>24}{'velocity [m/s]':>26}{'turn rate [rad/s]':>24}{'x PF (pos)':>12}{'lost':>6}")
+    for name in FILTERS:
+        row = table[name]
+        cells = []
+        for q in QUANTITIES:
+            lecture = LECTURE_TABLE[q].get(name)
+            cells.append(f"{row[q]:.4g}" + (f" ({lecture:.4g})" if lecture is not None else " (-)"))
+        factor = row["position"] / table["pf"]["position"]
+        print(f"{LABELS[name]:<10}{cells[0]:>24}{cells[1]:>26}{cells[2]:>24}{factor:>12.2f}{row['lost_runs']:>6}")
+
+
+def print_robust_table(table: dict) -> None:
+    """Print the medians over runs and the metric without the lost runs, beside the lost count."""
+    print(f"{'filter':<10}{'median pos [m]':>16}{'median vel [m/s]':>18}{'pos w/o lost [m]':>18}"
+          f"{'vel w/o lost [m/s]':>20}{'time-avg RMSE pos [m]':>23}{'lost':>6}")
+    for name in FILTERS:
+        row = table[name]
+        print(f"{LABELS[name]:<10}{row['median']['position']:>16.4g}{row['median']['velocity']:>18.4g}"
+              f"{row['excluding_lost']['position']:>18.4g}{row['excluding_lost']['velocity']:>20.4g}"
+              f"{row['time_averaged_rmse']['position']:>23.4g}{row['lost_runs']:>6}")
+
+
+# ------------------------------------------------------------------------------------------------
+# Figures
+# ------------------------------------------------------------------------------------------------
+
+
+def plot_flight(sc: Scenario, y: np.ndarray | None = None) -> Figure:
+    """The true flight, the radar at the origin, and (optionally) one run's radar returns."""
+    fig, ax = plt.subplots(figsize=(7, 6), constrained_layout=True)
+    ax.plot(sc.truth[:, 0] / 1000, sc.truth[:, 1] / 1000, color="black", lw=2, label="true flight")
+    ax.plot(sc.truth[0, 0] / 1000, sc.truth[0, 1] / 1000, "o", color="black", label="start (t = 0 s)")
+    if y is not None:
+        ax.plot(y[:, 0] * np.cos(y[:, 1]) / 1000, y[:, 0] * np.sin(y[:, 1]) / 1000, ".", color="tab:orange",
+                label="radar returns (one run)")
+    ax.plot(0, 0, "s", color="tab:green", ms=9, label="radar")
+    ax.set_xlabel("xi, east [km]")
+    ax.set_ylabel("eta, north [km]")
+    ax.set_aspect("equal")
+    ax.set_title(f"The aircraft's flight, sampled every {sc.T:g} s")
+    ax.legend(loc="upper left", fontsize="small")
+    return fig
+
+
+def plot_position_error(times: np.ndarray, curves: dict, title: str) -> Figure:
+    """RMSE_k of the position (over runs) against time, one line per filter, on a log scale."""
+    fig, ax = plt.subplots(figsize=(9, 5), constrained_layout=True)
+    for name in FILTERS:
+        if name in curves:
+            ax.semilogy(times, curves[name][:, 0], color=COLOURS[name], lw=2 if name in ("pf", "cut8") else 1.3,
+                        label=LABELS[name])
+    for start in np.cumsum([0.0] + [d for d, _ in LEGS])[1:-1]:
+        ax.axvline(start, color="grey", lw=0.8, ls=":")
+    ax.set_xlabel("time [s] (dotted lines: a turn starts or ends)")
+    ax.set_ylabel("position RMSE over runs [m]")
+    ax.set_title(title)
+    ax.legend(loc="upper left", ncols=4, fontsize="small")
+    return fig
+
+
+def plot_rmse_against_interval(T: np.ndarray, sweep: dict, runs: int) -> Figure:
+    """The lecture's metric for the position and the velocity against the measurement interval T."""
+    fig, axes = plt.subplots(1, 2, figsize=(11, 5), layout="constrained")
+    for ax, (index, quantity, unit) in zip(axes, [(0, "position", "m"), (1, "velocity", "m/s")]):
+        for name in FILTERS:
+            if name in sweep:
+                ax.semilogy(T, sweep[name][:, index], "o-", color=COLOURS[name], label=LABELS[name])
+        ax.set_xlabel("measurement interval T [s]")
+        ax.set_ylabel(f"{quantity}: sqrt(mean_k RMSE_k^2 / 5) [{unit}]")
+        ax.set_xticks(T)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncols=len(labels), fontsize="small")
+    fig.suptitle(f"Error against the measurement interval ({runs} runs per T)")
+    return fig
