@@ -4,10 +4,11 @@ The state is ``x = [h, v, c]``: altitude h [m] above the reference point, vertic
 v [m/s] (up is positive, so a falling vehicle has v < 0) and ballistic drag coefficient
 c [m^2/kg]. Equation numbers refer to the MCHA4400 Lab 5 handout.
 
-This module holds what the handout gives you: the constants, the data loader, the event-based
-square-root extended Kalman filter (the handout's Event, State and Measurement classes) and the
-plots. The filter *takes your functions as arguments*; it does not contain them. Nothing here
-implements a blank.
+This module holds what the handout gives you: the constants, the data loader, the RK4 step and its
+Jacobian, the event loop of the square-root extended Kalman filter (the handout's Event, State and
+Measurement classes), the plots, and, for comparison only, the textbook covariance-form update.
+The filter *takes your functions as arguments*, your square-root time and measurement updates
+among them; it does not contain them. Nothing here implements a blank.
 
 Square-root convention (as in the handout): a covariance P is carried as an upper-triangular
 S with S^T S = P.

@@ -426,6 +426,19 @@ def test_first_update_comparison_exact_value_is_the_scalar_kalman_update() -> No
                                       S0=np.triu(np.ones((3, 3))))
 
 
+def test_first_update_figure_marks_broken_covariances() -> None:
+    sigma = np.logspace(2, -10, 13)
+    cmp = starship.compare_first_update(ref.sqrt_measurement_update, ref.radar_predict, ref.radar_jacobian, sigma)
+    fig, ax = starship.plot_first_update_comparison(cmp)
+    try:
+        crosses = [line for line in ax.get_lines() if line.get_marker() == "x" and len(line.get_xdata())]
+        broken = (~cmp.pd_covariance32).sum() + (~cmp.pd_covariance64).sum() + (~cmp.pd_square_root).sum()
+        assert sum(len(line.get_xdata()) for line in crosses) == broken > 0
+        assert ax.get_xscale() == "log" and "[m]" in ax.get_xlabel() and ax.get_legend() is not None
+    finally:
+        plt.close(fig)
+
+
 def test_positive_definite_check() -> None:
     assert starship.is_positive_definite(np.diag([1.0, 2.0]))
     assert not starship.is_positive_definite(np.diag([1.0, -1e-12]))
