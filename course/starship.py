@@ -4,10 +4,11 @@ The state is ``x = [h, v, c]``: altitude h [m] above the reference point, vertic
 v [m/s] (up is positive, so a falling vehicle has v < 0) and ballistic drag coefficient
 c [m^2/kg]. Equation numbers refer to the MCHA4400 Lab 5 handout.
 
-This module holds what the handout gives you: the constants, the data loader, the event-based
-square-root extended Kalman filter (the handout's Event, State and Measurement classes) and the
-plots. The filter *takes your functions as arguments*; it does not contain them. Nothing here
-implements a blank.
+This module holds what the handout gives you: the constants, the data loader, the RK4 step and its
+Jacobian, the event loop of the square-root extended Kalman filter (the handout's Event, State and
+Measurement classes), the plots, and, for comparison only, the textbook covariance-form update.
+The filter *takes your functions as arguments*, your square-root time and measurement updates
+among them; it does not contain them. Nothing here implements a blank.
 
 Square-root convention (as in the handout): a covariance P is carried as an upper-triangular
 S with S^T S = P.
@@ -22,7 +23,6 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import block_diag
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -258,64 +258,15 @@ def rk4_step_with_jacobian(
     return x_next, J
 
 
-def time_update(
-    mu: Vector,
-    S: Matrix,
-    dt: float,
-    dynamics: Dynamics,
-    jacobian: Jacobian,
-    sqrt_q: Matrix = SQRT_Q,
-) -> tuple[Vector, Matrix]:
-    """Predict the belief dt seconds ahead (the handout's State::predict).
-
-    Augment z = [x; w] ~ N^(1/2)([mu; 0], blkdiag(S, SQRT_Q sqrt(dt))), map it through one RK4
-    step and linearise: S+ is the R factor of QR(blkdiag(S, SQRT_Q sqrt(dt)) J^T).
-    mu: (n,), S: (n, n) upper triangular, dt [s] >= 0. Returns (mu+, S+). dt = 0 is a no-op.
-    """
-    if dt < 0:
-        raise ValueError(f"time_update cannot go back in time (dt = {dt} s).")
-    if dt == 0:
-        return mu, S
-    n = mu.size
-    mu_next, J = rk4_step_with_jacobian(dynamics, jacobian, mu, np.zeros(n), dt)
-    # Square root of cov([x; w]) = blkdiag(P, Q dt)
-    S_z = block_diag(S, sqrt_q * np.sqrt(dt))
-    # P+ = J Pz J^T = (S_z J^T)^T (S_z J^T); the R factor of a Q-less QR is its square root
-    S_next = np.linalg.qr(S_z @ J.T, mode="r")
-    return mu_next, S_next
+StepWithJacobian = Callable[[Vector], tuple[Vector, Matrix]]
+SqrtUpdate = Callable[..., tuple[Vector, Matrix]]
 
 
-def measurement_update(
-    mu: Vector,
-    S: Matrix,
-    y: ArrayLike,
-    predict: Dynamics,
-    predict_jacobian: Jacobian,
-    conditional: Conditional,
-    sigma: float = SIGMA_RANGE,
-) -> tuple[Vector, Matrix]:
-    """Condition the belief on one measurement y (the handout's Measurement::update).
-
-    Augmented model [y; x] = [h(x); x] + [v; 0]. Its joint square root is the R factor of
-    QR([S Ja^T; blkdiag(sigma, 0)]) with Ja = [H; I], and its joint mean is [h(mu); mu]; then
-    ``conditional`` gives p(x | y). mu: (n,), S: (n, n), y: (m,). Returns (mu+, S+).
-    """
-    n = mu.size
-    y = np.atleast_1d(np.asarray(y, dtype=float))
-    m = y.size
-    y_pred = _as_vector(predict(mu), "radar_predict", m)
-    H = _as_matrix(predict_jacobian(mu), "radar_jacobian", (m, n))
-    # Ja = d[h(x); x]/dx = [H; I]
-    Ja = np.vstack([H, np.eye(n)])
-    # Square root of the joint covariance of [y; x]: Ja P Ja^T + blkdiag(sigma^2 I, 0)
-    noise = block_diag(sigma * np.eye(m), np.zeros((n, n)))
-    S_joint = np.linalg.qr(np.vstack([S @ Ja.T, noise]), mode="r")
-    mu_joint = np.concatenate([y_pred, mu])
-    # p(x | y): condition the joint on its head
-    mu_post, S_post = conditional(mu_joint, S_joint, np.arange(m, m + n), np.arange(m), y)
-    return _as_vector(mu_post, "conditional (the mean)", n), _as_matrix(
-        S_post, "conditional (the square root)", (n, n)
-    )
+def _checked_belief(value: object, name: str, n: int) -> tuple[Vector, Matrix]:
+    """Your update's (mu, S), checked for shape, with a message that names the function."""
+    if not (isinstance(value, tuple) and len(value) == 2):
+        raise ValueError(f"{name} should return the pair (mu, S), but it returned {type(value).__name__}.")
+    return _as_vector(value[0], f"{name} (the mean)", n), _as_matrix(value[1], f"{name} (the square root)", (n, n))
 
 
 def run_square_root_ekf(
@@ -324,26 +275,46 @@ def run_square_root_ekf(
     jacobian: Jacobian,
     predict: Dynamics,
     predict_jacobian: Jacobian,
-    conditional: Conditional,
+    sqrt_time_update: SqrtUpdate,
+    sqrt_measurement_update: SqrtUpdate,
     mu0: Vector = MU0,
     S0: Matrix = S0,
+    sigma_range: float = SIGMA_RANGE,
 ) -> FilterResult:
     """Run the event-based square-root EKF over every row of ``data``, in order.
 
     The belief starts at t = 0 with (mu0, S0). Each row is an event: a time update to its time
     (skipped when dt = 0, as for the first row at t = 0), then a measurement update with its
-    range. Pass your functions: ``ballistic_dynamics``, ``ballistic_jacobian``,
-    ``radar_predict``, ``radar_jacobian`` and ``conditional``.
+    range. The time update maps z = [x; w] through one RK4 step of dx = f(x) dt + dw
+    (:func:`rk4_step_with_jacobian`), with w of square root SQRT_Q sqrt(dt); the measurement
+    update uses the range model with noise of square root sigma_range [m]. Pass your functions:
+    ``ballistic_dynamics``, ``ballistic_jacobian``, ``radar_predict``, ``radar_jacobian``,
+    ``sqrt_time_update`` and ``sqrt_measurement_update``.
     """
     mu, S = np.array(mu0, dtype=float), np.array(S0, dtype=float)
     n = mu.size
     N = len(data)
     mus, Ss = np.empty((N, n)), np.empty((N, n, n))
+
+    def measure(x: Vector) -> tuple[Vector, Matrix]:
+        return _as_vector(predict(x), "radar_predict", 1), _as_matrix(predict_jacobian(x), "radar_jacobian", (1, n))
+
+    S_R = sigma_range * np.eye(1)
     time = 0.0
     for k in range(N):
-        mu, S = time_update(mu, S, data.t[k] - time, dynamics, jacobian)
+        dt = float(data.t[k] - time)
+        if dt < 0:
+            raise ValueError(f"The data go back in time at row {k} (dt = {dt} s).")
+        if dt > 0:
+
+            def step(x: Vector, dt: float = dt) -> tuple[Vector, Matrix]:
+                return rk4_step_with_jacobian(dynamics, jacobian, x, np.zeros(n), dt)
+
+            mu, S = _checked_belief(sqrt_time_update(mu, S, step, SQRT_Q * np.sqrt(dt)), "sqrt_time_update", n)
         time = data.t[k]
-        mu, S = measurement_update(mu, S, data.range_meas[k], predict, predict_jacobian, conditional)
+        mu, S = _checked_belief(
+            sqrt_measurement_update(mu, S, data.range_meas[k : k + 1], measure, S_R), "sqrt_measurement_update", n
+        )
         mus[k], Ss[k] = mu, S
     return FilterResult(t=data.t.copy(), mu=mus, S=Ss, mu0=np.array(mu0, dtype=float), S0=np.array(S0, dtype=float))
 
@@ -544,3 +515,198 @@ def check_band_plot(
             f"{name}: add a legend that names the truth, the estimate and the 99.7% region: give each a "
             "label=... and call ax.legend()."
         )
+
+
+# =============================================================================================
+# Why square roots: the conventional covariance-form update, for comparison
+# =============================================================================================
+def covariance_measurement_update(
+    mu: ArrayLike,
+    P: ArrayLike,
+    y: ArrayLike,
+    h_and_jacobian: Callable[[Vector], tuple[Vector, Matrix]],
+    R_cov: ArrayLike,
+    dtype: type = np.float64,
+) -> tuple[Vector, Matrix]:
+    """The textbook EKF update in covariance form, every product computed in ``dtype``.
+
+    K = P H^T (H P H^T + R)^-1, mu+ = mu + K (y - h(mu)), P+ = P - K H P. This is the form the
+    square-root filter replaces; it is given here only to compare the two. mu: (n,), P: (n, n),
+    y: (m,), R_cov: (m, m) the noise covariance. Returns (mu+, P+) as float64 arrays.
+    """
+    mu = np.asarray(mu, dtype=dtype)
+    P = np.asarray(P, dtype=dtype)
+    y = np.atleast_1d(np.asarray(y, dtype=dtype))
+    y_pred, H = (np.asarray(a, dtype=dtype) for a in h_and_jacobian(np.asarray(mu, dtype=float)))
+    # innovation covariance H P H^T + R, and K = P H^T (H P H^T + R)^-1
+    innovation_cov = H @ P @ H.T + np.asarray(R_cov, dtype=dtype)
+    K = np.linalg.solve(innovation_cov, H @ P).T
+    # mu+ = mu + K (y - h(mu)), P+ = P - K H P
+    mu_post = mu + K @ (y - y_pred)
+    P_post = P - K @ H @ P
+    return mu_post.astype(float), P_post.astype(float)
+
+
+def is_positive_definite(P: ArrayLike) -> bool:
+    """Whether a covariance is symmetric to rounding and has a Cholesky factor (all eigenvalues > 0)."""
+    P = np.asarray(P, dtype=float)
+    if not np.all(np.isfinite(P)):
+        return False
+    try:
+        np.linalg.cholesky(0.5 * (P + P.T))
+    except np.linalg.LinAlgError:
+        return False
+    return True
+
+
+@dataclass(frozen=True)
+class FirstUpdateComparison:
+    """The altitude variance after the first radar update, by three filters, over radar precisions.
+
+    Every array has shape (K,), one entry per value of ``sigma`` [m].
+    """
+
+    sigma: Vector  #: standard deviation of the radar noise [m]
+    exact: Vector  #: exact posterior variance of h [m^2], from the closed form for a diagonal prior
+    square_root: Vector  #: your square-root update, float64 [m^2]
+    covariance64: Vector  #: the covariance form in float64 [m^2]
+    covariance32: Vector  #: the covariance form in float32 [m^2]
+    pd_square_root: NDArray[np.bool_]  #: whether each posterior covariance is positive definite
+    pd_covariance64: NDArray[np.bool_]
+    pd_covariance32: NDArray[np.bool_]
+
+
+def compare_first_update(
+    sqrt_measurement_update: SqrtUpdate,
+    predict: Dynamics,
+    predict_jacobian: Jacobian,
+    sigma: ArrayLike,
+    y: float | None = None,
+    mu0: Vector = MU0,
+    S0: Matrix = S0,
+) -> FirstUpdateComparison:
+    """Condition the initial belief on one range, with radars of standard deviation ``sigma`` [m].
+
+    The prior (mu0, S0) must be diagonal: then the exact posterior variance of h is
+    P_hh sigma^2 / (H_h^2 P_hh + sigma^2), free of cancellation. ``y`` defaults to the predicted
+    range; the covariances do not depend on it.
+    """
+    sigma = np.asarray(sigma, dtype=float)
+    mu0, S0 = np.asarray(mu0, dtype=float), np.asarray(S0, dtype=float)
+    if np.any(S0 != np.diag(np.diag(S0))):
+        raise ValueError("compare_first_update needs a diagonal S0, for the exact closed form.")
+
+    def measure(x: Vector) -> tuple[Vector, Matrix]:
+        return _as_vector(predict(x), "radar_predict", 1), _as_matrix(predict_jacobian(x), "radar_jacobian", (1, 3))
+
+    y_pred, H = measure(mu0)
+    y_obs = y_pred if y is None else np.array([y], dtype=float)
+    P_prior = S0.T @ S0
+    prior_hh, H_h = P_prior[0, 0], H[0, 0]
+    exact = prior_hh * sigma**2 / (H_h**2 * prior_hh + sigma**2)
+    out: dict[str, list] = {key: [] for key in ("sr", "c64", "c32", "pd_sr", "pd_c64", "pd_c32")}
+    for s in sigma:
+        _, S_post = _checked_belief(sqrt_measurement_update(mu0, S0, y_obs, measure, s * np.eye(1)),
+                                    "sqrt_measurement_update", 3)
+        P_sr = S_post.T @ S_post
+        _, P64 = covariance_measurement_update(mu0, P_prior, y_obs, measure, s**2 * np.eye(1), np.float64)
+        _, P32 = covariance_measurement_update(mu0, P_prior, y_obs, measure, s**2 * np.eye(1), np.float32)
+        for key, P in (("sr", P_sr), ("c64", P64), ("c32", P32)):
+            out[key].append(P[0, 0])
+            out[f"pd_{key}"].append(is_positive_definite(P))
+    return FirstUpdateComparison(
+        sigma=sigma, exact=exact, square_root=np.array(out["sr"]), covariance64=np.array(out["c64"]),
+        covariance32=np.array(out["c32"]), pd_square_root=np.array(out["pd_sr"]),
+        pd_covariance64=np.array(out["pd_c64"]), pd_covariance32=np.array(out["pd_c32"]),
+    )
+
+
+def plot_first_update_comparison(comparison: FirstUpdateComparison) -> tuple[Figure, Axes]:
+    """Relative error of the posterior altitude variance against the radar's precision, per filter.
+
+    Filled markers: the posterior covariance is positive definite; crosses: it is not (a negative
+    or zero variance, or no Cholesky factor). Errors below 1e-17 are drawn at 1e-17.
+    """
+    import matplotlib.pyplot as plt
+
+    fig, ax = plt.subplots(figsize=(8, 4.5), layout="constrained")
+    floor = 1e-17
+    series = (
+        ("covariance form, float32", comparison.covariance32, comparison.pd_covariance32, "C3"),
+        ("covariance form, float64", comparison.covariance64, comparison.pd_covariance64, "C1"),
+        ("square-root form (yours), float64", comparison.square_root, comparison.pd_square_root, "C0"),
+    )
+    for label, value, pd, colour in series:
+        error = np.maximum(np.abs(value - comparison.exact) / comparison.exact, floor)
+        ax.plot(comparison.sigma, error, color=colour, linewidth=1.2, label=label)
+        ax.plot(comparison.sigma[pd], error[pd], "o", color=colour, markersize=4)
+        ax.plot(comparison.sigma[~pd], error[~pd], "x", color=colour, markersize=8, markeredgewidth=2)
+    ax.plot([], [], "kx", markersize=8, markeredgewidth=2, label="covariance not positive definite")
+    ax.set(xscale="log", yscale="log", xlabel="Radar noise standard deviation σ_rng [m]",
+           ylabel="Relative error of var(h) after update [-]",
+           title="First radar update from the 2200 m prior: covariance form against square-root form")
+    ax.invert_xaxis()
+    ax.grid(True, which="major", alpha=0.3)
+    ax.legend(loc="upper left", fontsize=9)
+    return fig, ax
+
+
+# =============================================================================================
+# Errors, bands and the NEES
+# =============================================================================================
+def normalised_estimation_error_squared(truth: ArrayLike, result: FilterResult) -> Vector:
+    """NEES_k = e_k^T P_k^-1 e_k with e_k = truth_k - mu_k, through triangular solves with S_k. Shape (N,)."""
+    from scipy.linalg import solve_triangular
+
+    errors = np.asarray(truth, dtype=float) - result.mu
+    # P^-1 = S^-1 S^-T, so e^T P^-1 e = |S^-T e|^2
+    whitened = np.array([solve_triangular(S.T, e, lower=True) for S, e in zip(result.S, errors)])
+    return np.sum(whitened**2, axis=1)
+
+
+def nees_band(n_states: int = 3, probability: float = 0.95) -> tuple[float, float]:
+    """The central ``probability`` interval of a chi-square with ``n_states`` degrees of freedom."""
+    from scipy.stats import chi2
+
+    lower, upper = chi2.ppf([(1 - probability) / 2, (1 + probability) / 2], n_states)
+    return float(lower), float(upper)
+
+
+def plot_errors_and_nees(data: ReentryData, result: FilterResult, marginal: Marginal) -> tuple[Figure, Sequence[Axes]]:
+    """Estimation errors of h, v and c with their ±3σ bands, and the NEES with its 95% chi-square band.
+
+    The standard deviations come from your ``marginal``. A dotted line marks the time the vehicle
+    passes the radar's altitude r2.
+    """
+    import matplotlib.pyplot as plt
+
+    std = marginal_std(result, marginal)
+    errors = data.truth - result.mu
+    nees = normalised_estimation_error_squared(data.truth, result)
+    lower, upper = nees_band(result.mu.shape[1])
+    crossing = data.t[int(np.argmax(data.h < RADAR_R2))] if np.any(data.h < RADAR_R2) else None
+    fig, axes = plt.subplots(4, 1, sharex=True, figsize=(8, 11), layout="constrained")
+    t = result.t
+    units = ("h error [m]", "v error [m/s]", "c error [m²/kg]")
+    late = t >= min(10.0, float(t[-1]))
+    for i, (ax, ylabel) in enumerate(zip(axes[:3], units)):
+        ax.fill_between(t, -3 * std[:, i], 3 * std[:, i], color="C0", alpha=0.25, linewidth=0,
+                        label="±3σ band (99.7%)" if i == 0 else None)
+        ax.plot(t, errors[:, i], color="k", linewidth=1.0, label="error = truth − estimate" if i == 0 else None)
+        # the axis is sized to the band after the first seconds; the early band runs off it
+        reach = 4 * float(np.max(std[late, i]))
+        ax.set(title=f"Estimation error of {STATE_NAMES[i]}", ylabel=ylabel, ylim=(-reach, reach))
+        ax.grid(True, alpha=0.3)
+    ax = axes[3]
+    ax.axhspan(lower, upper, color="C2", alpha=0.2, linewidth=0, label=f"95% band of χ²(3): [{lower:.2f}, {upper:.2f}]")
+    ax.plot(t, nees, color="C3", linewidth=0.8, label="NEES")
+    ax.set(title="Normalised estimation error squared", ylabel="NEES [-]", xlabel="Time [s]", yscale="log",
+           ylim=(min(1e-2, float(np.min(nees)) / 2), max(1e2, float(np.max(nees)) * 2)))
+    ax.grid(True, alpha=0.3)
+    for i, a in enumerate(axes):
+        if crossing is not None:
+            a.axvline(crossing, color="C4", linestyle=":", linewidth=1.5,
+                      label=f"vehicle passes the radar's altitude (h = {RADAR_R2:g} m)" if i == 0 else None)
+    fig.legend(loc="outside lower center", ncol=2, fontsize=9)
+    fig.suptitle("Square-root EKF on the shipped fall: errors inside their bands?")
+    return fig, axes

@@ -13,13 +13,13 @@ State x = [h, v, c]: altitude [m], velocity [m/s] (v < 0 when falling), ballisti
 from __future__ import annotations
 
 import argparse
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from pathlib import Path
 
 import numpy as np
 from matplotlib.axes import Axes
 from numpy.typing import ArrayLike, NDArray
-from scipy.linalg import solve_triangular
+from scipy.linalg import block_diag, solve_triangular
 
 from course import starship
 from course.starship import G, L, M, P0, R, RADAR_R1, RADAR_R2, SIGMA_RANGE, SQRT_Q, T0
@@ -128,7 +128,51 @@ def conditional(
 
 
 # =============================================================================================
-# Blank 5: the ballistic-coefficient subplot of Figure 2
+# Blank 5: square-root time update
+# =============================================================================================
+def sqrt_time_update(
+    mu: ArrayLike, S: ArrayLike, f_and_jacobian: Callable[[Vector], tuple[Vector, Matrix]], S_Q: ArrayLike
+) -> tuple[Vector, Matrix]:
+    """Predict N^(1/2)(mu, S) through a step x+ = F(x, w) linearised at (mu, 0).
+
+    mu: (n,), S: (n, n) upper triangular, S_Q: (q, q) upper-triangular square root of the
+    covariance of the step's noise w. f_and_jacobian(mu) returns (F(mu, 0), J) with
+    J = dF/d[x; w] of shape (n, n + q). Returns mu+ (n,) and upper-triangular S+ (n, n).
+    """
+    mu, S, S_Q = (np.asarray(a, dtype=float) for a in (mu, S, S_Q))
+    mu_next, J = f_and_jacobian(mu)
+    # square root of cov([x; w]) = blkdiag(P, Q): S_z = blkdiag(S, S_Q)
+    S_z = block_diag(S, S_Q)
+    # P+ = J blkdiag(P, Q) J^T = (S_z J^T)^T (S_z J^T), so S+ is the R of a Q-less QR of S_z J^T
+    S_next = np.linalg.qr(S_z @ J.T, mode="r")
+    return mu_next, S_next
+
+
+# =============================================================================================
+# Blank 6: square-root measurement update
+# =============================================================================================
+def sqrt_measurement_update(
+    mu: ArrayLike, S: ArrayLike, y: ArrayLike, h_and_jacobian: Callable[[Vector], tuple[Vector, Matrix]],
+    S_R: ArrayLike,
+) -> tuple[Vector, Matrix]:
+    """Condition N^(1/2)(mu, S) on y = h(x) + e, e ~ N^(1/2)(0, S_R), linearised at mu.
+
+    mu: (n,), S: (n, n) upper triangular, y: (m,), S_R: (m, m) upper triangular.
+    h_and_jacobian(mu) returns (h(mu) (m,), H (m, n)). Returns mu+ (n,) and upper-triangular S+ (n, n).
+    """
+    mu, S, S_R = (np.asarray(a, dtype=float) for a in (mu, S, S_R))
+    y = np.atleast_1d(np.asarray(y, dtype=float))
+    m, n = y.size, mu.size
+    y_pred, H = h_and_jacobian(mu)
+    # joint of [y; x] = [H x + e; x] near mu: covariance [H P H^T + R, H P; P H^T, P], whose
+    # square root is the R factor of the QR of [S H^T  S; S_R  0]
+    S_joint = np.linalg.qr(np.block([[S @ H.T, S], [S_R, np.zeros((m, n))]]), mode="r")
+    # p(x | y): the state (the tail) given the measurement (the head), with the joint mean [h(mu); mu]
+    return conditional(np.concatenate([y_pred, mu]), S_joint, np.arange(m, m + n), np.arange(m), y)
+
+
+# =============================================================================================
+# Blank 7: the ballistic-coefficient subplot of Figure 2
 # =============================================================================================
 def plot_ballistic_coefficient(
     ax: Axes, t: ArrayLike, c_true: ArrayLike, c_mean: ArrayLike, c_std: ArrayLike
@@ -151,7 +195,10 @@ def plot_ballistic_coefficient(
 # =============================================================================================
 def run_reference(data: starship.ReentryData) -> starship.FilterResult:
     """The course framework run with the reference blanks."""
-    return starship.run_square_root_ekf(data, ballistic_dynamics, ballistic_jacobian, radar_predict, radar_jacobian, conditional)
+    return starship.run_square_root_ekf(
+        data, ballistic_dynamics, ballistic_jacobian, radar_predict, radar_jacobian, sqrt_time_update,
+        sqrt_measurement_update,
+    )
 
 
 DATA_SEED: int = 20230503  #: seed of the shipped data file

@@ -308,8 +308,13 @@ def test_figure_has_three_panels_with_bands(data, result) -> None:
 # ---------------------------------------------------------------------------------------------
 # The framework: time and measurement updates against a dense-covariance EKF
 # ---------------------------------------------------------------------------------------------
+def framework_step(dt: float):
+    """The framework's step: (x+, d x+ / d[x; w]) at (mu, 0), for ``sqrt_time_update``."""
+    return lambda x: starship.rk4_step_with_jacobian(ref.ballistic_dynamics, ref.ballistic_jacobian, x, np.zeros(3), dt)
+
+
 @pytest.mark.parametrize("dt", [0.1, 0.05, 1.0])
-def test_time_update_equals_dense_ekf(dt: float) -> None:
+def test_sqrt_time_update_equals_dense_ekf(dt: float) -> None:
     rng = np.random.default_rng(8)
     Q = np.diag([0.0, 1e-20, 25e-12])  # equation (12)
     cases = [(starship.MU0, starship.S0)]
@@ -317,7 +322,7 @@ def test_time_update_equals_dense_ekf(dt: float) -> None:
         mu = np.array([rng.uniform(3000, 15000), rng.uniform(-500, -150), rng.uniform(5e-4, 2e-3)])
         cases.append((mu, random_upper_sqrt(rng, 3, scales=np.array([30.0, 3.0, 3e-5]))))
     for mu, S in cases:
-        mu_sr, S_sr = starship.time_update(mu, S, dt, ref.ballistic_dynamics, ref.ballistic_jacobian)
+        mu_sr, S_sr = ref.sqrt_time_update(mu, S, framework_step(dt), starship.SQRT_Q * np.sqrt(dt))
         # dense EKF: z = [x; w] ~ N([mu; 0], blkdiag(P, Q dt)), x+ = RK4(z), P+ = J Pz J^T
         z = np.concatenate([mu, np.zeros(3)])
         J = complex_step_jacobian(lambda zz: rk4_oracle(zz, dt), z)
@@ -327,12 +332,20 @@ def test_time_update_equals_dense_ekf(dt: float) -> None:
         assert_cov_close(S_sr.T @ S_sr, P_dense, rtol=1e-9)
 
 
-def test_time_update_skipped_when_dt_is_zero() -> None:
-    mu, S = starship.time_update(starship.MU0, starship.S0, 0.0, ref.ballistic_dynamics, ref.ballistic_jacobian)
-    np.testing.assert_array_equal(mu, starship.MU0)
-    np.testing.assert_array_equal(S, starship.S0)
-    with pytest.raises(ValueError):
-        starship.time_update(starship.MU0, starship.S0, -0.1, ref.ballistic_dynamics, ref.ballistic_jacobian)
+@pytest.mark.parametrize("n, q", [(2, 2), (3, 1), (5, 6), (7, 3)])
+def test_sqrt_time_update_on_random_linear_steps(n: int, q: int) -> None:
+    rng = np.random.default_rng(80 + n)
+    for scales in (np.ones(n), 10.0 ** rng.uniform(-6, 6, n)):
+        S = random_upper_sqrt(rng, n, scales=scales)
+        S_Q = np.triu(rng.standard_normal((q, q)))
+        J = rng.standard_normal((n, n + q))
+        mu = rng.standard_normal(n)
+        mu_next, S_next = ref.sqrt_time_update(mu, S, lambda x: (2 * x, J), S_Q)
+        np.testing.assert_array_equal(mu_next, 2 * mu)
+        assert S_next.shape == (n, n)
+        assert_upper_triangular(S_next)
+        P_z = np.block([[S.T @ S, np.zeros((n, q))], [np.zeros((q, n)), S_Q.T @ S_Q]])
+        assert_cov_close(S_next.T @ S_next, J @ P_z @ J.T, rtol=1e-9)
 
 
 def test_measurement_update_equals_dense_kalman_update() -> None:
@@ -342,8 +355,8 @@ def test_measurement_update_equals_dense_kalman_update() -> None:
         S = random_upper_sqrt(rng, 3, scales=np.array([300.0, 30.0, 3e-4]))
         P = S.T @ S
         y = ref.radar_predict(mu) + 100 * rng.standard_normal(1)
-        mu_sr, S_sr = starship.measurement_update(
-            mu, S, y, ref.radar_predict, ref.radar_jacobian, ref.conditional
+        mu_sr, S_sr = ref.sqrt_measurement_update(
+            mu, S, y, lambda x: (ref.radar_predict(x), ref.radar_jacobian(x)), SIGMA_RANGE * np.eye(1)
         )
         # Kalman gain and Joseph-form update with H from complex-step differences of (13)
         H = complex_step_jacobian(lambda x: np.sqrt(RADAR_R1**2 + (x[0] - RADAR_R2) ** 2)[None], mu)
@@ -355,6 +368,105 @@ def test_measurement_update_equals_dense_kalman_update() -> None:
         np.testing.assert_allclose(mu_sr, mu_dense, rtol=1e-9)
         assert_upper_triangular(S_sr)
         assert_cov_close(S_sr.T @ S_sr, P_dense, rtol=1e-9)
+
+
+@pytest.mark.parametrize("n, m", [(2, 1), (3, 2), (6, 3)])
+def test_sqrt_measurement_update_matches_joseph_form_with_correlated_noise(n: int, m: int) -> None:
+    rng = np.random.default_rng(90 + n)
+    S = random_upper_sqrt(rng, n, scales=10.0 ** rng.uniform(-2, 2, n))
+    S_R = np.triu(rng.standard_normal((m, m))) + 2 * np.eye(m)
+    H = rng.standard_normal((m, n))
+    mu, y = rng.standard_normal(n), rng.standard_normal(m)
+    mu_sr, S_sr = ref.sqrt_measurement_update(mu, S, y, lambda x: (H @ x + 1.0, H), S_R)
+    P, R_cov = S.T @ S, S_R.T @ S_R
+    K = np.linalg.solve(H @ P @ H.T + R_cov, H @ P).T
+    IKH = np.eye(n) - K @ H
+    np.testing.assert_allclose(mu_sr, mu + K @ (y - H @ mu - 1.0), rtol=1e-9, atol=1e-12)
+    assert_upper_triangular(S_sr)
+    assert_cov_close(S_sr.T @ S_sr, IKH @ P @ IKH.T + K @ R_cov @ K.T, rtol=1e-9)
+
+
+def test_framework_rejects_data_that_go_back_in_time(data) -> None:
+    t = data.t.copy()
+    t[3] = t[1]
+    backwards = starship.ReentryData(path="x", n_lines=data.n_lines, t=t, h=data.h, v=data.v, c=data.c,
+                                     range_true=data.range_true, range_meas=data.range_meas)
+    with pytest.raises(ValueError, match="back in time"):
+        ref.run_reference(backwards)
+
+
+# ---------------------------------------------------------------------------------------------
+# Why square roots, errors and NEES: the given comparison and diagnostics
+# ---------------------------------------------------------------------------------------------
+def test_covariance_form_update_equals_square_root_update_when_well_conditioned() -> None:
+    rng = np.random.default_rng(11)
+    S = random_upper_sqrt(rng, 3, scales=np.array([300.0, 30.0, 3e-4]))
+    mu = np.array([9000.0, -300.0, 1e-3])
+    measure = lambda x: (ref.radar_predict(x), ref.radar_jacobian(x))  # noqa: E731
+    y = ref.radar_predict(mu) + 20.0
+    mu_c, P_c = starship.covariance_measurement_update(mu, S.T @ S, y, measure, SIGMA_RANGE**2 * np.eye(1))
+    mu_s, S_s = ref.sqrt_measurement_update(mu, S, y, measure, SIGMA_RANGE * np.eye(1))
+    np.testing.assert_allclose(mu_c, mu_s, rtol=1e-12)
+    assert_cov_close(P_c, S_s.T @ S_s, rtol=1e-9)
+    _, P32 = starship.covariance_measurement_update(mu, S.T @ S, y, measure, SIGMA_RANGE**2 * np.eye(1), np.float32)
+    assert_cov_close(P32, S_s.T @ S_s, rtol=1e-3)
+
+
+def test_first_update_comparison_exact_value_is_the_scalar_kalman_update() -> None:
+    sigma = np.array([50.0, 1.0])
+    cmp = starship.compare_first_update(ref.sqrt_measurement_update, ref.radar_predict, ref.radar_jacobian, sigma)
+    H_h = ref.radar_jacobian(starship.MU0)[0, 0]
+    prior = starship.S0[0, 0] ** 2
+    # information form: 1 / P+ = 1 / P + H^2 / sigma^2
+    np.testing.assert_allclose(cmp.exact, 1 / (1 / prior + H_h**2 / sigma**2), rtol=1e-12)
+    np.testing.assert_allclose(cmp.square_root, cmp.exact, rtol=1e-12)
+    assert cmp.pd_square_root.all() and cmp.pd_covariance64.all()
+    with pytest.raises(ValueError, match="diagonal"):
+        starship.compare_first_update(ref.sqrt_measurement_update, ref.radar_predict, ref.radar_jacobian, sigma,
+                                      S0=np.triu(np.ones((3, 3))))
+
+
+def test_first_update_figure_marks_broken_covariances() -> None:
+    sigma = np.logspace(2, -10, 13)
+    cmp = starship.compare_first_update(ref.sqrt_measurement_update, ref.radar_predict, ref.radar_jacobian, sigma)
+    fig, ax = starship.plot_first_update_comparison(cmp)
+    try:
+        crosses = [line for line in ax.get_lines() if line.get_marker() == "x" and len(line.get_xdata())]
+        broken = (~cmp.pd_covariance32).sum() + (~cmp.pd_covariance64).sum() + (~cmp.pd_square_root).sum()
+        assert sum(len(line.get_xdata()) for line in crosses) == broken > 0
+        assert ax.get_xscale() == "log" and "[m]" in ax.get_xlabel() and ax.get_legend() is not None
+    finally:
+        plt.close(fig)
+
+
+def test_positive_definite_check() -> None:
+    assert starship.is_positive_definite(np.diag([1.0, 2.0]))
+    assert not starship.is_positive_definite(np.diag([1.0, -1e-12]))
+    assert not starship.is_positive_definite(np.array([[1.0, 2.0], [2.0, 1.0]]))
+    assert not starship.is_positive_definite(np.array([[np.nan, 0.0], [0.0, 1.0]]))
+
+
+def test_nees_equals_the_dense_quadratic_form_and_the_band_is_chi_square_3(data, result) -> None:
+    nees = starship.normalised_estimation_error_squared(data.truth, result)
+    e = data.truth - result.mu
+    P = np.einsum("kji,kjl->kil", result.S, result.S)
+    dense = np.einsum("ki,ki->k", e, np.linalg.solve(P, e[:, :, None])[:, :, 0])
+    np.testing.assert_allclose(nees, dense, rtol=1e-8)
+    lower, upper = starship.nees_band()
+    # chi-square(3) quantiles from tables: 0.2158 (2.5%) and 9.348 (97.5%)
+    assert lower == pytest.approx(0.2158, abs=1e-4) and upper == pytest.approx(9.348, abs=1e-3)
+
+
+def test_errors_and_nees_figure(data, result) -> None:
+    fig, axes = starship.plot_errors_and_nees(data, result, ref.marginal)
+    try:
+        assert len(axes) == 4
+        for ax in axes:
+            assert ax.get_ylabel() and ax.get_title()
+        assert axes[3].get_yscale() == "log" and "[s]" in axes[3].get_xlabel()
+        assert len(fig.legends) == 1 and len(fig.legends[0].get_texts()) == 5
+    finally:
+        plt.close(fig)
 
 
 def test_filter_is_consistent_with_the_truth(data, result) -> None:

@@ -1,6 +1,9 @@
 """Hidden tests of the reentry-srekf lab: each ``check_<blank>`` compares a student's blank with
 ``solutions.reentry_srekf`` on seeded random states, random upper-triangular square roots of
-sizes 2 to 7 and random index sets (head, tail, segment, non-contiguous, non-ascending)."""
+sizes 2 to 7 and random index sets (head, tail, segment, non-contiguous, non-ascending).
+
+Square roots are compared through S^T S on the correlation scale (``check_square_root``): the sign
+of each row of an upper-triangular square root is free, so the tests are invariant to it."""
 
 from __future__ import annotations
 
@@ -21,6 +24,8 @@ BLANKS = (
     "radar_jacobian",
     "marginal",
     "conditional",
+    "sqrt_time_update",
+    "sqrt_measurement_update",
     "plot_ballistic_coefficient",
 )
 SIZES = (2, 3, 4, 5, 6, 7)
@@ -122,6 +127,85 @@ def check_conditional(func: Callable) -> None:
             check_square_root(check_array(S_c, f"S_c for {case}", (idx_a.size, idx_a.size)), want_S.T @ want_S,
                               f"S_c for {case}", "S_c = R3 of the QR of [S[:, idx_b], S[:, idx_a]].", rtol=1e-8,
                               show_expected=False)
+
+
+def _update_cases(rng: np.random.Generator) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+    """(what, mu, S, ratio): well-conditioned and badly conditioned Gaussians of sizes 2 to 7.
+
+    ``ratio`` sets how much larger the prior is than the noise in the updates (1 for a
+    well-conditioned case, up to 1e5 for a badly conditioned one, where the covariance form loses
+    about ten digits and the square-root form none).
+    """
+    cases = []
+    for n in SIZES:
+        S = _random_sqrt(rng, n)
+        cases.append((f"a well-conditioned Gaussian with n = {n}", rng.standard_normal(n), S, 1.0))
+        # columns over twelve decades and one nearly dependent column: P is badly conditioned
+        S_bad = np.linalg.qr(rng.standard_normal((n, n)) + n * np.eye(n), mode="r")
+        S_bad[:, -1] = S_bad[:, 0] + 1e-7 * S_bad[:, -1]
+        S_bad = np.linalg.qr(S_bad, mode="r") * 10.0 ** rng.uniform(-6.0, 6.0, n)[None, :]
+        cases.append((f"a badly conditioned Gaussian with n = {n}", rng.standard_normal(n), S_bad, 1e5))
+    return cases
+
+
+def check_sqrt_time_update(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(3308)
+    for what, mu, S, ratio in _update_cases(rng):
+        n = mu.size
+        for q in sorted({n, int(rng.integers(1, n + 2))}):
+            A = np.eye(n) + 0.3 * rng.standard_normal((n, n))
+            B = rng.standard_normal((n, q)) * np.sqrt(np.sum(S**2, axis=0)).max() / ratio
+            J = np.hstack([A, B])
+            S_Q = np.triu(rng.standard_normal((q, q))) + np.eye(q)
+            S_Q[0, :] = 0.0  # a noise component of variance zero, like the altitude's in Q
+            offset = rng.standard_normal(n)
+
+            def f_and_jacobian(x, A=A, J=J, offset=offset):
+                x = np.asarray(x, dtype=float)
+                return A @ x + 0.1 * np.sin(x) + offset, J.copy()
+
+            case = f"the step of {what}, with {q} noise input{'s' if q > 1 else ''}"
+            mu_next, S_next = check_pair(func(mu.copy(), S.copy(), f_and_jacobian, S_Q.copy()),
+                                         "sqrt_time_update(mu, S, f_and_jacobian, S_Q)", "mu", "S")
+            want_mu, want_S = ref.sqrt_time_update(mu, S, f_and_jacobian, S_Q)
+            check_close(check_array(mu_next, f"the predicted mean for {case}", (n,)), want_mu,
+                        f"the predicted mean for {case}", "Return the mean that f_and_jacobian(mu) gives.",
+                        rtol=1e-12, atol=0.0, show_expected=False)
+            check_square_root(check_array(S_next, f"S for {case}", (n, n)), want_S.T @ want_S, f"S for {case}",
+                              "S+ is the R factor of a Q-less QR of blkdiag(S, S_Q) @ J.T (J's columns are [x; w]).",
+                              rtol=1e-8, show_expected=False)
+
+
+def check_sqrt_measurement_update(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(3309)
+    for what, mu, S, ratio in _update_cases(rng):
+        n = mu.size
+        for m in sorted({1, int(rng.integers(1, n + 1))}):
+            H = rng.standard_normal((m, n))
+            offset = rng.standard_normal(m)
+            spread = np.sqrt(np.diag(H @ S.T @ S @ H.T))
+            S_R = (np.triu(rng.standard_normal((m, m))) + 2 * np.eye(m)) * (spread / ratio)[None, :]
+            S_R = np.linalg.qr(S_R, mode="r")
+
+            def h_and_jacobian(x, H=H, offset=offset):
+                x = np.asarray(x, dtype=float)
+                return H @ x + offset, H.copy()
+
+            y = H @ mu + offset + spread * rng.standard_normal(m)
+            case = f"{m} measurement{'s' if m > 1 else ''} of {what}"
+            mu_post, S_post = check_pair(func(mu.copy(), S.copy(), y.copy(), h_and_jacobian, S_R.copy()),
+                                         "sqrt_measurement_update(mu, S, y, h_and_jacobian, S_R)", "mu", "S")
+            want_mu, want_S = ref.sqrt_measurement_update(mu, S, y, h_and_jacobian, S_R)
+            std_post = np.sqrt(np.sum(want_S**2, axis=0))
+            check_close(check_array(mu_post, f"the updated mean for {case}", (n,)), want_mu,
+                        f"the updated mean for {case}",
+                        "Condition the joint of [y; x], with mean [h(mu); mu], on y with your conditional.",
+                        rtol=1e-8, atol=1e-6 * float(np.min(std_post)), show_expected=False)
+            check_square_root(check_array(S_post, f"S for {case}", (n, n)), want_S.T @ want_S, f"S for {case}",
+                              "The joint square root of [y; x] is the R factor of the QR of [[S @ H.T, S], [S_R, 0]].",
+                              rtol=1e-8, show_expected=False)
 
 
 def check_plot_ballistic_coefficient(func: Callable) -> None:

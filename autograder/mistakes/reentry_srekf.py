@@ -51,6 +51,23 @@ MISTAKES = (
             'trans="T"', 'trans="N"'),
     Mistake("conditional", "innovation-sign", "mu_B - x_B where (31) has x_B - mu_B",
             "x_b - mu[idx_b]", "mu[idx_b] - x_b"),
+    # sqrt_time_update
+    Mistake("sqrt_time_update", "lower-factor", "S_z^T J^T: the factor used as if P = S S^T (a lower, not upper, square root)",
+            "S_z @ J.T", "S_z.T @ J.T"),
+    Mistake("sqrt_time_update", "noise-first", "blkdiag(S_Q, S): the noise's square root stacked in the state's block",
+            "block_diag(S, S_Q)", "block_diag(S_Q, S)"),
+    Mistake("sqrt_time_update", "returns-lower", "returns R^T, a lower-triangular factor, as the square root",
+            "return mu_next, S_next", "return mu_next, S_next.T"),
+    # sqrt_measurement_update
+    Mistake("sqrt_measurement_update", "lower-factor", "[S^T H^T, S^T]: the factor used as if P = S S^T",
+            "[[S @ H.T, S], [S_R,", "[[S.T @ H.T, S.T], [S_R,"),
+    Mistake("sqrt_measurement_update", "noise-variance", "S_R^T S_R, the noise covariance, stacked where its square root belongs",
+            "[S_R, np.zeros((m, n))]", "[S_R.T @ S_R, np.zeros((m, n))]"),
+    Mistake("sqrt_measurement_update", "residual-sign", "conditions on h(mu) with the joint mean at y: the residual's sign flipped",
+            "np.concatenate([y_pred, mu]), S_joint, np.arange(m, m + n), np.arange(m), y)",
+            "np.concatenate([y, mu]), S_joint, np.arange(m, m + n), np.arange(m), y_pred)"),
+    Mistake("sqrt_measurement_update", "state-given-state", "conditions the measurement on the state: index sets swapped",
+            "np.arange(m, m + n), np.arange(m), y)", "np.arange(m), np.arange(m, m + n), y)"),
     # plot_ballistic_coefficient
     Mistake("plot_ballistic_coefficient", "2-sigma", "draws the 95% band, mean +/- 2 std, as the 99.7% one",
             "c_mean - 3 * c_std, c_mean + 3 * c_std", "c_mean - 2 * c_std, c_mean + 2 * c_std"),
