@@ -52,9 +52,9 @@ def process_noise(sigma: float, dt_min: float = 1.0) -> np.ndarray:
 
 def predict(x: np.ndarray, B: np.ndarray, A: np.ndarray, Q: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """Forecast step (predict.m): x (n,), B (n x n) to x^f (n,), B^f (n x n)."""
-    # x^f_{t+1} = A x_t
+    # x^f_{t+1} = A x^a_t
     x_f = A @ x
-    # B_{t+1} = A B_t A^T + Q
+    # B^f_{t+1} = A B^a_t A^T + Q
     B_f = A @ B @ A.T + Q
     return x_f, B_f
 

@@ -107,6 +107,36 @@ def _steady() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return B_f, ref.gain_covariance_form(B_f, H, R), Bs[-1]
 
 
+def _expected_rmse(Q_f: np.ndarray, R_f: np.ndarray, B0_f: np.ndarray | None = None) -> np.ndarray:
+    """Exact root of the hour-mean expected squared error (2,) of a filter told Q_f, R_f, B0_f on the true process.
+
+    No simulation: the truth starts from the true belief and moves with the true Q, the fixes have the true R,
+    and the error covariance P of the filter's estimate follows the Joseph form with the filter's own gain.
+    """
+    A, H, R, Q, _, B0 = _model()
+    P, B = B0, B0 if B0_f is None else B0_f
+    mse = np.zeros(2)
+    for _ in range(60):
+        P, B = A @ P @ A.T + Q, A @ B @ A.T + Q_f
+        K = ref.gain_covariance_form(B, H, R_f)
+        B = B - K @ H @ B
+        I_KH = np.eye(2) - K @ H
+        P = I_KH @ P @ I_KH.T + K @ R @ K.T
+        mse += np.diag(P) / 60.0
+    return np.sqrt(mse)
+
+
+def _analysis_covariances(B0: np.ndarray, n_steps: int = 60) -> tuple[np.ndarray, np.ndarray]:
+    """Analysis covariances (n_steps, 2, 2) and gains (n_steps, 2, 2) of the true filter started from B0."""
+    A, H, R, Q, _, _ = _model()
+    B, Bs, Ks = B0, np.empty((n_steps, 2, 2)), np.empty((n_steps, 2, 2))
+    for t in range(n_steps):
+        _, B_f = ref.predict(np.zeros(2), B, A, Q)
+        Ks[t] = ref.gain_covariance_form(B_f, H, R)
+        B = Bs[t] = B_f - Ks[t] @ H @ B_f
+    return Bs, Ks
+
+
 def _between(value: float, low: float, high: float, what: str) -> None:
     assert low <= value <= high, f"{what} is {value:.4g}, outside [{low}, {high}]."
 
@@ -115,9 +145,9 @@ def _between(value: float, low: float, high: float, what: str) -> None:
 
 @claim("train-kf/speed-reverses")
 def _() -> None:
-    """In about one simulated hour in three the train's speed goes below zero (between 25% and 42% of 20 000 hours)."""
+    """In about one simulated hour in three the train's speed goes below zero (between 30% and 40% of 20 000 hours)."""
     reverses = np.mean(np.min(_pool()[1][:, :, 1], axis=1) < 0.0)
-    _between(reverses, 0.25, 0.42, "the fraction of hours in which the train reverses")
+    _between(reverses, 0.30, 0.40, "the fraction of hours in which the train reverses")
 
 
 @claim("train-kf/shipped-hour-forward")
@@ -130,11 +160,17 @@ def _() -> None:
 
 @claim("train-kf/speed-drift")
 def _() -> None:
-    """Over 20 000 hours the standard deviation of the speed's change over the hour is about 116 mph ([110, 122])."""
+    """The speed's change over the hour has sd 15 sqrt(60) = 116 mph and mean size 116 sqrt(2/pi) = 93 mph; 20 000 hours agree."""
+    sd, mean_size = train.SIGMA_Z * np.sqrt(60.0), train.SIGMA_Z * np.sqrt(60.0) * np.sqrt(2.0 / np.pi)
+    _between(sd, 115.5, 116.5, "15 sqrt(60), mph")
+    _between(mean_size, 92.5, 93.5, "the mean size of the change, mph")
     v = _pool()[1][:, :, 1]
     # the speed at minute 0 is drawn around the belief's 100 mph with sd 15, so subtract its variance
     drift = np.sqrt(np.var(v[:, -1]) - train.initial_belief()[1][1, 1])
     _between(drift, 110.0, 122.0, "the standard deviation of the speed's drift over the hour, mph")
+    # minutes 1 to 60 hold 59 of the hour's 60 steps: scale their mean size up by sqrt(60/59)
+    _between(np.mean(np.abs(v[:, -1] - v[:, 0])) * np.sqrt(60.0 / 59.0), 88.0, 98.0,
+             "the mean size of the speed's change over the hour, mph")
 
 
 # --- section 4: the noise models
@@ -179,6 +215,34 @@ def _() -> None:
     _between(K[0, 0], 0.013, 0.017, "the gain of a position fix on the position")
 
 
+@claim("train-kf/position-sd-grows")
+def _() -> None:
+    """Position sd: 1 mi at the start, about 1.01 after minute 1, 1.24 at minute 60, 1.29 in the steady state (exact)."""
+    _, _, _, _, _, B0 = _model()
+    Bs, _ = _analysis_covariances(B0, 2000)
+    sd = np.sqrt(Bs[:, 0, 0])
+    _between(np.sqrt(B0[0, 0]), 1.0, 1.0, "the starting position sd, mi")
+    _between(sd[0], 1.0, 1.01, "the position sd after minute 1, mi")
+    _between(sd[59], 1.235, 1.25, "the position sd at minute 60, mi")
+    _between(sd[-1], 1.28, 1.29, "the steady position sd, mi")
+    assert np.all(np.diff(sd[:60]) > 0.0), "the position sd does not grow at every minute of the hour"
+
+
+@claim("train-kf/vague-start")
+def _() -> None:
+    """Started at position sd 10 mi: expected position error over the hour about 2.5 mi, a quarter of the GPS's (station start 1.16); sd about 3 at minute 10, 1.9 at 30 (exact)."""
+    _, _, _, _, _, B0 = _model()
+    vague = np.diag([100.0, B0[1, 1]])
+    Bs, _ = _analysis_covariances(vague)
+    station, _ = _analysis_covariances(B0)
+    # the filter is the true one for either start, so its expected squared error is B^a's diagonal
+    _between(np.sqrt(Bs[:, 0, 0].mean()), 2.45, 2.6, "the vague start's expected position RMSE over the hour, mi")
+    _between(np.sqrt(Bs[:, 0, 0].mean()) / train.SIGMA_GPS[0], 0.22, 0.28, "that error over the GPS's 10 mi")
+    _between(np.sqrt(station[:, 0, 0].mean()), 1.15, 1.17, "the station start's expected position RMSE over the hour, mi")
+    _between(np.sqrt(Bs[9, 0, 0]), 2.95, 3.1, "the vague start's position sd at minute 10, mi")
+    _between(np.sqrt(Bs[29, 0, 0]), 1.8, 1.95, "the vague start's position sd at minute 30, mi")
+
+
 @claim("train-kf/steady-sd")
 def _() -> None:
     """At the end of the hour: forecast velocity sd about 17 mph, velocity gain about 3/4, analysis velocity sd about 8.7 mph."""
@@ -207,13 +271,13 @@ def _() -> None:
 
 @claim("train-kf/noise-models-over-hours")
 def _() -> None:
-    """Over 2 000 hours the random walk has the smaller position RMSE in 55% to 80% of them; mean velocity RMSEs agree within 1%."""
-    _, _, R, Q, _, B0 = _model()
-    y, truth = (a[:2000] for a in _pool())
-    walk = _rmse(_filter(y, Q, R, B0)[0], truth)
+    """Over 20 000 hours the random walk has the smaller position RMSE in 60% to 70% of them; mean velocity RMSEs agree within 1%."""
+    _, _, R, _, _, B0 = _model()
+    y, truth = _pool()
+    walk = _rmse(_true_filter()[0], truth)
     wna = _rmse(_filter(y, train.white_noise_acceleration(15.0**2 * 60.0), R, B0)[0], truth)
     fraction = np.mean(walk[:, 0] < wna[:, 0])
-    _between(fraction, 0.55, 0.80, "the fraction of hours where the random walk has the smaller position error")
+    _between(fraction, 0.60, 0.70, "the fraction of hours where the random walk has the smaller position error")
     _between(wna[:, 1].mean() / walk[:, 1].mean(), 0.99, 1.01, "the ratio of the mean velocity RMSEs")
 
 
@@ -229,10 +293,10 @@ def _() -> None:
 
 @claim("train-kf/velocity-q-small")
 def _() -> None:
-    """Velocity panel: at Q/100 the velocity RMSE is roughly twice the GPS's or more: at least 1.9 times in all 100 repetitions, median above 2."""
+    """Velocity panel: at Q/100 the velocity RMSE is roughly twice the GPS's or more: at least 1.9 times in 97 of 100 repetitions, median above 2."""
     scaled_Q, _, gps = _scaling()
     ratio = scaled_Q[0, :, 1] / gps[:, 1]
-    _between(ratio.min(), 1.9, np.inf, "the smallest velocity RMSE at Q/100 over the GPS's")
+    rate_at_least(ratio >= 1.9, 0.97, "velocity RMSE at Q/100 at least 1.9 times the GPS's")
     _between(np.median(ratio), 2.0, np.inf, "the median velocity RMSE at Q/100 over the GPS's")
 
 
@@ -257,31 +321,67 @@ def _() -> None:
 
 @claim("train-kf/position-below-gps")
 def _() -> None:
-    """Position panel: every point of both curves is below a third of the GPS RMSE, in every one of 100 repetitions."""
+    """Position panel: the highest point of both curves is about a quarter of the GPS RMSE (median of 100 repetitions
+    in [0.2, 0.27]) and below a third of it in at least 97 of 100 repetitions."""
     scaled_Q, scaled_R, gps = _scaling()
-    worst = max((scaled_Q[:, :, 0] / gps[:, 0]).max(), (scaled_R[:, :, 0] / gps[:, 0]).max())
-    _between(worst, 0.0, 1.0 / 3.0, "the largest position RMSE over the GPS's")
+    worst = np.maximum((scaled_Q[:, :, 0] / gps[:, 0]).max(axis=0), (scaled_R[:, :, 0] / gps[:, 0]).max(axis=0))
+    _between(np.median(worst), 0.2, 0.27, "the median over repetitions of the highest position point over the GPS's")
+    rate_at_least(worst < 1.0 / 3.0, 0.97, "every position point below a third of the GPS's")
 
 
 @claim("train-kf/q-scaling-position-flat")
 def _() -> None:
-    """Position, Q scaled: from Q/10 to Q x 100 within 5% (97 of 100 repetitions); at Q/100 within 30% of the value at 1 (all)."""
+    """Position, Q scaled: from Q/10 to Q x 100 within 5% (95 of 100 repetitions), at Q/100 within 30% of the value at 1
+    (97 of 100); the expected error varies by less than 0.3% from Q/10 to Q x 100 (exact)."""
     scaled_Q, _, _ = _scaling()
     position = scaled_Q[:, :, 0]
     upper = position[2:]
-    rate_at_least(upper.max(axis=0) / upper.min(axis=0) < 1.05, 0.97, "position RMSE within 5% from Q/10 to Q x 100")
-    _between((position[0] / position[ONE]).max(), 1.0 - 1e-9, 1.3, "the largest position RMSE at Q/100 over the one at 1")
+    # about 1% of repetitions spread by 5% or more (1000 repetitions of pool 778), so ask for 95 of 100
+    rate_at_least(upper.max(axis=0) / upper.min(axis=0) < 1.05, 0.95, "position RMSE within 5% from Q/10 to Q x 100")
+    rate_at_least(position[0] / position[ONE] < 1.3, 0.97, "position RMSE at Q/100 within 30% of the one at 1")
+    _, _, R, Q, _, _ = _model()
+    expected = np.array([_expected_rmse(c * Q, R)[0] for c in FACTORS[2:]])
+    _between(expected.max() / expected.min(), 1.0, 1.003, "the spread of the expected position error from Q/10 to Q x 100")
+
+
+@claim("train-kf/optimal-at-1")
+def _() -> None:
+    """With the true Q, R and B0 the filter is optimal: on a fine grid of factors 1/100..100 every expected-error curve is lowest at 1."""
+    _, _, R, Q, _, _ = _model()
+    grid = np.logspace(-2, 2, 81)
+    one = int(np.flatnonzero(np.isclose(grid, 1.0))[0])
+    curves = {"Q": np.array([_expected_rmse(c * Q, R) for c in grid]), "R": np.array([_expected_rmse(Q, c * R) for c in grid])}
+    for scaled, errors in curves.items():
+        for k, name in enumerate(("position", "velocity")):
+            lowest = int(np.argmin(errors[:, k]))
+            assert lowest == one, f"the expected {name} error with {scaled} scaled is lowest at {grid[lowest]:.3g}, not 1"
 
 
 @claim("train-kf/r-scaling-position-u")
 def _() -> None:
-    """Position, R scaled: lowest between R/3 and R x 10, and at R/100 and R x 100 more than 1.3 times the value at 1, in all 100 repetitions."""
+    """Position, R scaled (100 repetitions): lowest at 1 in the median, between R/3.16 and R x 10 in at least 97; both
+    ends more than 1.3 times the value at 1 in at least 97."""
     _, scaled_R, _ = _scaling()
     position = scaled_R[:, :, 0]
     lowest = np.argmin(position, axis=0)
-    assert np.all((lowest >= ONE - 1) & (lowest <= ONE + 2)), f"the position curve for R is lowest at factors {FACTORS[lowest]}"
-    _between(min((position[0] / position[ONE]).min(), (position[-1] / position[ONE]).min()), 1.3, np.inf,
-             "the smaller end of the position curve for R over its value at 1")
+    assert np.median(lowest) == ONE, f"the median lowest point of the position curve for R is at {FACTORS[int(np.median(lowest))]:.3g}"
+    rate_at_least((lowest >= ONE - 1) & (lowest <= ONE + 2), 0.97, "position curve for R lowest between R/3.16 and R x 10")
+    ends = np.minimum(position[0], position[-1]) / position[ONE]
+    rate_at_least(ends > 1.3, 0.97, "both ends of the position curve for R above 1.3 times its value at 1")
+
+
+@claim("train-kf/r-scaling-ends")
+def _() -> None:
+    """Expected position error (exact): R/100 gives 2.32 mi, as B0 x 100 alone does; R x 100 gives 2.74 mi, far above
+    B0/100 alone (1.22) or Q/100 alone (1.25); the true filter 1.16."""
+    _, _, R, Q, _, B0 = _model()
+    small_R, large_R = _expected_rmse(Q, R / 100.0)[0], _expected_rmse(Q, 100.0 * R)[0]
+    _between(small_R, 2.3, 2.35, "the expected position error with R/100, mi")
+    _between(abs(_expected_rmse(Q, R, 100.0 * B0)[0] / small_R - 1.0), 0.0, 0.001, "R/100 against B0 x 100 alone, relative gap")
+    _between(large_R, 2.7, 2.8, "the expected position error with R x 100, mi")
+    _between(_expected_rmse(Q, R, B0 / 100.0)[0], 1.2, 1.23, "the expected position error with B0/100 alone, mi")
+    _between(_expected_rmse(Q / 100.0, R)[0], 1.23, 1.26, "the expected position error with Q/100 alone, mi")
+    _between(_expected_rmse(Q, R)[0], 1.15, 1.17, "the true filter's expected position error, mi")
 
 
 @claim("train-kf/r-scaling-equivalence")
@@ -306,11 +406,36 @@ def _() -> None:
 
 @claim("train-kf/coverage-per-hour-spread")
 def _() -> None:
-    """Per hour of 20 000: position all inside in 65% to 85%, under 3/4 inside in 3% to 12%; velocity under 85% inside in < 1%."""
+    """Per hour of 20 000: position all inside in 72% to 80%, under 3/4 inside in 5% to 8%; velocity under 85% inside in < 1%."""
     inside = _consistency()[0]
-    _between(np.mean(inside[:, 0] == 1.0), 0.65, 0.85, "the fraction of hours with the position inside all hour")
-    _between(np.mean(inside[:, 0] < 0.75), 0.03, 0.12, "the fraction of hours with the position inside under 3/4 of it")
+    _between(np.mean(inside[:, 0] == 1.0), 0.72, 0.80, "the fraction of hours with the position inside all hour")
+    _between(np.mean(inside[:, 0] < 0.75), 0.05, 0.08, "the fraction of hours with the position inside under 3/4 of it")
     _between(np.mean(inside[:, 1] < 0.85), 0.0, 0.01, "the fraction of hours with the velocity inside under 85% of it")
+
+
+@claim("train-kf/error-persistence")
+def _() -> None:
+    """Correlation of the filter's errors (each over its sd), exact, averaged over later minutes 30..59: position about
+    0.98 one minute apart, 0.85 at ten, 0.6 at thirty; velocity about 0.25 at one minute, under 0.1 at two."""
+    A, H, _, _, _, B0 = _model()
+    Bs, Ks = _analysis_covariances(B0)
+    sd = np.sqrt(np.diagonal(Bs, axis1=1, axis2=2))
+
+    def correlation(lag: int) -> np.ndarray:
+        values = []
+        for later in range(30, 60):
+            # e_{t+1} = (I - K_{t+1} H) A e_t + terms independent of e_t, so E[e_{t+lag} e_t^T] is a product times B^a_t
+            cross = Bs[later - lag]
+            for u in range(later - lag + 1, later + 1):
+                cross = (np.eye(2) - Ks[u] @ H) @ A @ cross
+            values.append(np.diag(cross) / (sd[later - lag] * sd[later]))
+        return np.mean(values, axis=0)
+
+    _between(correlation(1)[0], 0.97, 0.99, "the position error correlation one minute apart")
+    _between(correlation(10)[0], 0.8, 0.9, "the position error correlation ten minutes apart")
+    _between(correlation(30)[0], 0.55, 0.65, "the position error correlation thirty minutes apart")
+    _between(correlation(1)[1], 0.2, 0.3, "the velocity error correlation one minute apart")
+    _between(correlation(2)[1], -0.1, 0.1, "the velocity error correlation two minutes apart")
 
 
 @claim("train-kf/nees-band")
