@@ -4,18 +4,24 @@ The grading pipeline reads the gradebook through nbgrader's ORM (``autograder.gr
 and writes grades.csv from those rows. Comparing grades.csv with the rows it was written from, or
 ``read_grades`` with itself, cannot fail. Here the gradebook is read with SQL through the database's
 own driver (``sqlite3`` or ``psycopg``), on nbgrader's tables, and grades.csv with the ``csv``
-module; ``csv_disagreements`` compares the two, cell by cell.
+module; ``csv_disagreements`` compares the two, cell by cell. ``formgrader_gives`` and
+``nbgrader_export`` do what an instructor does after grading written answers by hand.
 """
 
 from __future__ import annotations
 
 import csv
 import sqlite3
+import subprocess
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import psycopg
+from nbgrader.api import Gradebook
 from sqlalchemy.engine import make_url
+
+from autograder.labs import ROOT
 
 GRADES = """
 SELECT student.id AS student, assignment.name AS lab, base_cell.name AS cell,
@@ -108,3 +114,21 @@ def csv_disagreements(table: dict[tuple[str, str], dict[str, str]], book: dict[t
             if float(record[column]) != float(f"{value:g}"):  # grades.csv writes numbers with :g
                 errors.append(f"{key} {column}: grades.csv {record[column]!r}, gradebook {value}")
     return errors
+
+
+def formgrader_gives(db_url: str, lab: str, student: str, scores: dict[str, float]) -> None:
+    """What formgrader's grade API (nbgrader's GradeHandler.put) does when a grader saves a score
+    by hand: the manual score, and no longer needing grading by hand."""
+    with Gradebook(db_url) as gb:
+        for name, score in scores.items():
+            grade = gb.find_grade(name, lab, lab, student)
+            grade.manual_score = score
+            grade.needs_manual_grade = grade.manual_score is None and grade.auto_score is None
+        gb.db.commit()
+
+
+def nbgrader_export(workdir: Path, env: dict[str, str] | None = None) -> None:
+    """`nbgrader export` as an instructor runs it from the course root, for the course ``workdir``:
+    grades.csv rewritten from the gradebook with the hand scores (autograder/export.py)."""
+    subprocess.run([sys.executable, "-m", "nbgrader", "export", f"--CourseDirectory.root={workdir}"],
+                   cwd=ROOT, env=env, check=True, capture_output=True)
