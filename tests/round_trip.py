@@ -6,8 +6,8 @@ points and keeps every other blank's, grades.csv says what the gradebook (read w
 every feedback page hides the hidden tests, and regrading gives every cell again. This is what
 `python -m autograder demo` shows, asserted.
 
-The labs are dealt into two halves (every other lab, in alphabetical order, so that a new lab lands
-in one of them without an edit), so that `pytest -n 2 --dist loadfile` grades the two halves on two
+The labs are dealt into two halves of about as many submissions each (so that a new lab lands in
+one of them without an edit), so that `pytest -n 2 --dist loadfile` grades the two halves on two
 workers at once. A test file sets ``HALF`` and imports everything here (``__all__``): the tests,
 the ``graded`` fixture, and the hook that parametrizes ``lab`` over its half.
 """
@@ -18,17 +18,29 @@ import html
 import re
 from pathlib import Path
 
+import pytest
+
 from autograder import cells, grading, submissions
 from autograder.grading import GradeRow
 from autograder.labs import Lab
 from autograder.mistakes import catalogue
-import pytest
-
 from course.checks import NOT_WRITTEN
 from gradebook_sql import csv_disagreements, read_csv, sheets
 from over_labs import LABS
 
-HALVES = (LABS[0::2], LABS[1::2])
+
+
+def _halves(labs: list[Lab]) -> tuple[list[Lab], list[Lab]]:
+    """The labs in two halves of about as many submissions each (blank, solved, one per mistake):
+    the largest lab first, each into the half with fewer so far."""
+    halves: tuple[list[Lab], list[Lab]] = ([], [])
+    size = {lab: 2 + len(catalogue(lab)) for lab in labs}
+    for lab in sorted(labs, key=lambda lab: (-size[lab], lab.id)):
+        min(halves, key=lambda half: sum(size[other] for other in half)).append(lab)
+    return halves
+
+
+HALVES = _halves(LABS)
 
 __all__ = ["graded", "pytest_generate_tests", "test_blank_release_scores_zero", "test_solved_notebook_scores_full_marks",
            "test_each_mistake_loses_its_blank_and_only_its_blank", "test_grades_csv_matches_the_gradebook",
