@@ -101,7 +101,7 @@ class GradingExecute(Execute):
                     why = (f"the submission used up its time limit of {self.notebook_timeout} s"
                            if restarts <= self.max_restarts else "the kernel had to be restarted too often")
                     _add_error(cell, NOT_RUN, f"This cell was not run: {why}.")
-                    if not any(note.startswith("Cells from") for note in notes):
+                    if not any(note.startswith("The cells from") for note in notes):
                         notes.append(f"The cells from cell {_name(cell, index)} on were not run: {why}.")
                     continue
                 stopped = (f"This cell ran for more than {self.timeout} s and was stopped. The grader "

@@ -4,8 +4,6 @@ grades.csv without grading again. Regrading asks for the hand grades to be confi
 
 import csv
 import json
-import subprocess
-import sys
 from importlib import metadata
 
 import nbformat
@@ -14,7 +12,8 @@ from nbgrader.api import Gradebook
 from nbgrader.coursedir import CourseDirectory
 
 from autograder import grading, submissions
-from autograder.labs import ROOT, get_lab
+from autograder.labs import get_lab
+from gradebook_sql import formgrader_gives, nbgrader_export
 
 LAB = get_lab("train-kf")
 
@@ -23,16 +22,6 @@ def read_csv(path) -> dict[str, str]:
     with open(path) as handle:
         [row] = list(csv.DictReader(handle))
     return row
-
-
-def formgrader_gives(db_url: str, student: str, scores: dict[str, float]) -> None:
-    """What formgrader's grade API (nbgrader's GradeHandler.put) does when a grader saves a score."""
-    with Gradebook(db_url) as gb:
-        for name, score in scores.items():
-            grade = gb.find_grade(name, LAB.id, LAB.id, student)
-            grade.manual_score = score
-            grade.needs_manual_grade = grade.manual_score is None and grade.auto_score is None
-        gb.db.commit()
 
 
 @pytest.fixture(scope="module")
@@ -62,10 +51,9 @@ def test_hand_grades_reach_grades_csv_through_nbgrader_export(graded):
     assert written and all(read_csv(workdir / "grades.csv")[cell] == "" for cell in written)
 
     hand = {cell: row.max_cells[cell] - 1 for cell in written}
-    formgrader_gives(db_url, "s001", hand)
+    formgrader_gives(db_url, LAB.id, "s001", hand)
     (workdir / "grades.versions.json").unlink()
-    subprocess.run([sys.executable, "-m", "nbgrader", "export", f"--CourseDirectory.root={workdir}"],
-                   cwd=ROOT, check=True, capture_output=True)
+    nbgrader_export(workdir)
     exported = read_csv(workdir / "grades.csv")
     assert {cell: float(exported[cell]) for cell in written} == hand
     assert float(exported["total"]) == row.auto_score + sum(hand.values())
@@ -79,7 +67,6 @@ def test_hand_grades_reach_grades_csv_through_nbgrader_export(graded):
             grade = gb.find_grade(cell, LAB.id, LAB.id, "s001")
             assert grade.needs_manual_grade and grade.manual_score == score
     assert all(read_csv(workdir / "grades.csv")[cell] == "" for cell in written)
-    formgrader_gives(db_url, "s001", hand)
-    subprocess.run([sys.executable, "-m", "nbgrader", "export", f"--CourseDirectory.root={workdir}"],
-                   cwd=ROOT, check=True, capture_output=True)
+    formgrader_gives(db_url, LAB.id, "s001", hand)
+    nbgrader_export(workdir)
     assert {cell: float(read_csv(workdir / "grades.csv")[cell]) for cell in written} == hand

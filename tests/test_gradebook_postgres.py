@@ -1,28 +1,34 @@
 """The gradebook in PostgreSQL, against a real server started on loopback for this module.
 
 With GRADEBOOK_URL set, nbgrader_config.py points nbgrader at that database, so
-`python -m autograder grade` and plain `nbgrader` both keep the gradebook there. A small class (a
-blank and a solved submission of train-kf) graded into PostgreSQL gets the grades that SQLite
-gives it, grades.csv agrees with the rows in PostgreSQL, and no SQLite gradebook is written.
-The test needs Debian's `postgresql` package; without it, it fails (it never skips).
+`python -m autograder grade` and plain `nbgrader` both keep the gradebook there. A class of train-kf
+with every kind of row (full marks, zero, a mistake that loses one blank, a late submission and a
+late one with a mistake, written answers graded by hand and exported, a flagged cheat), graded two
+at a time into PostgreSQL, gets every column of grades.csv that SQLite gives it; each grades.csv
+says what its gradebook holds, read with SQL (tests/gradebook_sql.py); no SQLite gradebook is
+written. The test needs Debian's `postgresql` package; without it, it fails (it never skips).
 """
 
-import csv
 import os
 import shutil
 import subprocess
 import sys
+from datetime import timedelta, timezone
 
-import nbformat
 import pytest
-import sqlalchemy
 from nbgrader.coursedir import CourseDirectory
 
 import postgres_server
-from autograder import grading, submissions
+from autograder import cells, cheats, grading, late, submissions
 from autograder.labs import ROOT, get_lab
+from autograder.mistakes import catalogue
+from gradebook_sql import csv_disagreements, formgrader_gives, nbgrader_export, read_csv, sheets
 
-LABS = [get_lab("train-kf")]
+LAB = get_lab("train-kf")
+MISTAKE = catalogue(LAB)[0]
+CHEAT = next(c for c in cheats.catalogue(LAB) if c.caught_by == {cheats.STATIC} and c.games == "blank")
+LATE = {"late": 1.5, "late_mistake": 10.0}
+"""Days late: 2 started days (20%), and over the 50% cap."""
 
 
 @pytest.fixture(scope="module")
@@ -40,45 +46,56 @@ def postgres_url():
 
 @pytest.fixture(scope="module")
 def class_dir(tmp_path_factory):
-    """A blank and a solved submission of each lab in LABS."""
     folder = tmp_path_factory.mktemp("class")
-    for lab in LABS:
-        blank, solved = nbformat.read(lab.release_notebook, as_version=4), submissions.solved(lab)
-        for student, nb in ((submissions.BLANK, blank), (submissions.SOLVED, solved)):
-            path = folder / student / lab.id / lab.notebook_name
-            path.parent.mkdir(parents=True)
-            nbformat.write(nb, path)
+    notebooks = {
+        submissions.BLANK: cells.read(LAB.release_notebook), submissions.SOLVED: submissions.solved(LAB),
+        "mistake": submissions.with_mistake(LAB, MISTAKE), "late": submissions.solved(LAB),
+        "late_mistake": submissions.with_mistake(LAB, MISTAKE), "cheat": CHEAT.notebook(LAB),
+    }
+    due = late.read_due_dates(late.DUE_DATES)[LAB.id].astimezone(timezone.utc)
+    for student, nb in notebooks.items():
+        path = submissions.write(nb, folder, student, LAB)
+        if student in LATE:  # nbgrader's submission time, as the LMS intake writes it
+            (path.parent / "timestamp.txt").write_text((due + timedelta(days=LATE[student])).isoformat())
     return folder
+
+
+def written_cells() -> dict[str, float]:
+    """The written answers of the lab and their points, from the source notebook."""
+    return {cells.grade_id(c): float(cells.meta(c)["points"]) for c in cells.read(LAB.source_notebook).cells
+            if cells.meta(c).get("grade") and c.cell_type == "markdown"}
+
+
+def grade_and_hand_grade(class_dir, workdir, url: str | None):
+    """Grade the class two at a time, with GRADEBOOK_URL set to ``url`` (None: unset, SQLite), then
+    grade the late student's written answers by hand and run `nbgrader export`: the rows that
+    grading returned, and the gradebook's URL."""
+    env = {k: v for k, v in os.environ.items() if k != "GRADEBOOK_URL"} | ({"GRADEBOOK_URL": url} if url else {})
+    with pytest.MonkeyPatch.context() as patch:
+        if url:
+            patch.setenv("GRADEBOOK_URL", url)
+        else:
+            patch.delenv("GRADEBOOK_URL", raising=False)
+        rows = grading.grade(class_dir, workdir, jobs=2)
+        db_url = CourseDirectory(config=grading.course_config(workdir)).db_url
+    formgrader_gives(db_url, LAB.id, "late", {cell: p - 1.0 for cell, p in written_cells().items()})
+    nbgrader_export(workdir, env)
+    return {row.student: row for row in rows}, db_url
 
 
 @pytest.fixture(scope="module")
 def graded_sqlite(class_dir, tmp_path_factory):
     workdir = tmp_path_factory.mktemp("sqlite-course")
-    with pytest.MonkeyPatch.context() as patch:
-        patch.delenv("GRADEBOOK_URL", raising=False)
-        rows = grading.grade(class_dir, workdir)
-    return {(row.student, row.lab): row for row in rows}
+    return (*grade_and_hand_grade(class_dir, workdir, None), workdir)
 
 
 @pytest.fixture(scope="module")
 def graded_postgres(postgres_url, class_dir, tmp_path_factory):
-    """The class graded with GRADEBOOK_URL set: (student, lab) -> GradeRow, and the course folder."""
+    """(student -> GradeRow, the gradebook's URL, the course folder), graded into PostgreSQL."""
     workdir = tmp_path_factory.mktemp("postgres-course")
-    with pytest.MonkeyPatch.context() as patch:
-        patch.setenv("GRADEBOOK_URL", postgres_url)
-        rows = grading.grade(class_dir, workdir)
-        assert grading.read_grades(workdir, LABS) == rows
-    return {(row.student, row.lab): row for row in rows}, workdir
-
-
-def query(url, sql):
-    engine = sqlalchemy.create_engine(url)
-    try:
-        assert engine.dialect.name == "postgresql"
-        with engine.connect() as connection:
-            return connection.execute(sqlalchemy.text(sql)).mappings().all()
-    finally:
-        engine.dispose()
+    graded = (*grade_and_hand_grade(class_dir, workdir, postgres_url), workdir)
+    assert graded[1] == postgres_url
+    return graded
 
 
 def test_the_configuration_follows_gradebook_url(monkeypatch, tmp_path):
@@ -92,63 +109,42 @@ def test_the_configuration_follows_gradebook_url(monkeypatch, tmp_path):
     assert db_url() == url
 
 
-def test_postgresql_gives_the_grades_that_sqlite_gives(graded_postgres, graded_sqlite):
-    rows, _ = graded_postgres
-    assert set(rows) == {(student, lab.id) for lab in LABS for student in (submissions.BLANK, submissions.SOLVED)}
-    for key, row in rows.items():
-        assert row == graded_sqlite[key], key
-    for lab in LABS:
-        blank, solved = rows[(submissions.BLANK, lab.id)], rows[(submissions.SOLVED, lab.id)]
-        assert blank.auto_max > 0 and blank.auto_score == 0, blank.cells
-        assert solved.auto_score == solved.auto_max, solved.lost
+def test_the_class_holds_every_kind_of_row(graded_postgres):
+    """What the comparison below covers, with numbers computed from the source notebook."""
+    rows, _, workdir = graded_postgres
+    table = {student: record for (student, _), record in read_csv(workdir / "grades.csv").items()}
+    full = rows[submissions.SOLVED].auto_max
+    earned = full - rows["mistake"].max_cells[f"test_{MISTAKE.blank}"]
+    assert rows[submissions.SOLVED].auto_score == full > 0 and rows[submissions.BLANK].auto_score == 0
+    assert rows["mistake"].lost == [f"test_{MISTAKE.blank}"] and rows["mistake"].auto_score == earned
+    assert rows["late"].late_penalty == pytest.approx(0.2 * full)
+    assert rows["late_mistake"].late_penalty == pytest.approx(0.5 * earned)
+    assert rows["cheat"].flags and table["cheat"]["flagged"]
+    hand = sum(p - 1.0 for p in written_cells().values())
+    assert hand > 0 and float(table["late"]["total"]) == pytest.approx(0.8 * full + hand)
+
+
+def test_postgresql_gives_every_column_that_sqlite_gives(graded_postgres, graded_sqlite):
+    rows, _, workdir = graded_postgres
+    assert rows == graded_sqlite[0]
+    in_postgres, in_sqlite = read_csv(workdir / "grades.csv"), read_csv(graded_sqlite[2] / "grades.csv")
+    assert set(in_postgres) == set(in_sqlite) == {(student, LAB.id) for student in rows}
+    for key, record in in_postgres.items():
+        assert record == in_sqlite[key], key
 
 
 def test_the_grades_are_in_postgresql_and_grades_csv_agrees(graded_postgres, postgres_url):
-    rows, workdir = graded_postgres
+    rows, _, workdir = graded_postgres
     assert not (workdir / "gradebook.db").exists(), "nbgrader wrote an SQLite gradebook despite GRADEBOOK_URL"
-    grades = query(
-        postgres_url,
-        """
-        SELECT student.id AS student, assignment.name AS lab, base_cell.name AS cell,
-               grade.auto_score, grade.manual_score, grade.extra_credit, grade.needs_manual_grade,
-               grade_cells.max_score, submitted_notebook.late_submission_penalty
-        FROM grade
-        JOIN submitted_notebook ON grade.notebook_id = submitted_notebook.id
-        JOIN submitted_assignment ON submitted_notebook.assignment_id = submitted_assignment.id
-        JOIN student ON submitted_assignment.student_id = student.id
-        JOIN assignment ON submitted_assignment.assignment_id = assignment.id
-        JOIN base_cell ON grade.cell_id = base_cell.id
-        JOIN grade_cells ON grade_cells.id = base_cell.id
-        """,
-    )
-    # (student, lab) -> cell -> (score, or None while it awaits grading by hand; maximum), and penalty
-    in_db: dict[tuple[str, str], dict[str, tuple[float | None, float]]] = {}
-    penalty: dict[tuple[str, str], float] = {}
-    for g in grades:
-        # nbgrader's Grade.score: the manual score if there is one, else the automatic one, plus extra credit
-        points = g["manual_score"] if g["manual_score"] is not None else (g["auto_score"] or 0.0)
-        score = None if g["needs_manual_grade"] else points + (g["extra_credit"] or 0.0)
-        in_db.setdefault((g["student"], g["lab"]), {})[g["cell"]] = (score, g["max_score"])
-        penalty[(g["student"], g["lab"])] = g["late_submission_penalty"] or 0.0
-    assert set(in_db) == set(rows)
-    every_cell = {cell for cells in in_db.values() for cell in cells}
+    book = sheets(postgres_url)
+    assert set(book) == {(student, LAB.id) for student in rows}
+    assert csv_disagreements(read_csv(workdir / "grades.csv"), book) == []
 
-    with open(workdir / "grades.csv") as handle:
-        table = list(csv.DictReader(handle))
-    assert len(table) == len(in_db)
-    assert {(record["student"], record["lab"]) for record in table} == set(in_db)
-    for record in table:
-        key = (record["student"], record["lab"])
-        cells = in_db[key]
-        assert every_cell <= set(record), f"grades.csv lacks columns {every_cell - set(record)}"
-        for cell in every_cell:  # a cell of another lab is empty
-            expected = cells.get(cell, (None, 0.0))[0]
-            assert record[cell] == ("" if expected is None else f"{expected:g}"), (key, cell)
-        if "late_penalty" in record:
-            assert float(record["late_penalty"]) == penalty[key]
-        points = sum(score for score, _ in cells.values() if score is not None)
-        assert float(record["total"]) == max(0.0, points - penalty[key]), key
-        assert float(record["max_score"]) == sum(maximum for _, maximum in cells.values()), key
+
+def test_sqlites_grades_csv_agrees_with_its_gradebook(graded_sqlite):
+    _, db_url, workdir = graded_sqlite
+    assert db_url.startswith("sqlite:")
+    assert csv_disagreements(read_csv(workdir / "grades.csv"), sheets(db_url)) == []
 
 
 def test_plain_nbgrader_reads_the_postgresql_gradebook(graded_postgres, postgres_url, tmp_path):
@@ -161,5 +157,5 @@ def test_plain_nbgrader_reads_the_postgresql_gradebook(graded_postgres, postgres
         cwd=tmp_path, env=env, capture_output=True, text=True, check=True, timeout=60,
     )
     students = {line.split()[0] for line in listing.stdout.splitlines()[1:] if line.strip()}
-    assert students == {student for student, _ in graded_postgres[0]}, listing.stdout
+    assert students == set(graded_postgres[0]), listing.stdout
     assert not (tmp_path / "gradebook.db").exists()

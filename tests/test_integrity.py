@@ -22,7 +22,6 @@ import ast
 import asyncio
 import copy
 import json
-import os
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -35,7 +34,7 @@ from nbgrader.utils import determine_grade
 
 from autograder import cells, cheats, integrity, submissions
 from autograder.integrity import INTEGRITY_SETUP, PROBE_NAME, RUNTIME_PROBE, Finding, runtime_findings
-from autograder.labs import ROOT, Lab, all_labs, get_lab
+from autograder.labs import ROOT, Lab, get_lab
 from autograder.mistakes import catalogue as mistakes
 from over_labs import LABS, over_labs
 
@@ -346,6 +345,12 @@ def test_a_missing_or_forged_report_is_a_finding(result):
 
 # -- the honest corpus ------------------------------------------------------------------------------
 
+def full_marks(lab: Lab) -> dict[str, float]:
+    """grade_id -> points of every graded test cell, from the source notebook's metadata."""
+    return {cells.grade_id(c): cells.meta(c)["points"] for c in cells.read(lab.source_notebook).cells
+            if cells.is_autograded_test(c)}
+
+
 @over_labs
 def test_static_scan_flags_no_honest_notebook(lab):
     notebooks = {"blank release": cells.read(lab.release_notebook), "solved": submissions.solved(lab)}
@@ -364,7 +369,7 @@ def test_runtime_monitor_flags_no_honest_run(runs, lab):
         assert len(run.probes) > 1, f"{kind}: no graded test cell ran"
         assert run.findings == [], f"{kind} notebook of {lab.id}: {run.findings}"
     solved, blank = runs[f"solved/{lab.id}"], runs[f"blank/{lab.id}"]
-    assert all(score > 0 for score in solved.scores.values()), solved.scores
+    assert solved.scores == full_marks(lab), "the solved notebook, run under the monitor, must score full marks"
     assert all(score == 0 for score in blank.scores.values()), blank.scores
     if lab == TRAIN:
         assert len(runs[f"mistakes/{lab.id}"].probes) > len(mistakes(lab)), "the mistakes notebook graded too little"
@@ -375,7 +380,7 @@ def test_honest_habits_are_not_flagged(runs):
     assert integrity.static_findings(nb, TRAIN) == []
     run = runs["habits/train-kf"]
     assert run.findings == []
-    assert all(score > 0 for score in run.scores.values()), run.scores
+    assert run.scores == full_marks(TRAIN), "honest habits must keep full marks"
     outputs = [o for c in run.nb.cells if c.source.startswith("%timeit") for o in c.outputs]
     assert any("per loop" in o.get("text", "") for o in outputs), outputs  # the honest cell ran
 

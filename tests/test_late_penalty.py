@@ -1,8 +1,8 @@
 """Late submissions: the due dates in due_dates.toml reach the gradebook before autograde, and
-nbgrader's AssignLatePenalties takes the configured penalty (LatePenalty) from late submissions,
-from an LMS download with submission times to grades.csv."""
+nbgrader's AssignLatePenalties takes README's penalty (LatePenalty: 10% of the earned points per
+started day, at most 50%) from late submissions, from an LMS download with submission times to
+grades.csv, and never from written answers graded later by hand."""
 
-import csv
 from datetime import timedelta, timezone
 
 import nbformat
@@ -10,10 +10,11 @@ import pytest
 from nbgrader.api import Gradebook
 from nbgrader.coursedir import CourseDirectory
 
-from autograder import grading, late, submissions
+from autograder import cells, grading, late, submissions
 from autograder.intake import collect
 from autograder.labs import get_lab
 from autograder.mistakes import catalogue
+from gradebook_sql import csv_disagreements, formgrader_gives, nbgrader_export, read_csv, sheets
 
 LAB = get_lab("train-kf")
 DAY = 86400
@@ -44,9 +45,24 @@ def test_bad_due_dates_are_refused(tmp_path, text, error):
         late.read_due_dates(path)
 
 
-def test_late_submissions_lose_the_configured_penalty(tmp_path):
-    """An LMS download with submission times: on time, 1.5 days late (2 started days) with full
-    marks, and 10 days late (capped) with a mistake, so that the penalty is of the earned points."""
+def points(lab) -> dict[str, float]:
+    """grade_id -> points of every graded cell, from the source notebook's metadata."""
+    return {cells.grade_id(c): float(cells.meta(c)["points"]) for c in cells.read(lab.source_notebook).cells
+            if cells.meta(c).get("grade")}
+
+
+def test_the_configured_penalty_is_readmes():
+    """README: 10% of the earned points for every started day late, at most 50%."""
+    config = grading.course_config()
+    assert (config.LatePenalty.percent_per_day, config.LatePenalty.max_percent) == (10.0, 50.0)
+
+
+def test_late_submissions_lose_readmes_penalty_and_hand_grades_are_not_penalised(tmp_path):
+    """An LMS download with submission times: on time, 1.5 days late (2 started days: 20%) with full
+    marks, and 10 days late (capped at 50%) with a mistake, so that the penalty is of the earned
+    points. The expected penalties are computed here from the points in the source notebook. Then
+    the written answers of the late submission are graded by hand (as formgrader does) and
+    exported: the hand scores are added in full, after the penalty."""
     due = late.read_due_dates(late.DUE_DATES)[LAB.id].astimezone(timezone.utc)
     mistake = next(m for m in catalogue(LAB) if m.slug == "no-Q")
     files = {
@@ -63,20 +79,27 @@ def test_late_submissions_lose_the_configured_penalty(tmp_path):
 
     workdir = tmp_path / "course"
     rows = {row.student: row for row in grading.grade(tmp_path / "SUBMISSIONS", workdir)}
-
-    config = grading.course_config(workdir)
-    per_day, cap = config.LatePenalty.percent_per_day, config.LatePenalty.max_percent
-    with Gradebook(CourseDirectory(config=config).db_url) as gb:
+    db_url = CourseDirectory(config=grading.course_config(workdir)).db_url
+    with Gradebook(db_url) as gb:
         assert gb.find_assignment(LAB.id).duedate == due.replace(tzinfo=None)
         assert gb.find_submission(LAB.id, "late").total_seconds_late == 1.5 * DAY
-    solved = rows["ontime"]
-    assert solved.late_penalty == 0 and solved.auto_score == solved.auto_max
-    assert rows["late"].late_penalty == pytest.approx(solved.auto_score * 2 * per_day / 100)
-    earned = rows["verylate"].auto_score
-    assert earned < solved.auto_score
-    assert rows["verylate"].late_penalty == pytest.approx(earned * cap / 100)
-    with open(workdir / "grades.csv") as handle:
-        table = {record["student"]: record for record in csv.DictReader(handle)}
-    for student, row in rows.items():
-        assert float(table[student]["late_penalty"]) == pytest.approx(row.late_penalty)
-        assert float(table[student]["total"]) == pytest.approx(row.auto_score - row.late_penalty)
+
+    graded = points(LAB)
+    written = {cell: p for cell, p in graded.items() if cell not in rows["ontime"].autograded}
+    full = sum(p for cell, p in graded.items() if cell not in written)
+    earned = full - graded[f"test_{mistake.blank}"]
+    expected = {"ontime": (0.0, full), "late": (0.20 * full, 0.80 * full), "verylate": (0.50 * earned, 0.50 * earned)}
+    table = read_csv(workdir / "grades.csv")
+    for student, (penalty, total) in expected.items():
+        assert rows[student].late_penalty == pytest.approx(penalty), student
+        assert float(table[(student, LAB.id)]["late_penalty"]) == pytest.approx(penalty), student
+        assert float(table[(student, LAB.id)]["total"]) == pytest.approx(total), student
+
+    assert written, "train-kf has written answers"
+    hand = {cell: p - 1.0 for cell, p in written.items()}
+    formgrader_gives(db_url, LAB.id, "late", hand)
+    nbgrader_export(workdir)
+    table = read_csv(workdir / "grades.csv")
+    assert float(table[("late", LAB.id)]["late_penalty"]) == pytest.approx(0.20 * full)
+    assert float(table[("late", LAB.id)]["total"]) == pytest.approx(0.80 * full + sum(hand.values()))
+    assert csv_disagreements(table, sheets(db_url)) == []

@@ -45,7 +45,7 @@ def grade(course, class_dir, workdir) -> dict[str, dict[str, str]]:
 def test_regrading_after_a_test_fix_changes_only_that_cell_for_the_students_it_affects(tmp_path):
     course = tmp_path / "kit"
     shutil.copytree(ROOT, course, ignore=shutil.ignore_patterns(
-        ".git", "demo", "submitted", "autograded", "feedback", "gradebook.db", "grades*", "*.log", "__pycache__"))
+        ".git", ".venv", "demo", "submitted", "autograded", "feedback", "gradebook.db", "grades*", "*.log", "__pycache__"))
     mistakes = {m.slug: m for m in catalogue(LAB) if m.blank == "predict"}
     # no-Q gets B_f wrong (the fix forgives it); mean-not-moved gets x_f wrong (it does not)
     notebooks = {

@@ -1,5 +1,11 @@
 """The grading environment: environment.lock pins every package exactly, within environment.txt's
-ranges, and the record written beside a grades CSV says what the grades were made with."""
+ranges, and exactly the packages that environment.txt installs; the record written beside a grades
+CSV says what the grades were made with, and whether that matches the lock.
+
+That an environment made from environment.lock grades the demo class to the same grades takes a
+fresh environment and a graded class (minutes): benchmarks/lock_grades_demo.py does it, for
+maintainers before a term and after regenerating the lock.
+"""
 
 import json
 import platform
@@ -8,6 +14,7 @@ from importlib import metadata
 
 import pytest
 from packaging.requirements import Requirement
+from packaging.utils import canonicalize_name
 
 from autograder import versions
 from autograder.labs import ROOT
@@ -41,6 +48,53 @@ def test_a_package_that_differs_from_the_lock_is_named(tmp_path):
     }
 
 
+def _dependencies(name: str, extras: frozenset[str]) -> list[Requirement]:
+    """What the installed distribution ``name`` (with ``extras``) requires on this platform."""
+    found = []
+    for line in metadata.requires(name) or []:
+        requirement = Requirement(line)
+        if requirement.marker is None or any(requirement.marker.evaluate({"extra": e}) for e in extras | {""}):
+            found.append(requirement)
+    return found
+
+
+def test_the_lock_pins_exactly_what_environment_txt_installs():
+    """The closure of environment.txt's requirements (and the kit's own, `-e .`) over the installed
+    packages' metadata is the set of packages in the lock: nothing missing, nothing extra (an extra
+    package, such as a maintainer's tool, would make every grading record differ from the lock)."""
+    todo = [(r.name, frozenset(r.extras)) for r in requirements()]
+    todo += [(r.name, frozenset(r.extras)) for r in _dependencies("estimation-lab-kit", frozenset())]
+    needed: set[str] = set()
+    seen: set[tuple[str, frozenset[str]]] = set()
+    while todo:
+        name, extras = todo.pop()
+        if (canonicalize_name(name), extras) in seen:
+            continue
+        seen.add((canonicalize_name(name), extras))
+        needed.add(canonicalize_name(name))
+        todo += [(r.name, frozenset(r.extras)) for r in _dependencies(name, extras)]
+    locked = set(versions.read_lock(versions.LOCK))
+    assert locked - needed == set(), f"environment.lock pins packages that environment.txt does not install: {locked - needed}"
+    assert needed - locked <= {"pip", "setuptools"}, f"environment.lock lacks {needed - locked - {'pip', 'setuptools'}}"
+
+
+def test_the_record_says_whether_the_environment_matches_the_lock(tmp_path, monkeypatch):
+    """Against locks written for the purpose: one that pins what is installed, one that differs."""
+    installed = {name: metadata.version(name) for name in ("numpy", "scipy", "nbgrader")}
+    same, differs = tmp_path / "same.lock", tmp_path / "differs.lock"
+    same.write_text("".join(f"{name}=={version}\n" for name, version in installed.items()))
+    differs.write_text(f"numpy==0.0.1\nscipy=={installed['scipy']}\nno-such-package==1.0\n")
+    for lock, matches, differences in (
+        (same, True, {}),
+        (differs, False, {"numpy": {"locked": "0.0.1", "installed": installed["numpy"]},
+                          "no-such-package": {"locked": "1.0", "installed": None}}),
+        (tmp_path / "missing.lock", None, None),
+    ):
+        monkeypatch.setattr(versions, "LOCK", lock)
+        record = json.loads(versions.record(tmp_path / "grades.csv").read_text())
+        assert (record["matches_lock"], record["differs_from_lock"]) == (matches, differences), lock.name
+
+
 def test_the_record_says_what_the_grades_were_made_with(tmp_path):
     path = versions.record(tmp_path / "grades.csv")
     assert path == tmp_path / "grades.versions.json"
@@ -50,4 +104,3 @@ def test_the_record_says_what_the_grades_were_made_with(tmp_path):
         assert record["packages"][name] == metadata.version(name)
     head = subprocess.run(["git", "-C", str(ROOT), "rev-parse", "HEAD"], capture_output=True, text=True)
     assert record["kit"]["commit"] == (head.stdout.strip() if head.returncode == 0 else None)
-    assert record["matches_lock"] == (not versions.differences_from_lock(versions.LOCK))

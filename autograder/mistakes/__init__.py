@@ -2,7 +2,9 @@
 
 A mistake is an edit of one blank's model answer: the reference code with ``find`` replaced by
 ``replace``. The round-trip test grades a submission with each mistake and requires that it loses
-that blank's points and no other blank's.
+that blank's points and no other blank's. tests/test_hidden_tests.py requires that the blank's
+hidden test fails it the way ``raises`` says: by default with the hidden test's own AssertionError
+(a wrong answer); a mistake that makes the student's function crash names the exception it raises.
 """
 
 from __future__ import annotations
@@ -25,6 +27,9 @@ class Mistake:
     find: str
     """Text in the model answer; it must occur there exactly once."""
     replace: str
+    raises: type[Exception] = AssertionError
+    """How the hidden test fails it: AssertionError, the hidden test's verdict on a wrong answer
+    (the default); another exception: the student's function itself raises it (a crash)."""
 
     def student_id(self, lab: Lab) -> str:
         return f"{lab.id}_{self.blank}_{self.slug}"
