@@ -485,7 +485,7 @@ def plot_tracking(data: RadarData, history: FilterHistory, title: str = "", crb:
         axes[1, i].set_xlabel("time t [s]")
     axes[1, 0].set_ylim(-4 * data.sigma, 4 * data.sigma)
     axes[0, 0].legend(loc="upper right", fontsize=8)
-    axes[1, 2].legend(loc="upper right", fontsize=8)
+    axes[1, 2].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
     n = f", N = {history.n_particles} particles" if history.n_particles else ""
     fig.suptitle(title or f"Particle filter tracking of the falling object{n}")
     return axes
