@@ -1,11 +1,13 @@
 """Hidden tests of the reentry-pf lab: each ``check_<blank>`` tests a student's blank against
-``solutions.reentry_pf``, with every other blank bound to the reference.
+``solutions.reentry_pf``, with every other blank bound to the reference. run_particle_filter is
+also run with another innovation_std and with the given bootstrap step.
 
 The deterministic blanks (tracking_dynamics, simulate_radar, initial_cloud, credibility_interval,
 run_particle_filter) are compared with the reference on seeded random inputs of several sizes.
 ``pf_step`` is stochastic, so its test is statistical (the second half of this module): weights
-normalised and following step (d), resampling following the fitness weights (chi-square),
-innovation spread and centre, and the posterior of beta after a whole run against an ensemble of
+normalised and following step (d), the diagnostics it reports in ``info`` (exact), resampling
+following the fitness weights (chi-square), the spread and centre of the artificial process noise
+(the handout's "innovation") for the default and another ``innovation_std``, and the posterior of beta after a whole run against an ensemble of
 reference runs. Each statistical check states its false-fail probability for a correct step,
 derived from its statistic's distribution; together they stay below ``FALSE_FAIL_TOTAL`` = 1e-6.
 tests/test_reentry_pf_reference.py shows the reference passing on 200 seeds and every catalogued
