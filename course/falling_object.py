@@ -13,7 +13,7 @@ results as arguments*; nothing here implements a blank.
 
 from __future__ import annotations
 
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import TYPE_CHECKING
@@ -46,15 +46,49 @@ PRIOR_STD: Vector = np.array([500.0, 200.0, 1500.0])  # prior standard deviation
 INNOVATION_STD: Vector = np.array([100.0, 100.0, 5.0])  # innovation standard deviations, D^(1/2)
 RUN_SEED: int = 2029  # seed of the lab's filter run, np.random.default_rng(RUN_SEED)
 
+CHOSEN: tuple[float, float, float] = (10.0, 10.0, 50.0)  # the tuned artificial process noise of the lab's study
+CHOSEN_STD: Vector = np.array(CHOSEN)
+
+
+@dataclass(frozen=True)
+class TuningSetting:
+    """One setting of the tuning study: the filter ("auxiliary" = pf_step, "bootstrap"), N, and
+    the standard deviations of the artificial process noise in h [m], v [m/s], beta [kg/(m s^2)]."""
+
+    filter: str
+    N: int
+    innovation_std: tuple[float, float, float]
+
+    @property
+    def label(self) -> str:
+        h, v, beta = self.innovation_std
+        return f"{self.filter}, N = {self.N}, noise ({h:g}, {v:g}, {beta:g})"
+
+
+HANDOUT_STD: tuple[float, float, float] = (100.0, 100.0, 5.0)
+TUNING_SETTINGS: tuple[TuningSetting, ...] = (
+    *(TuningSetting("auxiliary", 2000, (hv, hv, beta)) for beta in (5.0, 50.0) for hv in (3.0, 10.0, 30.0, 100.0)),
+    TuningSetting("auxiliary", 500, HANDOUT_STD),
+    TuningSetting("auxiliary", 5000, HANDOUT_STD),
+    TuningSetting("auxiliary", 500, CHOSEN),
+    TuningSetting("bootstrap", 2000, HANDOUT_STD),
+    TuningSetting("bootstrap", 2000, CHOSEN),
+)
+"""The settings of the shipped tuning study (course/data/falling_object_tuning.csv)."""
+TUNING_SEEDS: int = 50  # simulated half minutes per setting
+WIDTH_EVERY: int = 10  # the study keeps the width of beta's 90% band at every 10th reading
+
 STATE_NAMES: tuple[str, str, str] = ("h", "v", "beta")
 STATE_LABELS: tuple[str, str, str] = ("altitude h [m]", "speed v [m/s]", r"ballistic coefficient $\beta$ [kg/(m s$^2$)]")
 
-for _constant in (X0_TRUE, PRIOR_STD, INNOVATION_STD):
+for _constant in (X0_TRUE, PRIOR_STD, INNOVATION_STD, CHOSEN_STD):
     _constant.setflags(write=False)
 
 #: The data file shipped with the kit, built by the instructors' reference simulator from a seed.
 DATA_FILE: Path = Path(__file__).resolve().parent / "data" / "falling_object_radar.csv"
 CSV_HEADER: str = "t_s,h_true_m,v_true_m_per_s,beta_true_kg_per_m_s2,b_m"
+#: The tuning study shipped with the kit (built by the instructors' data build, 50 seeds per setting).
+TUNING_FILE: Path = DATA_FILE.parent / "falling_object_tuning.csv"
 
 
 def time_grid(n_steps: int = N_STEPS, dt: float = DT) -> Vector:
@@ -106,9 +140,156 @@ def load(path: str | Path | None = None) -> RadarData:
     return RadarData(t=table[:, 0], x_true=table[:, 1:4].T.copy(), b=table[:, 4].copy())
 
 
+# --- The tuning study -------------------------------------------------------------------------
+TUNING_COLUMNS: tuple[str, ...] = (
+    "filter", "N", "std_h", "std_v", "std_beta", "seed",
+    "rmse_h", "rmse_v", "rmse_beta", "cover50_h", "cover50_v", "cover50_beta", "cover90_h", "cover90_v", "cover90_beta",
+    "roots_end", "lo90_v_end",
+)
+
+
+def format_tuning_csv(rows: list[dict]) -> str:
+    """The kit's CSV text of the tuning study: one row per run (setting, seed), fixed decimals,
+    then the width of beta's 90% band at every WIDTH_EVERY-th reading."""
+    n_widths = rows[0]["width90_beta"][::WIDTH_EVERY].shape[0] if rows else 0
+    lines = [",".join(TUNING_COLUMNS + tuple(f"width90_beta_{WIDTH_EVERY * i}" for i in range(n_widths)))]
+    for row in rows:
+        setting = row["setting"]
+        fields = [setting.filter, str(setting.N), *(f"{value:g}" for value in setting.innovation_std), str(row["seed"])]
+        fields += [f"{value:.3f}" for value in row["rmse"]]
+        fields += [f"{value:.6f}" for value in (*row["cover50"], *row["cover90"])]
+        fields += [f"{row['roots']:.0f}", f"{row['lo90_v_end']:.3f}"] + [f"{value:.3f}" for value in row["width90_beta"][::WIDTH_EVERY]]
+        lines.append(",".join(fields))
+    return "\n".join(lines) + "\n"
+
+
+@dataclass(frozen=True)
+class TuningStudy:
+    """The shipped tuning study: for every setting, its runs on TUNING_SEEDS simulated half minutes.
+
+    ``runs[setting]`` maps a column name of TUNING_COLUMNS (from "rmse_h" on) to an array over the
+    seeds, and "width90_beta" to an array (seeds, times) at the times ``width_times`` [s].
+    """
+
+    runs: dict[TuningSetting, dict[str, Vector]]
+    width_times: Vector
+
+    def summary(self, setting: TuningSetting) -> dict[str, Vector]:
+        """Means over the seeds of RMSE (3,) [m, m/s, kg/(m s^2)], coverage of the 50% and 90% bands (3,)."""
+        run = self.runs[setting]
+        return {key: np.array([np.mean(run[f"{key}_{n}"]) for n in STATE_NAMES]) for key in ("rmse", "cover50", "cover90")}
+
+
+def load_tuning(path: str | Path | None = None) -> TuningStudy:
+    """Load the shipped tuning study."""
+    lines = Path(TUNING_FILE if path is None else path).read_text().splitlines()
+    header = lines[0].split(",")
+    n_fixed = len(TUNING_COLUMNS)
+    groups: dict[TuningSetting, list[list[str]]] = {}
+    for line in lines[1:]:
+        fields = line.split(",")
+        setting = TuningSetting(fields[0], int(fields[1]), (float(fields[2]), float(fields[3]), float(fields[4])))
+        groups.setdefault(setting, []).append(fields)
+    runs = {}
+    for setting, rows in groups.items():
+        table = np.array([[float(v) for v in row[5:]] for row in rows])
+        run = {name: table[:, i] for i, name in enumerate(TUNING_COLUMNS[5:])}
+        run["width90_beta"] = table[:, n_fixed - 5:]
+        runs[setting] = run
+    width_times = DT * np.array([int(name.rsplit("_", 1)[1]) for name in header[n_fixed:]])
+    return TuningStudy(runs, width_times)
+
+
+def format_tuning_table(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING_SETTINGS) -> str:
+    """A table of the study: RMSE of h, v, beta and the coverage of the 50% and 90% bands, per setting."""
+    rows = [f"{'setting':<44}{'RMSE h [m]':>11}{'v [m/s]':>9}{'beta':>7}{'in 50%: h':>11}{'v':>6}{'beta':>6}"
+            f"{'in 90%: h':>11}{'v':>6}{'beta':>6}"]
+    for setting in settings:
+        m = study.summary(setting)
+        rows.append(f"{setting.label:<44}" + f"{m['rmse'][0]:>11.0f}{m['rmse'][1]:>9.0f}{m['rmse'][2]:>7.0f}"
+                    + f"{m['cover50'][0]:>11.0%}{m['cover50'][1]:>6.0%}{m['cover50'][2]:>6.0%}"
+                    + f"{m['cover90'][0]:>11.0%}{m['cover90'][1]:>6.0%}{m['cover90'][2]:>6.0%}")
+    n = len(next(iter(study.runs.values()))["rmse_h"])
+    rows.append(f"(means over {n} simulated half minutes per setting; RMSE and coverage over t = 0.1 s to 30 s)")
+    return "\n".join(rows)
+
+
+# =============================================================================================
+# Given parts: the bootstrap filter's step, and the Cramer-Rao bound of beta
+# =============================================================================================
+Dynamics = Callable[[float, np.ndarray], np.ndarray]
+
+
+def bootstrap_step(
+    x: Matrix,
+    w: Vector,
+    b_next: float,
+    rng: np.random.Generator,
+    dynamics: Dynamics,
+    *,
+    innovation_std: Vector = INNOVATION_STD,
+    info: dict | None = None,
+) -> tuple[Matrix, Vector]:
+    """One step of the bootstrap filter (Gordon, Salmond and Smith 1993), for comparison with pf_step.
+
+    Resample the cloud x (3, N) with its weights w (N,), propagate the parents with Forward Euler of
+    ``dynamics`` (your tracking_dynamics), add the artificial process noise D^(1/2) e with
+    D^(1/2) = diag(innovation_std), and weigh the new particles by the likelihood of the reading
+    b_next [m] alone. Unlike pf_step, the resampling does not look ahead at b_next. ``info``, if a
+    dict, receives the ESS of the resampling weights ("ess") and the parents' indices ("parents").
+    """
+    N = x.shape[1]
+    # parents k_l drawn with replacement with probabilities w (multinomial resampling)
+    cdf = np.cumsum(w)
+    k = np.searchsorted(cdf / cdf[-1], np.sort(rng.random(N)), side="right")
+    # x_new(l) = x(k_l) + dt f(x(k_l)) + D^(1/2) e(l),  e(l) ~ N(0, I_3)
+    parents = x[:, k]
+    x_new = parents + DT * dynamics(0.0, parents) + np.asarray(innovation_std)[:, None] * rng.standard_normal((3, N))
+    # w(l) proportional to exp(-|x_new_1(l) - b_{j+1}|^2 / (2 sigma^2)), in logarithms
+    log_w = -((x_new[0] - b_next) ** 2) / (2 * SIGMA**2)
+    w_new = np.exp(log_w - np.max(log_w))
+    if info is not None:
+        info["ess"] = 1.0 / np.sum(np.asarray(w) ** 2)
+        info["parents"] = k
+    return x_new, w_new / np.sum(w_new)
+
+
+def beta_crb(dynamics: Dynamics, x0: Vector, t: Vector, sigma: float = SIGMA, prior_std: Vector = PRIOR_STD) -> Vector:
+    """The Cramer-Rao bound of beta [kg/(m s^2)] after the readings b_1..b_j, for every t_j (shape (len(t),)).
+
+    The noise-free model x' = f(x) (``dynamics``) from x0 makes the altitudes h_j(x0) a function of the
+    initial state; their sensitivities s_j = dh_j / dx0 (central differences of tight ODE solves) give
+    the Fisher information of the readings, J_j = C^-1 + sum_{i=1..j} s_i s_i^T / sigma^2, with the
+    prior covariance C = diag(prior_std^2) standing for what is known at t_0. The bound on the standard
+    deviation of any unbiased estimate of beta is sqrt([J_j^-1]_33); it is evaluated along the true
+    trajectory (x0 = the truth), and it knows nothing of the filter's artificial process noise.
+    """
+    from scipy.integrate import solve_ivp
+
+    t = np.asarray(t, dtype=float)
+    x0 = np.asarray(x0, dtype=float)
+    step = np.array([1.0, 0.1, 1.0])  # difference steps in h0 [m], v0 [m/s], beta [kg/(m s^2)]
+
+    def altitudes(start: Vector) -> Vector:
+        solution = solve_ivp(dynamics, (t[0], t[-1]), start, method="DOP853", t_eval=t, rtol=1e-12, atol=1e-9)
+        return solution.y[0]
+
+    # s_j = dh_j / dx0, one column per component of x0: (h(x0 + d e_i) - h(x0 - d e_i)) / (2 d)
+    S = np.column_stack([(altitudes(x0 + d * e) - altitudes(x0 - d * e)) / (2 * d) for d, e in zip(step, np.eye(3))])
+    S[0] = 0.0  # b_0 is already in the prior (h_init = b_0)
+    # J_j = C^-1 + sum_{i <= j} s_i s_i^T / sigma^2, for every j at once
+    J = np.diag(1.0 / np.asarray(prior_std) ** 2) + np.cumsum(S[:, :, None] * S[:, None, :], axis=0) / sigma**2
+    # [J^-1]_33 by solving J y = e_3
+    return np.sqrt(np.linalg.solve(J, np.broadcast_to([0.0, 0.0, 1.0], (t.shape[0], 3))[..., None])[:, 2, 0])
+
+
 # =============================================================================================
 # The filter's history
 # =============================================================================================
+HISTORY_FIELDS: tuple[str, ...] = ("mean", "median", "lo50", "hi50", "lo90", "hi90", "ess", "ess_resample", "parents", "roots")
+"""The fields of a FilterHistory that a run fills in."""
+
+
 @dataclass
 class FilterHistory:
     """What the particle filter reports at every reading time t_j, j = 0..T.
@@ -116,10 +297,15 @@ class FilterHistory:
     Rows of every (3, T + 1) array are h [m], v [m/s] and beta [kg/(m s^2)]:
 
     - ``mean``: the weighted mean of the particles, sum_l w_l x_l;
-    - ``median``: the median of the particle values;
-    - ``lo50``, ``hi50`` and ``lo90``, ``hi90``: the 50% and 90% credibility intervals by the
-      handout's sorted-sample rule;
-    - ``ess`` (T + 1,): the effective sample size 1 / sum_l w_l^2 of the weights.
+    - ``median``: the weighted median of the particle values;
+    - ``lo50``, ``hi50`` and ``lo90``, ``hi90``: the weighted 50% and 90% credibility intervals;
+    - ``ess`` (T + 1,): the effective sample size 1 / sum_l w_l^2 of the weights after the step;
+    - ``ess_resample`` (T + 1,): the effective sample size of the weights the step resampled with
+      (the fitness weights of the auxiliary filter, the previous weights of the bootstrap filter);
+    - ``parents`` (T + 1,): the number of distinct parents the resampling drew;
+    - ``roots`` (T + 1,): the number of particles of t_0 that still have descendants.
+
+    At t_0 nothing has been resampled: ``ess_resample``, ``parents`` and ``roots`` are N there.
 
     ``FilterHistory.empty(n)`` makes one filled with NaN, for a run to fill in.
     """
@@ -131,6 +317,9 @@ class FilterHistory:
     lo90: Matrix
     hi90: Matrix
     ess: Vector
+    ess_resample: Vector
+    parents: Vector
+    roots: Vector
     n_particles: int = field(default=0)
 
     @classmethod
@@ -148,6 +337,9 @@ class FilterHistory:
             lo90=nan(3, n_times),
             hi90=nan(3, n_times),
             ess=nan(n_times),
+            ess_resample=nan(n_times),
+            parents=nan(n_times),
+            roots=nan(n_times),
             n_particles=n_particles,
         )
 
@@ -157,8 +349,12 @@ class FilterHistory:
 
     def missing(self) -> list[str]:
         """Names of the fields that still hold NaN (not filled in at every time)."""
-        names = ("mean", "median", "lo50", "hi50", "lo90", "hi90", "ess")
-        return [name for name in names if not np.all(np.isfinite(getattr(self, name)))]
+        return [name for name in HISTORY_FIELDS if not np.all(np.isfinite(getattr(self, name)))]
+
+
+def history_is_per_variable(name: str) -> bool:
+    """Whether a FilterHistory field has one row per state variable, (3, T + 1), or is (T + 1,)."""
+    return name in ("mean", "median", "lo50", "hi50", "lo90", "hi90")
 
 
 def check_history(history: object, n_times: int, n_particles: int) -> None:
@@ -170,9 +366,9 @@ def check_history(history: object, n_times: int, n_particles: int) -> None:
             f"run_particle_filter should return a FilterHistory (FilterHistory.empty(len(b), N), filled in), "
             f"not {type(history).__name__}."
         )
-    for name in ("mean", "median", "lo50", "hi50", "lo90", "hi90", "ess"):
+    for name in HISTORY_FIELDS:
         value = np.asarray(getattr(history, name))
-        shape = (n_times,) if name == "ess" else (3, n_times)
+        shape = (3, n_times) if history_is_per_variable(name) else (n_times,)
         if value.shape != shape:
             raise AssertionError(f"history.{name} should have shape {shape}, one column per reading; it has {value.shape}.")
         if not np.all(np.isfinite(value)):
@@ -186,10 +382,17 @@ def check_history(history: object, n_times: int, n_particles: int) -> None:
                 f"history.{labels[k]} exceeds history.{labels[k + 1]} somewhere: the 90% band should contain the 50% "
                 "band, which contains the median. Did you sort the samples, and use p = 50 and p = 90 the right way round?"
             )
-    if np.any(history.ess < 1 - 1e-9) or np.any(history.ess > n_particles * (1 + 1e-9)):
+    for name in ("ess", "ess_resample", "parents", "roots"):
+        value = getattr(history, name)
+        if np.any(value < 1 - 1e-9) or np.any(value > n_particles * (1 + 1e-9)):
+            raise AssertionError(
+                f"history.{name} should lie between 1 and N = {n_particles}; it ranges from {np.min(value):.3g} to "
+                f"{np.max(value):.3g}. ESS = 1 / sum_l w_l^2 with normalised weights; parents and roots count distinct indices."
+            )
+    if np.any(np.diff(history.roots) > 0):
         raise AssertionError(
-            f"The effective sample size should lie between 1 and N = {n_particles}; it ranges from "
-            f"{np.min(history.ess):.3g} to {np.max(history.ess):.3g}. ESS = 1 / sum_l w_l^2 with normalised weights."
+            "history.roots grows somewhere: a particle of t_0 that has lost all its descendants cannot get them back. "
+            "Follow root = root[info['parents']] after every step."
         )
 
 
@@ -244,9 +447,11 @@ def print_report(data: RadarData, history: FilterHistory) -> None:
     print(format_report(data, history))
 
 
-def plot_tracking(data: RadarData, history: FilterHistory, title: str = "") -> NDArray[np.object_]:
-    """The show and tell: h, v and beta against time with the truth, weighted mean, median and
-    the 50% and 90% credibility bands.
+def plot_tracking(data: RadarData, history: FilterHistory, title: str = "", crb: Vector | None = None) -> NDArray[np.object_]:
+    """The show and tell: h, v and beta against time with the truth, weighted mean, weighted
+    median and the 50% and 90% credibility bands. With ``crb`` (the Cramer-Rao bound of beta at
+    every t_j, from beta_crb), the beta panels also show the truth +- 1.645 crb: the narrowest
+    90% band an unbiased estimate could have.
 
     Altitude and speed change by tens of kilometres and kilometres per second, while the bands
     are a few hundred metres wide, so the top row shows the values and the bottom row shows
@@ -268,6 +473,11 @@ def plot_tracking(data: RadarData, history: FilterHistory, title: str = "") -> N
             ax.plot(t, history.mean[i] - offset, color="C3", lw=1.3, label="weighted mean")
             ax.plot(t, history.median[i] - offset, color="C1", lw=1.1, ls="--", label="median")
             ax.grid(alpha=0.3)
+        if i == 2 and crb is not None:
+            for row, offset in ((0, 0.0), (1, data.x_true[2])):
+                for sign in (-1, 1):
+                    axes[row, 2].plot(t, data.x_true[2] - offset + sign * Z90 * crb, color="C4", lw=1.4, ls=":",
+                                      label=r"truth $\pm$ 1.645 $\times$ Cramér–Rao bound" if sign < 0 else None)
         axes[0, i].set_title(f"{name}: estimate and truth")
         axes[0, i].set_ylabel(label)
         axes[1, i].set_title(f"{name} minus the truth")
@@ -275,52 +485,90 @@ def plot_tracking(data: RadarData, history: FilterHistory, title: str = "") -> N
         axes[1, i].set_xlabel("time t [s]")
     axes[1, 0].set_ylim(-4 * data.sigma, 4 * data.sigma)
     axes[0, 0].legend(loc="upper right", fontsize=8)
-    axes[1, 2].legend(loc="upper right", fontsize=8)
+    axes[1, 2].legend(loc="upper left", bbox_to_anchor=(1.02, 1.0), fontsize=8)
     n = f", N = {history.n_particles} particles" if history.n_particles else ""
     fig.suptitle(title or f"Particle filter tracking of the falling object{n}")
     return axes
 
 
-def plot_ess(data: RadarData, history: FilterHistory, ax: Axes | None = None) -> Axes:
-    """The effective sample size 1 / sum w^2 of the filter's weights against time."""
+def plot_health(data: RadarData, histories: Mapping[str, FilterHistory]) -> NDArray[np.object_]:
+    """The health of the resampling, one curve per run: the effective sample size of the weights
+    each step resampled with, the number of distinct parents each resampling drew, and the number
+    of particles of t_0 that still have descendants (log scale). Returns the 3 Axes."""
     import matplotlib.pyplot as plt
 
-    _require_complete(history, data.t.shape[0])
-    if ax is None:
-        _, ax = plt.subplots(figsize=(8, 3.5), layout="constrained")
-    ax.plot(data.t, history.ess, color="C2", lw=1.4, label="effective sample size")
-    if history.n_particles:
-        ax.axhline(history.n_particles, color="k", lw=0.8, ls=":", label=f"N = {history.n_particles}")
-        ax.set_ylim(0, 1.05 * history.n_particles)
-    else:
-        ax.set_ylim(bottom=0)
-    ax.set_xlabel("time t [s]")
-    ax.set_ylabel("ESS = 1 / $\\sum_\\ell w_\\ell^2$ [particles]")
-    ax.set_title("Effective sample size of the weights after each step")
-    ax.grid(alpha=0.3)
-    ax.legend(loc="lower left")
-    return ax
-
-
-def plot_band_widths(data: RadarData, histories: Mapping[str, FilterHistory], ax: Axes | None = None) -> Axes:
-    """The width of the 90% credibility band of beta against time, one curve per run.
-
-    ``histories`` maps a label (for example "N = 5000") to a run's FilterHistory. The prior's
-    90% band, 2 x 1.645 x 1500 = 4935, is drawn for comparison.
-    """
-    import matplotlib.pyplot as plt
-
-    if ax is None:
-        _, ax = plt.subplots(figsize=(8, 3.8), layout="constrained")
-    for label, history in histories.items():
+    fig, axes = plt.subplots(1, 3, figsize=(15, 4), layout="constrained")
+    for (label, history), colour in zip(histories.items(), ("C0", "C3", "C2", "C1")):
         _require_complete(history, data.t.shape[0])
-        ax.plot(data.t, history.hi90[2] - history.lo90[2], lw=1.4, label=label)
-    prior = 2 * 1.6448536269514722 * PRIOR_STD[2]
-    ax.axhline(prior, color="k", lw=0.8, ls=":", label=f"prior 90% band ({prior:.0f})")
+        axes[0].plot(data.t[1:], history.ess_resample[1:], color=colour, lw=1.2, label=label)
+        axes[1].plot(data.t[1:], history.parents[1:], color=colour, lw=1.2, label=label)
+        axes[2].semilogy(data.t, history.roots, color=colour, lw=1.4, label=label)
+    titles = ("ESS of the weights used to resample", "Distinct parents drawn by each resampling",
+              "Particles of $t_0$ with descendants left")
+    ylabels = ("ESS before resampling [particles]", "distinct parents [particles]", "surviving ancestors [particles]")
+    for ax, title, ylabel in zip(axes, titles, ylabels):
+        ax.set_title(title)
+        ax.set_xlabel("time t [s]")
+        ax.set_ylabel(ylabel)
+        ax.grid(alpha=0.3)
+    for ax in axes[:2]:
+        ax.set_ylim(0, 1.05 * max(h.n_particles for h in histories.values()))
+    axes[0].legend(loc="lower left", fontsize=9)
+    fig.suptitle("Health of the particle filter: resampling weights, parents and ancestry")
+    return axes
+
+
+Z90: float = 1.6448536269514722
+"""The 95% point of the standard normal: a Gaussian's 90% band is the mean +- Z90 standard deviations."""
+
+
+def plot_band_widths(study: TuningStudy, settings: list[TuningSetting], t: Vector, crb: Vector, ax: Axes | None = None) -> Axes:
+    """The width of beta's 90% band against time over the study's seeds, one colour per setting:
+    the median over the seeds and the band from the 10th to the 90th percentile. The Cramer-Rao
+    yardstick 2 x 1.645 x crb (crb at the times t) and the prior's 90% band are drawn for comparison."""
+    import matplotlib.pyplot as plt
+
+    if ax is None:
+        _, ax = plt.subplots(figsize=(9, 4.2), layout="constrained")
+    for setting, colour in zip(settings, ("C0", "C1", "C2", "C3", "C5")):
+        widths = study.runs[setting]["width90_beta"]
+        low, mid, high = np.percentile(widths, [10, 50, 90], axis=0)
+        ax.fill_between(study.width_times, low, high, color=colour, alpha=0.2, lw=0)
+        ax.plot(study.width_times, mid, color=colour, lw=1.6, label=f"{setting.label}: median, 10-90% of {widths.shape[0]} seeds")
+    ax.plot(t, 2 * Z90 * crb, color="C4", lw=1.6, ls=":", label=r"2 $\times$ 1.645 $\times$ Cramér–Rao bound")
+    prior = 2 * Z90 * PRIOR_STD[2]
+    ax.axhline(prior, color="k", lw=0.8, ls="--", label=f"prior 90% band ({prior:.0f})")
     ax.set_ylim(bottom=0)
     ax.set_xlabel("time t [s]")
     ax.set_ylabel(r"width of the 90% band of $\beta$ [kg/(m s$^2$)]")
-    ax.set_title(r"How fast does the filter learn $\beta$? The 90% band for several N")
+    ax.set_title(r"How fast does the filter learn $\beta$? Width of the 90% band over many seeds")
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower left", fontsize=9)
+    ax.legend(loc="lower left", fontsize=8)
     return ax
+
+
+def plot_tuning(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING_SETTINGS) -> NDArray[np.object_]:
+    """Calibration of every setting: for h, v and beta, the fraction of the time the truth lies in
+    the 50% band (open circles) and the 90% band (dots), mean over the seeds with +- 2 standard
+    errors. Left of the dotted line at 50% or 90%, the bands are too narrow (over-confident);
+    right of it, too wide (under-confident). Returns the 3 Axes."""
+    import matplotlib.pyplot as plt
+
+    fig, axes = plt.subplots(1, 3, figsize=(15, 0.42 * len(settings) + 1.8), sharey=True, layout="constrained")
+    rows = np.arange(len(settings))[::-1]
+    for i, (ax, name) in enumerate(zip(axes, STATE_NAMES)):
+        for level, marker in (("50", "o"), ("90", "s")):
+            runs = [study.runs[s][f"cover{level}_{name}"] for s in settings]
+            mean = np.array([np.mean(r) for r in runs])
+            error = np.array([2 * np.std(r, ddof=1) / np.sqrt(r.shape[0]) for r in runs])
+            ax.errorbar(mean, rows, xerr=error, fmt=marker, mfc="white" if level == "50" else "C0", color="C0", ms=6,
+                        label=f"truth in the {level}% band")
+            ax.axvline(int(level) / 100, color="k", lw=0.9, ls=":")
+        ax.set_xlim(0, 1.02)
+        ax.set_xlabel(f"fraction of the time the truth of {name} is inside")
+        ax.set_title(f"{name}: coverage of the bands")
+        ax.grid(alpha=0.3, axis="x")
+    axes[0].set_yticks(rows, [s.label for s in settings], fontsize=8)
+    axes[0].legend(loc="lower left", fontsize=8)
+    fig.suptitle("Which settings are over-confident (left of the dotted lines) or under-confident (right)?")
+    return axes

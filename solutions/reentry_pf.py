@@ -10,7 +10,9 @@ Instructors: ``python -m solutions.reentry_pf`` rebuilds the shipped data from D
 
 from __future__ import annotations
 
+import functools
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import numpy as np
@@ -81,12 +83,25 @@ def initial_cloud(b0: float, N: int, rng: np.random.Generator) -> tuple[np.ndarr
     return x, w
 
 
-def pf_step(x: np.ndarray, w: np.ndarray, b_next: float, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """One step (a) to (d) of the particle filter, from t_j to t_{j+1}.
+def pf_step(
+    x: np.ndarray,
+    w: np.ndarray,
+    b_next: float,
+    rng: np.random.Generator,
+    *,
+    innovation_std: np.ndarray = INNOVATION_STD,
+    info: dict | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """One step (a) to (d) of the auxiliary particle filter, from t_j to t_{j+1}.
 
     x (3, N) and w (N,) are the cloud and its normalised weights at t_j; b_next [m] is the
-    reading b_{j+1}. Returns the new cloud (3, N) and its normalised weights (N,). Weights are
-    handled as logarithms, so a reading far from every particle underflows nothing.
+    reading b_{j+1}. innovation_std (3,) are the standard deviations D^(1/2) of the artificial
+    process noise (the handout's "innovation") in h [m], v [m/s] and beta [kg/(m s^2)]; the
+    default is the handout's (100, 100, 5). If ``info`` is a dict, the step stores in it the
+    effective sample size of the fitness weights that drive the resampling ("ess") and the
+    parents' indices k_l ("parents", (N,)). Returns the new cloud (3, N) and its normalised
+    weights (N,). Weights are handled as logarithms, so a reading far from every particle
+    underflows nothing.
     """
     N = x.shape[1]
     # (a) x^(l) = x^(l) + dt f(x^(l)): Forward Euler for every particle at once
@@ -103,59 +118,82 @@ def pf_step(x: np.ndarray, w: np.ndarray, b_next: float, rng: np.random.Generato
     cdf = np.cumsum(w_hat)
     cdf /= cdf[-1]
     k = np.searchsorted(cdf, np.sort(rng.random(N)), side="right")
-    # x_new(l) = x^(k_l) + D^(1/2) w(l),  w(l) ~ N(0, I_3),  D^(1/2) = diag(INNOVATION_STD)
-    x_new = x_hat[:, k] + INNOVATION_STD[:, None] * rng.standard_normal((3, N))
+    # x_new(l) = x^(k_l) + D^(1/2) w(l),  w(l) ~ N(0, I_3),  D^(1/2) = diag(innovation_std)
+    x_new = x_hat[:, k] + np.asarray(innovation_std)[:, None] * rng.standard_normal((3, N))
     # (d) log w(l) = -(|x_new_1(l) - b_{j+1}|^2 - |x^_1(k_l) - b_{j+1}|^2) / (2 sigma^2),
     #     with x^_1(k_l) the propagated parent before the innovation
     log_w = -((x_new[0] - b_next) ** 2 - (x_hat[0, k] - b_next) ** 2) / (2 * SIGMA**2)
     # w(l) = w(l) / sum w
     w_new = np.exp(log_w - np.max(log_w))
+    if info is not None:
+        # diagnostics: ESS = 1 / sum w^2 of the resampling weights, and the parents k_l
+        info["ess"] = 1.0 / np.sum(w_hat**2)
+        info["parents"] = k
     return x_new, w_new / np.sum(w_new)
 
 
-def credibility_interval(samples: np.ndarray, p: float) -> tuple[np.ndarray, np.ndarray]:
-    """The p% credibility interval [lo, hi] of the samples (N,), p in percent, by the handout's
-    sorted-sample rule. (Written with ``...`` indexing, it also takes (k, N): one interval per row.)
+def credibility_interval(samples: np.ndarray, weights: np.ndarray, p: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The central p% credibility interval [lo, hi] of weighted samples, p in percent.
 
-    The handout's 1-based index i is Python's index i - 1 in the sorted samples. The rule is
-    evaluated in floating point, as MATLAB evaluates it: where (1 -+ p/100)(N/2) is a half in exact
-    arithmetic but lands just below it in floating point (N = 10, p = 90), it rounds down.
+    samples (N,) and weights (N,) (non-negative, not all zero) describe one variable of the
+    cloud; p is a number or an array of numbers in [0, 100], and lo, hi have its shape. The
+    interval runs between the weighted quantiles of orders (1 - p/100)/2 and (1 + p/100)/2,
+    where the quantile of order a is the smallest sample whose cumulative weight, in sorted
+    order, reaches a. p = 0 gives the weighted median twice.
     """
-    s = np.sort(samples, axis=-1)
-    N = s.shape[-1]
-    # i_min = [(1 - p/100)(N/2)],  i_max = [(1 + p/100)(N/2)],  [.] rounding halves away from
-    # zero as MATLAB's round does (Python's round and np.round send halves to even)
-    a_min, a_max = (1 - p / 100) * (N / 2), (1 + p / 100) * (N / 2)
-    i_min = int(np.floor(a_min) + (a_min - np.floor(a_min) >= 0.5))
-    i_max = int(np.floor(a_max) + (a_max - np.floor(a_max) >= 0.5))
-    # clamp to the valid 1-based indices 1..N
-    i_min, i_max = min(max(i_min, 1), N), min(max(i_max, 1), N)
-    # [h_(i_min), h_(i_max)]: 1-based index i is Python's i - 1
-    return s[..., i_min - 1], s[..., i_max - 1]
+    order = np.argsort(samples)
+    s = samples[order]
+    # F_i = sum of the weights of the i smallest samples, normalised so that F_N = 1
+    cdf = np.cumsum(weights[order])
+    cdf /= cdf[-1]
+    # orders of the lower and upper quantiles: (1 -+ p/100) / 2
+    a_lo, a_hi = 0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200
+    # q(a) = s_i with the smallest i such that F_i >= a (clamped to the last sample)
+    last = s.shape[0] - 1
+    return s[np.minimum(np.searchsorted(cdf, a_lo), last)], s[np.minimum(np.searchsorted(cdf, a_hi), last)]
 
 
-def run_particle_filter(b: np.ndarray, N: int, rng: np.random.Generator) -> FilterHistory:
-    """Run the particle filter with N particles over the readings b (T + 1,) [m].
+def run_particle_filter(
+    b: np.ndarray,
+    N: int,
+    rng: np.random.Generator,
+    *,
+    step: Callable | None = None,
+    innovation_std: np.ndarray = INNOVATION_STD,
+) -> FilterHistory:
+    """Run a particle filter with N particles over the readings b (T + 1,) [m].
 
-    At every t_j it records the weighted mean, the median, the 50% and 90% credibility
-    intervals of h, v and beta, and the effective sample size, in a FilterHistory.
+    ``step`` is the filter step (default: pf_step, the auxiliary particle filter); it is called
+    as step(x, w, b_j, rng, innovation_std=innovation_std, info=info). At every t_j the run
+    records the weighted mean, the weighted median, the weighted 50% and 90% credibility
+    intervals of h, v and beta, the effective sample size of the weights, and the health of
+    the resampling: the ESS of the weights it used, its number of distinct parents, and the
+    number of distinct particles of t_0 that still have descendants.
     """
+    step = pf_step if step is None else step
     history = FilterHistory.empty(len(b), N)
     # the prior cloud at t_0 is centred on the first reading, h_init = b_0
     x, w = initial_cloud(b[0], N, rng)
+    # root(l): the particle of t_0 that particle l descends from
+    root = np.arange(N)
+    info: dict = {"ess": float(N), "parents": root}
     for j in range(len(b)):
         if j > 0:
-            # steps (a)-(e) from t_{j-1} to t_j, with the reading b_j
-            x, w = pf_step(x, w, b[j], rng)
+            # one step from t_{j-1} to t_j, with the reading b_j
+            x, w = step(x, w, b[j], rng, innovation_std=innovation_std, info=info)
+            root = root[info["parents"]]
         # weighted mean sum_l w(l) x(l)
         history.mean[:, j] = x @ w
-        history.median[:, j] = np.median(x, axis=1)
         for i in range(3):
-            # p% credibility intervals of h, v and beta by the sorted-sample rule
-            history.lo50[i, j], history.hi50[i, j] = credibility_interval(x[i], 50)
-            history.lo90[i, j], history.hi90[i, j] = credibility_interval(x[i], 90)
+            # weighted median (p = 0) and the weighted 50% and 90% credibility intervals
+            lo, hi = credibility_interval(x[i], w, np.array([0.0, 50.0, 90.0]))
+            history.median[i, j], history.lo50[i, j], history.hi50[i, j] = lo[0], lo[1], hi[1]
+            history.lo90[i, j], history.hi90[i, j] = lo[2], hi[2]
         # ESS = 1 / sum_l w(l)^2
         history.ess[j] = 1.0 / np.sum(w**2)
+        history.ess_resample[j] = info["ess"]
+        history.parents[j] = np.unique(info["parents"]).size
+        history.roots[j] = np.unique(root).size
     return history
 
 
@@ -167,12 +205,48 @@ def radar_data_text(seed: int = DATA_SEED) -> str:
     return falling_object.format_radar_csv(t, x_true, b)
 
 
+def tuning_runs(seeds: range = range(falling_object.TUNING_SEEDS)) -> list[dict]:
+    """The tuning study: every setting of falling_object.TUNING_SETTINGS, filter and N, on ``seeds``.
+
+    Seed s simulates fresh readings of the lab's truth (np.random.default_rng([s, 1])) and runs
+    the filter with np.random.default_rng([s, 2]); every setting sees the same readings. One row
+    per run: the setting, the RMSE of the weighted mean of h, v and beta over t_1..t_T, the
+    fraction of t_1..t_T at which the truth lies in the 50% and 90% bands, the width of the
+    90% band of beta at every t_j, the number of roots left at the end, and the lower end of the
+    90% interval of v at the end.
+    """
+    t = falling_object.time_grid()
+    rows = []
+    for seed in seeds:
+        x_true, b = simulate_radar(falling_object.X0_TRUE, t, SIGMA, np.random.default_rng([seed, 1]))
+        for setting in falling_object.TUNING_SETTINGS:
+            step = None if setting.filter == "auxiliary" else functools.partial(falling_object.bootstrap_step, dynamics=tracking_dynamics)
+            history = run_particle_filter(
+                b, setting.N, np.random.default_rng([seed, 2]), step=step, innovation_std=np.array(setting.innovation_std)
+            )
+            x, j = x_true[:, 1:], slice(1, None)
+            rows.append({
+                "setting": setting,
+                "seed": seed,
+                "rmse": np.sqrt(np.mean((history.mean[:, j] - x) ** 2, axis=1)),
+                "cover50": np.mean((history.lo50[:, j] <= x) & (x <= history.hi50[:, j]), axis=1),
+                "cover90": np.mean((history.lo90[:, j] <= x) & (x <= history.hi90[:, j]), axis=1),
+                "width90_beta": history.hi90[2] - history.lo90[2],
+                "roots": history.roots[-1],
+                "lo90_v_end": history.lo90[1, -1],
+            })
+    return rows
+
+
 def write_data(directory: str | Path | None = None, seed: int = DATA_SEED) -> list[Path]:
-    """Build the shipped radar data from ``seed`` into ``directory`` (default course/data/)."""
+    """Build the shipped radar data from ``seed``, and the tuning study, into ``directory``
+    (default course/data/)."""
     folder = falling_object.DATA_FILE.parent if directory is None else Path(directory)
     path = folder / falling_object.DATA_FILE.name
     path.write_text(radar_data_text(seed))
-    return [path]
+    tuning = folder / falling_object.TUNING_FILE.name
+    tuning.write_text(falling_object.format_tuning_csv(tuning_runs()))
+    return [path, tuning]
 
 
 if __name__ == "__main__":  # pragma: no cover

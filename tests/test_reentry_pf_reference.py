@@ -103,10 +103,11 @@ def test_readings_are_the_truth_plus_one_seeded_draw():
     np.testing.assert_allclose(b - x_true[0], 250.0 * e, rtol=1e-9, atol=1e-8)
 
 
-def test_shipped_data_is_rebuilt_byte_for_byte(tmp_path):
-    [written] = ref.write_data(tmp_path)
-    assert written.name == fo.DATA_FILE.name
-    assert written.read_bytes() == fo.DATA_FILE.read_bytes()
+def test_shipped_data_is_rebuilt_byte_for_byte():
+    assert ref.radar_data_text() == fo.DATA_FILE.read_text()
+    # the tuning study takes minutes to rebuild (python -m autograder data --check does it); its first seed here
+    first = fo.format_tuning_csv(ref.tuning_runs(range(1))).splitlines()
+    assert first == fo.TUNING_FILE.read_text().splitlines()[: len(first)]
 
 
 def test_shipped_data_is_the_lab_case():
@@ -139,50 +140,59 @@ def test_initial_cloud_moments():
 
 
 # --- credibility_interval ---------------------------------------------------------------------
-def exact_interval(samples: np.ndarray, p: int) -> tuple[float, float]:
-    """Oracle: exact rational arithmetic, halves away from zero, 1-based list indexing."""
-    h = [None] + sorted(samples.tolist())  # h[1] <= h[2] <= ... <= h[N]
-    N = len(samples)
+def exact_weighted_quantile(samples: np.ndarray, weights: np.ndarray, a: Fraction) -> float:
+    """Oracle: walk up the sorted samples in exact rational arithmetic of the weights until the
+    cumulative weight reaches the fraction a of the total."""
+    pairs = sorted(zip(samples.tolist(), (Fraction(x) for x in weights.tolist())))
+    total = sum(w for _, w in pairs)
+    cumulative = Fraction(0)
+    for value, weight in pairs:
+        cumulative += weight
+        if cumulative >= a * total:
+            return value
+    return pairs[-1][0]
 
-    def matlab_round(value: Fraction) -> int:
-        return math.floor(value + Fraction(1, 2))  # value >= 0
 
-    i_min = min(max(matlab_round((1 - Fraction(p, 100)) * Fraction(N, 2)), 1), N)
-    i_max = min(max(matlab_round((1 + Fraction(p, 100)) * Fraction(N, 2)), 1), N)
-    return h[i_min], h[i_max]
-
-
-def test_credibility_interval_matches_the_exact_oracle():
+def test_credibility_interval_matches_the_exact_weighted_oracle():
     rng = np.random.default_rng(8)
     checked = 0
-    for N in [1, 2, 3, 4, 5, 10, 11, 20, 99, 100, 1000, 5000, *rng.integers(6, 3000, 40)]:
+    for N in [1, 2, 3, 5, 10, 99, 1000, *rng.integers(6, 3000, 20)]:
         samples = rng.standard_normal(int(N))
+        weights = rng.dirichlet(np.full(int(N), 0.5)) if N > 1 else np.ones(1)
         for p in [0, 1, 25, 50, 68, 90, 95, 99, 100]:
-            if checks.float_rule_is_exact(int(N), p):
-                assert ref.credibility_interval(samples, p) == exact_interval(samples, p), (N, p)
-                checked += 1
-    assert checked > 400
+            lo, hi = ref.credibility_interval(samples, weights, p)
+            # the orders (1 -+ p/100)/2 as exact fractions: random weights put no cumulative weight on them
+            assert lo == exact_weighted_quantile(samples, weights, Fraction(100 - p, 200)), (N, p)
+            assert hi == exact_weighted_quantile(samples, weights, Fraction(100 + p, 200)), (N, p)
+            checked += 1
+    assert checked > 200
 
 
-def test_credibility_interval_rounds_halves_away_from_zero():
-    samples = np.arange(10.0)[::-1]  # 9, 8, ..., 0: sorted 0..9, so h_i = i - 1
-    # i_min = [0.5 x 5] = [2.5] = 3, i_max = [1.5 x 5] = [7.5] = 8 (Python's round gives 2 and 8)
-    assert ref.credibility_interval(samples, 50) == (2.0, 7.0)
-    # N = 5, p = 80: i_min = [0.5] -> 1 in exact arithmetic; the float formula gives 0.4999... -> 0,
-    # clamped to 1: both readings agree here
-    assert ref.credibility_interval(np.arange(5.0), 80) == (0.0, 4.0)
-    # p = 100 and N = 1: indices clamped to 1..N
-    assert ref.credibility_interval(np.array([3.0, 1.0, 2.0]), 100) == (1.0, 3.0)
-    assert ref.credibility_interval(np.array([4.2]), 90) == (4.2, 4.2)
+def test_credibility_interval_hand_cases_and_arrays_of_p():
+    samples = np.array([4.0, 1.0, 3.0, 2.0])
+    # equal weights: cumulative 0.25, 0.5, 0.75, 1 over 1, 2, 3, 4; the median (order 0.5) is 2
+    assert ref.credibility_interval(samples, np.ones(4), 0) == (2.0, 2.0)
+    # all the weight on 3: every quantile is 3
+    assert ref.credibility_interval(samples, np.array([0.0, 0.0, 1.0, 0.0]), 90) == (3.0, 3.0)
+    # weights 0.1 (1), 0.1 (2), 0.7 (3), 0.1 (4): the 50% interval runs from order 0.25 (3) to 0.75 (3)
+    lo, hi = ref.credibility_interval(samples, np.array([0.1, 0.1, 0.7, 0.1]), np.array([50.0, 90.0, 100.0]))
+    np.testing.assert_array_equal(lo, [3.0, 1.0, 1.0])
+    np.testing.assert_array_equal(hi, [3.0, 4.0, 4.0])
+    # unnormalised weights give the same interval as normalised ones
+    w = np.random.default_rng(1).random(500)
+    x = np.random.default_rng(2).standard_normal(500)
+    assert ref.credibility_interval(x, w, 90) == ref.credibility_interval(x, 7.5 * w, 90)
 
 
-def test_hidden_interval_cases_avoid_float_ambiguity_but_keep_halves():
-    ambiguous = [(N, p) for N in range(1, 200) for p in range(101) if not checks.float_rule_is_exact(N, p)]
-    assert (10, 90) in ambiguous and (5, 80) in ambiguous  # exact halves that floating point misses
-    cases = checks.credibility_cases()
-    assert all(checks.float_rule_is_exact(N, p) for N, p in cases)
-    halves = [(N, p) for N, p in cases if round((1 - p / 100) * N / 2) != math.floor((1 - p / 100) * N / 2 + 0.5)]
-    assert len(halves) >= 2  # where Python's round (halves to even) and MATLAB's differ
+def test_weighted_interval_of_a_weighted_sample_covers_its_target():
+    # importance sampling: N(0, 1) samples weighted by N(1, 1)/N(0, 1) describe N(1, 1), whose central
+    # 90% interval is 1 -+ 1.645. The weights' ESS is N/e = 73600, so each quantile's standard error
+    # is about sqrt(0.05 x 0.95 / 73600) / phi(1.645) = 0.008; the tolerance 0.05 is 6.2 standard
+    # errors, exceeded by a correct function with probability below 1e-9 (two quantiles, two sides).
+    rng = np.random.default_rng(3)
+    x = rng.standard_normal(200_000)
+    lo, hi = ref.credibility_interval(x, np.exp(x - 0.5), 90)
+    assert abs(lo - (1 - 1.6449)) < 0.05 and abs(hi - (1 + 1.6449)) < 0.05
 
 
 def test_hidden_radar_cases_stay_well_above_the_ground():
@@ -191,22 +201,14 @@ def test_hidden_radar_cases_stay_well_above_the_ground():
         assert x_true[0].min() > 1_000.0 and t[0] > 0
 
 
-def test_credibility_interval_of_rows():
-    x = np.random.default_rng(9).standard_normal((3, 501))
-    lo, hi = ref.credibility_interval(x, 90)
-    assert lo.shape == hi.shape == (3,)
-    for i in range(3):
-        assert (lo[i], hi[i]) == exact_interval(x[i], 90)
-
-
 # --- the statistical checks of pf_step ---------------------------------------------------------
 def test_false_fail_budget_is_at_most_one_in_a_million():
     assert checks.FALSE_FAIL_TOTAL <= 1e-6
     assert checks.resampling_threshold() == pytest.approx(-2 * math.log(checks.RESAMPLING_NOMINAL_TAIL))
     lower, upper, z_max = checks.innovation_bounds(11_999)
-    a = checks.ALPHA_INNOVATION / 12
+    a = checks.ALPHA_INNOVATION / 24
     assert stats.chi2.cdf(lower, 11_999) == pytest.approx(a) and stats.chi2.sf(upper, 11_999) == pytest.approx(a)
-    assert 12 * a == pytest.approx(checks.ALPHA_INNOVATION) and stats.norm.sf(z_max) == pytest.approx(a)
+    assert 24 * a == pytest.approx(checks.ALPHA_INNOVATION) and stats.norm.sf(z_max) == pytest.approx(a)
     R = checks.POSTERIOR_RUNS
     assert 2 * stats.t.sf(checks.posterior_threshold(), R - 1) == pytest.approx(checks.ALPHA_POSTERIOR)
 
@@ -351,23 +353,85 @@ def test_run_reproduces_a_hand_written_loop():
     history = ref.run_particle_filter(b, 300, np.random.default_rng(4))
     rng = np.random.default_rng(4)
     x, w = ref.initial_cloud(b[0], 300, rng)
+    root = np.arange(300)
     for j in range(1, 21):
-        x, w = ref.pf_step(x, w, b[j], rng)
+        info = {}
+        x, w = ref.pf_step(x, w, b[j], rng, info=info)
+        root = root[info["parents"]]
+    assert history.roots[-1] == len(set(root.tolist())) and history.parents[-1] == len(set(info["parents"].tolist()))
+    assert history.ess_resample[-1] == pytest.approx(info["ess"]) and history.roots[0] == 300
     np.testing.assert_allclose(history.mean[:, -1], np.sum(w * x, axis=1), rtol=1e-12)
-    np.testing.assert_allclose(history.median[:, -1], np.median(x, axis=1))
     np.testing.assert_allclose(history.ess[-1], 1 / np.sum(w**2))
-    lo, hi = (np.sort(x, axis=1)[:, i - 1] for i in (round(0.05 * 300), round(0.95 * 300)))
-    np.testing.assert_array_equal(history.lo90[:, -1], lo)
-    np.testing.assert_array_equal(history.hi90[:, -1], hi)
+    for i in range(3):
+        assert history.median[i, -1] == exact_weighted_quantile(x[i], w, Fraction(1, 2))
+        assert history.lo90[i, -1] == exact_weighted_quantile(x[i], w, Fraction(1, 20))
+        assert history.hi90[i, -1] == exact_weighted_quantile(x[i], w, Fraction(19, 20))
 
 
-def test_lab_beta_panel_narrows_and_keeps_the_truth_in_the_90_band(lab_run):
-    data, history = lab_run
-    beta = 19_161.0
-    assert np.all((history.lo90[2] <= beta) & (beta <= history.hi90[2]))
-    for lo, hi in ((history.lo90[2], history.hi90[2]), (history.lo50[2], history.hi50[2])):
-        width = hi - lo
-        assert np.mean(width[-30:]) < 0.75 * np.mean(width[:30])
+def test_bootstrap_step_is_a_bootstrap_filter():
+    # the given step resamples with the old weights, propagates, and weighs by the likelihood alone:
+    # with all the weight on one particle, every parent is that particle
+    x, _ = ref.initial_cloud(60_000.0, 400, np.random.default_rng(5))
+    w = np.zeros(400)
+    w[17] = 1.0
+    info = {}
+    x_new, w_new = fo.bootstrap_step(x, w, 59_700.0, np.random.default_rng(6), ref.tracking_dynamics, info=info)
+    assert np.all(info["parents"] == 17) and info["ess"] == pytest.approx(1.0)
+    log_w = -((x_new[0] - 59_700.0) ** 2) / (2 * fo.SIGMA**2)
+    np.testing.assert_allclose(w_new, np.exp(log_w) / np.exp(log_w).sum(), rtol=1e-9)
+    # the spread around the propagated parent is the artificial noise (400 draws: within 25%, over 7 sigma)
+    parent = x[:, 17] + fo.DT * ref.tracking_dynamics(0.0, x[:, 17])
+    assert np.all(np.abs(np.std(x_new - parent[:, None], axis=1) / fo.INNOVATION_STD - 1) < 0.25)
+
+
+def test_beta_crb_matches_a_variational_solve():
+    # oracle: the sensitivities dh/dx0 from the variational equations S' = (df/dx) S, S(0) = I
+    t = fo.time_grid()
+
+    def rhs(_t, y):
+        h, v, beta = y[:3]
+        rho = 1.754 * math.exp(-1.39e-4 * h)
+        A = np.array([[0.0, -1.0, 0.0],
+                      [9.81 * 1.39e-4 * rho * v * v / (2 * beta), -9.81 * rho * v / beta, 9.81 * rho * v * v / (2 * beta**2)],
+                      [0.0, 0.0, 0.0]])
+        return np.concatenate([scalar_rhs(h, v, beta), (A @ y[3:].reshape(3, 3)).ravel()])
+
+    y = solve_ivp(rhs, (0, 30), np.concatenate([fo.X0_TRUE, np.eye(3).ravel()]), t_eval=t, rtol=1e-11, atol=1e-11).y
+    S = y[3:6].T  # dh_j / dx0, (T + 1, 3)
+    J = np.diag(1 / fo.PRIOR_STD**2) + S[1:].T @ S[1:] / fo.SIGMA**2
+    crb = fo.beta_crb(ref.tracking_dynamics, fo.X0_TRUE, t)
+    assert crb[0] == pytest.approx(fo.PRIOR_STD[2])
+    assert crb[-1] == pytest.approx(math.sqrt(np.linalg.inv(J)[2, 2]), rel=1e-5)
+    assert np.all(np.diff(crb) <= 1e-9)  # information only accumulates
+
+
+BAND_SEEDS = range(100, 120)  # fresh seeds, outside the tuning study's 0..49
+
+
+@pytest.fixture(scope="module")
+def handout_runs():
+    """20 runs of the handout's setting, N = 2000, each on its own simulated readings."""
+    t = fo.time_grid()
+    runs = []
+    for seed in BAND_SEEDS:
+        x_true, b = ref.simulate_radar(fo.X0_TRUE, t, fo.SIGMA, np.random.default_rng([seed, 1]))
+        runs.append((x_true, ref.run_particle_filter(b, 2000, np.random.default_rng([seed, 2]))))
+    return runs
+
+
+def test_handout_setting_over_seeds_wide_beta_band_collapsed_ancestry_upward_v(handout_runs):
+    # What holds for the handout's setting run by run (the old test asserted a narrowing beta band on one
+    # pinned seed; over seeds the band does not reliably narrow). Three properties, each held in 50 of 50
+    # runs of the tuning study (N = 2000): at 30 s the beta band is wider than the Cramer-Rao yardstick,
+    # fewer than 30 particles of t_0 have descendants, and the 90% interval of v reaches below 0. Each
+    # must hold in at least 12 of 20 fresh runs. If a property's per-run rate is at least 0.95, failing
+    # that needs 9 or more misses of 20: binomial tail 2.0e-7, so 6e-7 for the three together.
+    yardstick = 2 * fo.Z90 * fo.beta_crb(ref.tracking_dynamics, fo.X0_TRUE, fo.time_grid())[-1]
+    wide = [h.hi90[2, -1] - h.lo90[2, -1] > yardstick for _, h in handout_runs]
+    collapsed = [h.roots[-1] < 30 for _, h in handout_runs]
+    upward = [h.lo90[1, -1] < 0 for _, h in handout_runs]
+    for name, held in (("wide beta band", wide), ("collapsed ancestry", collapsed), ("v interval below 0", upward)):
+        assert sum(held) >= 12, (name, held)
 
 
 def test_figures_and_report_draw(lab_run):
@@ -377,14 +441,28 @@ def test_figures_and_report_draw(lab_run):
     import matplotlib.pyplot as plt
 
     data, history = lab_run
-    axes = fo.plot_tracking(data, history)
+    crb = fo.beta_crb(ref.tracking_dynamics, fo.X0_TRUE, data.t)
+    axes = fo.plot_tracking(data, history, crb=crb)
     assert axes.shape == (2, 3) and all(ax.get_xlabel() == "time t [s]" for ax in axes[1])
-    ax = fo.plot_ess(data, history)
-    assert ax.get_ylabel().startswith("ESS")
-    ax = fo.plot_band_widths(data, {"N = 5000": history})
-    assert len(ax.get_lines()) == 2
+    axes = fo.plot_health(data, {"auxiliary": history})
+    assert axes[0].get_ylabel().startswith("ESS")
+    study = fo.load_tuning()
+    handout = [s for s in fo.TUNING_SETTINGS if s.innovation_std == fo.HANDOUT_STD and s.filter == "auxiliary"]
+    ax = fo.plot_band_widths(study, handout, data.t, crb)
+    assert len(ax.get_lines()) == len(handout) + 2
+    axes = fo.plot_tuning(study)
+    assert len(axes) == 3
     report = fo.format_report(data, history)
     assert "beta" in report and "19161" in report
+    assert "auxiliary" in fo.format_tuning_table(study)
     plt.close("all")
     with pytest.raises(ValueError, match="NaN"):
-        fo.plot_ess(data, fo.FilterHistory.empty(301))
+        fo.plot_health(data, {"empty": fo.FilterHistory.empty(301)})
+
+
+def test_tuning_study_has_every_setting_on_every_seed():
+    study = fo.load_tuning()
+    assert set(study.runs) == set(fo.TUNING_SETTINGS)
+    for run in study.runs.values():
+        assert run["rmse_h"].shape == (fo.TUNING_SEEDS,) and run["width90_beta"].shape == (fo.TUNING_SEEDS, 31)
+        assert np.all((0 <= run["cover50_h"]) & (run["cover50_h"] <= run["cover90_h"]) & (run["cover90_h"] <= 1))

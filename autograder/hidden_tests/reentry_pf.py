@@ -1,11 +1,13 @@
 """Hidden tests of the reentry-pf lab: each ``check_<blank>`` tests a student's blank against
-``solutions.reentry_pf``, with every other blank bound to the reference.
+``solutions.reentry_pf``, with every other blank bound to the reference. run_particle_filter is
+also run with another innovation_std and with the given bootstrap step.
 
 The deterministic blanks (tracking_dynamics, simulate_radar, initial_cloud, credibility_interval,
 run_particle_filter) are compared with the reference on seeded random inputs of several sizes.
 ``pf_step`` is stochastic, so its test is statistical (the second half of this module): weights
-normalised and following step (d), resampling following the fitness weights (chi-square),
-innovation spread and centre, and the posterior of beta after a whole run against an ensemble of
+normalised and following step (d), the diagnostics it reports in ``info`` (exact), resampling
+following the fitness weights (chi-square), the spread and centre of the artificial process noise
+(the handout's "innovation") for the default and another ``innovation_std``, and the posterior of beta after a whole run against an ensemble of
 reference runs. Each statistical check states its false-fail probability for a correct step,
 derived from its statistic's distribution; together they stay below ``FALSE_FAIL_TOTAL`` = 1e-6.
 tests/test_reentry_pf_reference.py shows the reference passing on 200 seeds and every catalogued
@@ -114,73 +116,77 @@ def check_initial_cloud(func: Callable) -> None:
         check_close(w, want_w, f"the prior weights for N = {N}", "Equal weights 1/N.", rtol=1e-12, atol=0.0, show_expected=False)
 
 
-def float_rule_is_exact(N: int, p: float) -> bool:
-    """Whether the handout's rule gives the same indices in floating point and in exact arithmetic.
-
-    (For N = 10, p = 90, (1 - p/100)(N/2) is exactly 1/2 but 0.4999... in floating point; a
-    student who computes (100 - p) N / 200 is right too, so such cases are not tested.)
-    """
-    for sign in (-1, 1):
-        a = (1 + sign * p / 100) * (N / 2)
-        exact = (1 + sign * Fraction(p) / 100) * Fraction(N, 2)
-        if math.floor(a) + (a - math.floor(a) >= 0.5) != math.floor(exact + Fraction(1, 2)):
-            return False
-    return True
-
-
-def credibility_cases(seed: int = 4005) -> list[tuple[int, float]]:
-    """(N, p) of the hidden test: halves (where MATLAB's and Python's rounding differ), clamped
-    ends, and random sizes and percentages, all unambiguous in floating point."""
+def credibility_cases(seed: int = 4005) -> list[tuple[np.ndarray, np.ndarray, float | np.ndarray]]:
+    """(samples, weights, p) of the hidden test: N from 1 to 5000, weights from flat to a few heavy
+    ones, some exactly zero, and p single numbers or arrays. Random weights put no cumulative weight
+    exactly on a quantile's order, so the interval is unambiguous."""
     rng = np.random.default_rng(seed)
-    fixed = [(10, 50), (6, 50), (14, 50), (1, 90), (3, 100), (2, 0), (5000, 90), (5000, 50)]
-    drawn = [(int(n), float(p)) for n, p in zip(rng.integers(2, 3000, 40), rng.choice([5, 20, 50, 68, 80, 90, 95, 99, 33.5], 40))]
-    return [(N, p) for N, p in fixed + drawn if float_rule_is_exact(N, p)]
+    cases = []
+    for N, concentration in ((1, 1.0), (2, 1.0), (7, 0.3), (50, 1.0), (300, 0.05), (2000, 1.0), (5000, 5.0)):
+        samples = rng.normal(rng.uniform(-1e4, 1e4), rng.uniform(1.0, 1e3), N)
+        weights = rng.dirichlet(np.full(N, concentration)) if N > 1 else np.ones(1)
+        if N >= 50:
+            weights[rng.choice(N, N // 5, replace=False)] = 0.0  # particles with no weight left
+        weights = weights * rng.uniform(0.5, 2.0)  # not normalised: the function normalises
+        for p in (90.0, 50.0, float(rng.uniform(1.0, 99.0)), np.array([0.0, 50.0, 90.0]), np.array([100.0, 5.0])):
+            cases.append((samples, weights, p))
+    return cases
 
 
 def check_credibility_interval(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(4005)
-    for N, p in credibility_cases():
-        samples = rng.normal(rng.uniform(-1e4, 1e4), rng.uniform(1.0, 1e3), N)
-        result = check_pair(func(samples.copy(), p), f"credibility_interval(samples, {p:g})", "lo", "hi")
-        got = check_array(np.array(result, dtype=float), f"the {p:g}% interval of {N} samples", (2,),
-                          "lo and hi are two numbers, two of the samples.")
-        check_close(got, ref.credibility_interval(samples, p), f"the {p:g}% interval of {N} random samples",
-                    "Sort the samples; i_min = [(1 - p/100) N/2] and i_max = [(1 + p/100) N/2], rounded half away "
-                    "from zero, clamped to 1..N; the handout's h_i is Python's sorted[i - 1].",
+    for samples, weights, p in credibility_cases():
+        N = samples.shape[0]
+        shape = np.shape(p)
+        label = f"credibility_interval(samples, weights, {np.round(p, 2).tolist()}) for {N} weighted samples"
+        lo, hi = check_pair(func(samples.copy(), weights.copy(), np.copy(p) if shape else p), label, "lo", "hi")
+        got = np.stack([check_array(lo, f"lo of {label}", shape, "lo and hi have the shape of p."),
+                        check_array(hi, f"hi of {label}", shape, "lo and hi have the shape of p.")])
+        check_close(got, np.stack(ref.credibility_interval(samples, weights, p)), label,
+                    "Sort the samples and carry their weights along (weights[order]); the quantile of order a is the "
+                    "first sorted sample whose normalised cumulative weight reaches a; the orders are (1 -+ p/100) / 2.",
                     rtol=0.0, atol=0.0, show_expected=False)
 
 
 RUN_HINTS = {
     "mean": "the weighted mean sum_l w_l x_l of each variable at every t_j",
-    "median": "the median of each variable's particle values at every t_j",
-    "lo50": "the 50% intervals from credibility_interval(x[i], 50)",
-    "hi50": "the 50% intervals from credibility_interval(x[i], 50)",
-    "lo90": "the 90% intervals from credibility_interval(x[i], 90)",
-    "hi90": "the 90% intervals from credibility_interval(x[i], 90)",
-    "ess": "the effective sample size 1 / sum_l w_l^2 at every t_j",
+    "median": "the weighted median of each variable, credibility_interval(x[i], w, 0), at every t_j",
+    "lo50": "the 50% intervals from credibility_interval(x[i], w, 50)",
+    "hi50": "the 50% intervals from credibility_interval(x[i], w, 50)",
+    "lo90": "the 90% intervals from credibility_interval(x[i], w, 90)",
+    "hi90": "the 90% intervals from credibility_interval(x[i], w, 90)",
+    "ess": "the effective sample size 1 / sum_l w_l^2 of the weights the step returned, at every t_j",
+    "ess_resample": "info['ess'] from the step (N at t_0)",
+    "parents": "the number of distinct indices in info['parents'] (N at t_0)",
+    "roots": "the number of distinct particles of t_0 with descendants: root = root[info['parents']] after each step",
 }
 
 
 def check_run_particle_filter(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(4006)
-    for n_times, N in ((1, 50), (6, 200), (25, 1000)):
+    bootstrap = functools.partial(falling_object.bootstrap_step, dynamics=ref.tracking_dynamics)
+    cases = ((1, 50, {}), (6, 200, {}), (25, 1000, {}),
+             (12, 300, {"innovation_std": np.array([30.0, 20.0, 40.0])}),
+             (12, 300, {"step": bootstrap, "innovation_std": np.array([10.0, 10.0, 50.0])}))
+    for n_times, N, options in cases:
         t = DT * np.arange(n_times)
         b = rng.uniform(55_000.0, 65_000.0) - rng.uniform(2_500.0, 3_500.0) * t + SIGMA * rng.standard_normal(n_times)
         seed = int(rng.integers(2**31))
-        history = func(b.copy(), N, np.random.default_rng(seed))
+        history = func(b.copy(), N, np.random.default_rng(seed), **options)
         if not isinstance(history, FilterHistory):
             raise AssertionError(f"run_particle_filter should return a FilterHistory, not {type(history).__name__}.")
-        want = ref.run_particle_filter(b, N, np.random.default_rng(seed))
-        case = f"{n_times} random readings and N = {N}"
+        want = ref.run_particle_filter(b, N, np.random.default_rng(seed), **options)
+        case = f"{n_times} random readings, N = {N}" + "".join(f", {key}={'bootstrap_step' if key == 'step' else value}"
+                                                                for key, value in options.items())
         for name, hint in RUN_HINTS.items():
-            shape = want.ess.shape if name == "ess" else want.mean.shape
+            shape = getattr(want, name).shape
             got = check_array(getattr(history, name), f"history.{name} for {case}", shape,
                               "Fill every entry: one column per reading time t_j.")
             check_close(got, getattr(want, name), f"history.{name} for {case}",
-                        f"It should hold {hint}. Start from initial_cloud(b[0], N, rng) at t_0, then call "
-                        "pf_step once with each later reading b_j, using the rng you were given.",
+                        f"It should hold {hint}. Start from initial_cloud(b[0], N, rng) at t_0, then call the step "
+                        "(pf_step unless step is given) once with each later reading b_j, passing innovation_std and "
+                        "info, using the rng you were given.",
                         rtol=1e-9, atol=1e-9, show_expected=False)
 
 # =============================================================================================
@@ -205,14 +211,18 @@ RESAMPLING_NOMINAL_TAIL = 1.25e-7
 statistic at that threshold is a little larger (1.26e-7 and 1.29e-7 for the two readings, by
 exact enumeration in tests/), and below the 1.5e-7 each test is allowed."""
 ALPHA_INNOVATION = 3e-7
-"""Innovation spread and centre: 12 one-sided tails (3 coordinates x mean and sum of squares x
-2 sides), 2.5e-8 each."""
+"""Innovation spread and centre: 24 one-sided tails (2 settings of innovation_std x 3 coordinates
+x mean and sum of squares x 2 sides), 1.25e-8 each."""
+INNOVATION_TAILS = 24
+OTHER_INNOVATION_STD = np.array([40.0, 250.0, 2.0])
+"""A second setting of the keyword innovation_std for the innovation check (beta's stays far below
+the 5000 between the families)."""
 ALPHA_POSTERIOR = 3e-7
 """Posterior of beta after a whole run, against an ensemble of reference runs."""
 TIE_BOUND = 1e-15
 """Bound on the probability that two fresh innovations coincide exactly (see check_innovation)."""
 FALSE_FAIL_TOTAL = ALPHA_RESAMPLING + ALPHA_INNOVATION + ALPHA_POSTERIOR + TIE_BOUND
-"""check_weights is exact (false-fail probability 0), so this bounds all four checks together."""
+"""check_weights and check_info are exact (false-fail probability 0), so this bounds all the checks together."""
 
 # --- the test bed ------------------------------------------------------------------------------
 FAMILY_BETA = np.array([15_000.0, 20_000.0, 25_000.0])  # [kg/(m s^2)], 5000 apart
@@ -275,8 +285,9 @@ def far_case(seed: int) -> FamilyCase:
     return family_case(FAR_OFFSETS, seed, "a reading 40 sigma below every particle")
 
 
-def _run_step(pf_step: PfStep, case: FamilyCase, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
-    """Call pf_step on a copy of the case; turn warnings and bad output into clear failures."""
+def _run_step(pf_step: PfStep, case: FamilyCase, rng: np.random.Generator, **options: object) -> tuple[np.ndarray, np.ndarray]:
+    """Call pf_step on a copy of the case (with the keyword ``options``); turn warnings and bad
+    output into clear failures."""
     N = case.w.shape[0]
     underflow_hint = (
         " With a reading far from every particle, exp(-(h - b)^2 / (2 sigma^2)) is 0 for all of them; "
@@ -285,7 +296,7 @@ def _run_step(pf_step: PfStep, case: FamilyCase, rng: np.random.Generator) -> tu
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            result = pf_step(case.x.copy(), case.w.copy(), case.b_next, rng)
+            result = pf_step(case.x.copy(), case.w.copy(), case.b_next, rng, **options)
         except Exception as error:
             numeric = [w for w in caught if issubclass(w.category, RuntimeWarning)]
             if not numeric:
@@ -398,28 +409,63 @@ def check_resampling(pf_step: PfStep, seed: int = 0, readings: tuple[str, ...] =
             )
 
 
-def innovation_bounds(n: int, alpha: float = ALPHA_INNOVATION / 12) -> tuple[float, float, float]:
+def innovation_bounds(n: int, alpha: float = ALPHA_INNOVATION / INNOVATION_TAILS) -> tuple[float, float, float]:
     """(lower, upper) bounds on a chi-square(n) sum of squares, and the bound on |N(0,1)|, each
     with one-sided tail alpha."""
     return float(stats.chi2.ppf(alpha, n)), float(stats.chi2.isf(alpha, n)), float(stats.norm.isf(alpha))
 
 
-def check_innovation(pf_step: PfStep, seed: int = 0) -> None:
+def check_info(pf_step: PfStep, seed: int = 0) -> None:
+    """With info={}, the step reports the ESS of its resampling weights and the parents it drew.
+
+    Exact check (false-fail probability 0): the ESS of the fitness weights (b) follows from the
+    input alone, and each reported parent must belong to the family that the new particle's beta
+    names.
+    """
+    case = near_case(seed)
+    info: dict = {}
+    x_new, _ = _run_step(pf_step, case, _rng(seed, 7), info=info)
+    missing = [key for key in ("ess", "parents") if key not in info]
+    if missing:
+        raise AssertionError(f"pf_step(..., info=info) should store {missing} in the dict info: "
+                             "info['ess'] = 1 / sum(w_hat**2) and info['parents'] = k.")
+    # (b) for every particle, in logarithms: the oracle of the resampling weights
+    log_w_hat = np.log(case.w) - (case.x_hat[0, case.family] - case.b_next) ** 2 / (2 * SIGMA**2)
+    w_hat = np.exp(log_w_hat - log_w_hat.max())
+    w_hat /= w_hat.sum()
+    check_close(float(np.asarray(info["ess"])), 1.0 / np.sum(w_hat**2), "info['ess']",
+                "It is the effective sample size 1 / sum w^2 of the fitness weights w^ of step (b), the weights the "
+                "resampling draws with (not of the old weights, nor of the new ones).", rtol=1e-9, atol=0.0, show_expected=False)
+    parents = check_array(info["parents"], "info['parents']", (case.w.shape[0],), "One parent index k_l per new particle.")
+    if not np.all((parents >= 0) & (parents < case.w.shape[0]) & (parents == np.round(parents))):
+        raise AssertionError("info['parents'] should hold the indices k_l, integers from 0 to N - 1.")
+    if np.any(case.family[parents.astype(int)] != _parent_family(case, x_new)):
+        raise AssertionError("info['parents'] does not name the particles the new ones were copied from: store the "
+                             "indices k that you used in x_hat[:, k].")
+
+
+def check_innovation(pf_step: PfStep, seed: int = 0, innovation_std: np.ndarray | None = None) -> None:
     """New particles are the parents' propagated candidates plus fresh N(0, D) innovations.
 
     With z = (x_new - x^(k_l)) / D^(1/2) per coordinate, a correct step gives N independent
     N(0, 1) values in each of the 3 coordinates, so the scatter sum (z - mean z)^2 is exactly
-    chi-square(N - 1) and, independently, sum z / sqrt(N) exactly N(0, 1). Each of the 12
-    one-sided tails has probability 2.5e-8, 3e-7 in all. This catches a missing or wrongly scaled innovation (variance for standard
+    chi-square(N - 1) and, independently, sum z / sqrt(N) exactly N(0, 1). The check runs with the
+    handout's default and with innovation_std=OTHER_INNOVATION_STD; each of the 24 one-sided tails
+    has probability 1.25e-8, 3e-7 in all. This catches a missing or wrongly scaled innovation (variance for standard
     deviation) and a missing or wrong propagation (a) (v dt = 300 m in h, 20-30 m/s in v).
     It also requires all N new particles to differ: an innovation added before resampling
     repeats the copies of each parent exactly. For a correct step a repeat needs two independent
     normal draws to agree to the last bit in all three coordinates; even if two draws agreed with
     probability 2^-32 (a generous bound for 53-bit doubles), the union over the N^2/2 = 7.2e7
-    pairs is below 7.2e7 x 2^-96 < 1e-15.
+    pairs is below 7.2e7 x 2^-96 < 1e-15 (for each of the two runs; TIE_BOUND covers both).
     """
     case = near_case(seed)
-    x_new, _ = _run_step(pf_step, case, _rng(seed, 5))
+    if innovation_std is None:  # the default: the handout's setting
+        std, options, stream = INNOVATION_STD, {}, 5
+    else:
+        std, options, stream = np.asarray(innovation_std, dtype=float), {"innovation_std": np.array(innovation_std)}, 8
+    stds = ", ".join(f"{value:g}" for value in std)
+    x_new, _ = _run_step(pf_step, case, _rng(seed, stream), **options)
     N = x_new.shape[1]
     distinct = np.unique(x_new, axis=1).shape[1]
     if distinct < N:
@@ -427,21 +473,21 @@ def check_innovation(pf_step: PfStep, seed: int = 0) -> None:
             f"Only {distinct} of the {N} new particles are different: some are exact copies. Add a fresh "
             "innovation D^(1/2) w to each particle after resampling, not before."
         )
-    z = (x_new - case.x_hat[:, _parent_family(case, x_new)]) / INNOVATION_STD[:, None]
+    z = (x_new - case.x_hat[:, _parent_family(case, x_new)]) / std[:, None]
     lower, upper, z_max = innovation_bounds(N - 1)
     for i, name in enumerate(falling_object.STATE_NAMES):
         # spread about the sample mean: sum (z - mean z)^2 ~ chi-square(N - 1), independent of the mean
         scatter = float(np.sum((z[i] - np.mean(z[i])) ** 2))
         if not lower <= scatter <= upper:
-            spread = math.sqrt(scatter / (N - 1)) * INNOVATION_STD[i]
+            spread = math.sqrt(scatter / (N - 1)) * std[i]
             raise AssertionError(
                 f"The innovation in {name} has standard deviation about {spread:.4g}; it should be "
-                f"{INNOVATION_STD[i]:g} (the innovation is D^(1/2) w with D^(1/2) = diag({_STDS}), "
-                "w ~ N(0, I_3), one fresh draw per new particle)."
+                f"{std[i]:g} (the innovation is D^(1/2) w with D^(1/2) = diag(innovation_std), here diag({stds}), "
+                "w ~ N(0, I_3), one fresh draw per new particle; use the keyword argument innovation_std)."
             )
         centre = float(np.sum(z[i]) / np.sqrt(N))
         if abs(centre) > z_max:
-            mean_offset = float(np.mean(z[i]) * INNOVATION_STD[i])
+            mean_offset = float(np.mean(z[i]) * std[i])
             raise AssertionError(
                 f"The new particles' {name} is off its parent's propagated candidate x^ by {mean_offset:.3g} "
                 f"on average; it should be 0 (z = {centre:.1f}, limit {z_max:.1f}). Propagate with Forward Euler, "
@@ -509,8 +555,10 @@ def statistical_checks(pf_step: PfStep, seed: int) -> None:
     """Every statistical check, cheapest first. A correct step fails with probability below
     FALSE_FAIL_TOTAL."""
     check_weights(pf_step, seed)
+    check_info(pf_step, seed)
     check_resampling(pf_step, seed)
     check_innovation(pf_step, seed)
+    check_innovation(pf_step, seed, OTHER_INNOVATION_STD)
     check_posterior(pf_step, seed)
 
 

@@ -1,0 +1,187 @@
+"""Checks of the results that the reentry-pf notebook states.
+
+The tuning study (course/data/falling_object_tuning.csv, 50 simulated half minutes per setting)
+is built by ``solutions.reentry_pf.tuning_runs`` and rebuilt byte for byte by
+``python -m autograder data --check``, so the checks that quote it read the shipped file rather
+than rerun 650 filters. The Cramer-Rao bound is recomputed; the diagnostics of single runs are
+recomputed on 10 fresh seeds.
+"""
+
+from __future__ import annotations
+
+import functools
+
+import numpy as np
+
+from autograder.claims import claim, rate_at_least
+from course import falling_object as fo
+from solutions import reentry_pf as ref
+
+HANDOUT = {N: fo.TuningSetting("auxiliary", N, fo.HANDOUT_STD) for N in (500, 2000, 5000)}
+CHOSEN = {N: fo.TuningSetting("auxiliary", N, fo.CHOSEN) for N in (500, 2000)}
+BOOTSTRAP = {"handout": fo.TuningSetting("bootstrap", 2000, fo.HANDOUT_STD), "chosen": fo.TuningSetting("bootstrap", 2000, fo.CHOSEN)}
+
+
+@functools.cache
+def crb() -> np.ndarray:
+    return fo.beta_crb(ref.tracking_dynamics, fo.X0_TRUE, fo.time_grid())
+
+
+@functools.cache
+def study() -> fo.TuningStudy:
+    return fo.load_tuning()
+
+
+@functools.cache
+def handout_runs(seeds: range = range(1000, 1010), N: int = 2000) -> list[fo.FilterHistory]:
+    """Runs of the handout's filter on fresh simulated readings (seeds outside the study's)."""
+    t = fo.time_grid()
+    runs = []
+    for seed in seeds:
+        _, b = ref.simulate_radar(fo.X0_TRUE, t, fo.SIGMA, np.random.default_rng([seed, 1]))
+        runs.append(ref.run_particle_filter(b, N, np.random.default_rng([seed, 2])))
+    return runs
+
+
+def mean(setting: fo.TuningSetting, column: str) -> float:
+    return float(np.mean(study().runs[setting][column]))
+
+
+@claim("reentry-pf/crb-information")
+def _() -> None:
+    """At t = 30 s the Fisher information of beta (readings plus prior) is over 50 times the prior's: a bound of about
+    200 (between 150 and 212)."""
+    ratio = (fo.PRIOR_STD[2] / crb()[-1]) ** 2
+    assert ratio > 50 and crb()[-1] > 150, f"information / prior information at 30 s is {ratio:.1f}, bound {crb()[-1]:.0f}"
+
+
+@claim("reentry-pf/crb-arrives-late")
+def _() -> None:
+    """The bound is within 1% of the prior's 1500 at 10 s, above 80% of it at 15 s, and falls most between 15 s and 25 s."""
+    bound = crb()
+    j = lambda t: round(t / fo.DT)  # noqa: E731
+    assert bound[j(10)] > 0.99 * 1500 and bound[j(15)] > 0.8 * 1500, (bound[j(10)], bound[j(15)])
+    drops = {t: bound[j(t)] - bound[j(t + 5)] for t in (0, 5, 10, 15, 20, 25)}
+    assert max(drops, key=drops.get) in (15, 20), drops
+
+
+@claim("reentry-pf/handout-band-far-from-crb")
+def _() -> None:
+    """Handout's setting, N = 2000 and 5000: beta's 90% band at 30 s is over 1.5 times the yardstick in every
+    one of the 50 study runs, and 4 to 8 times it in the median run."""
+    yardstick = 2 * fo.Z90 * crb()[-1]
+    for N in (2000, 5000):
+        ratio = study().runs[HANDOUT[N]]["width90_beta"][:, -1] / yardstick
+        assert ratio.min() > 1.5 and 4 < np.median(ratio) < 8, (N, ratio.min(), np.median(ratio))
+
+
+@claim("reentry-pf/ess-after-d-high")
+def _() -> None:
+    """The ESS after step (d) stays above 0.6 N at every step, in every one of 10 fresh runs (N = 2000)."""
+    rate_at_least([np.min(h.ess[1:]) > 0.6 * h.n_particles for h in handout_runs()], 1.0,
+                  "the ESS after (d) above 0.6 N throughout a run")
+
+
+@claim("reentry-pf/fitness-ess")
+def _() -> None:
+    """The ESS of the fitness weights that drive the resampling drops below 0.35 N at some reading in at least 8 of
+    10 fresh runs."""
+    rate_at_least([np.min(h.ess_resample[1:]) < 0.35 * h.n_particles for h in handout_runs()], 0.8,
+                  "the ESS of the fitness weights below 0.35 N at some reading")
+
+
+@claim("reentry-pf/parents-fraction")
+def _() -> None:
+    """Each resampling draws between 25% and 70% of the N particles as distinct parents, at every step of 10 fresh runs."""
+    fractions = np.array([h.parents[1:] / h.n_particles for h in handout_runs()])
+    assert 0.25 < fractions.min() and fractions.max() < 0.7, (fractions.min(), fractions.max())
+
+
+@claim("reentry-pf/roots-collapse")
+def _() -> None:
+    """Handout's setting, N = 5000: fewer than 30 particles of t_0 have descendants at 30 s, in all 50 study runs."""
+    roots = study().runs[HANDOUT[5000]]["roots_end"]
+    assert roots.max() < 30, roots.max()
+
+
+@claim("reentry-pf/fewer-particles-narrower")
+def _() -> None:
+    """Handout's setting: the median width of beta's 90% band at 30 s grows with N (500, 2000, 5000), and at
+    N = 500 it is narrower than the yardstick in some study runs."""
+    medians = [np.median(study().runs[HANDOUT[N]]["width90_beta"][:, -1]) for N in (500, 2000, 5000)]
+    assert medians[0] < medians[1] < medians[2], medians
+    assert study().runs[HANDOUT[500]]["width90_beta"][:, -1].min() < 2 * fo.Z90 * crb()[-1]
+
+
+@claim("reentry-pf/handout-v-too-wide")
+def _() -> None:
+    """Handout's setting (N = 2000, 5000): the truth of v is in the 50% band over 90% of the time and in the 90% band
+    over 99% of the time."""
+    for N in (2000, 5000):
+        assert mean(HANDOUT[N], "cover50_v") > 0.9 and mean(HANDOUT[N], "cover90_v") > 0.99, N
+
+
+@claim("reentry-pf/handout-v-upward")
+def _() -> None:
+    """Handout's setting (N = 2000, 5000): the 90% interval of v at 30 s reaches below 0 in every one of the 50 study runs."""
+    for N in (2000, 5000):
+        assert np.all(study().runs[HANDOUT[N]]["lo90_v_end"] < 0), N
+
+
+@claim("reentry-pf/chosen-rmse")
+def _() -> None:
+    """N = 2000: the chosen setting's RMSE of h is below 0.7, of v below 0.45, of beta below 1 times the handout's."""
+    ratios = [mean(CHOSEN[2000], f"rmse_{n}") / mean(HANDOUT[2000], f"rmse_{n}") for n in fo.STATE_NAMES]
+    assert ratios[0] < 0.7 and ratios[1] < 0.45 and ratios[2] < 1.0, ratios
+
+
+@claim("reentry-pf/chosen-coverage")
+def _() -> None:
+    """N = 2000, chosen setting: every 90% band holds the truth at least 90% of the time; the 50% band of h 45-60%,
+    of v over 70%, of beta over 55%."""
+    c90 = [mean(CHOSEN[2000], f"cover90_{n}") for n in fo.STATE_NAMES]
+    c50 = [mean(CHOSEN[2000], f"cover50_{n}") for n in fo.STATE_NAMES]
+    assert min(c90) >= 0.9 and 0.45 <= c50[0] <= 0.6 and c50[1] > 0.7 and c50[2] > 0.55, (c50, c90)
+
+
+@claim("reentry-pf/small-noise-overconfident")
+def _() -> None:
+    """N = 2000: with noise (3, 3, 5) and (3, 3, 50) the 90% band of h holds the truth less than 80% of the time."""
+    for beta in (5.0, 50.0):
+        setting = fo.TuningSetting("auxiliary", 2000, (3.0, 3.0, beta))
+        assert mean(setting, "cover90_h") < 0.8, (beta, mean(setting, "cover90_h"))
+
+
+@claim("reentry-pf/chosen-needs-particles")
+def _() -> None:
+    """Chosen setting: with N = 500 beta's 90% band holds the truth less than 80% of the time (over 90% with N = 2000)."""
+    assert mean(CHOSEN[500], "cover90_beta") < 0.8 < 0.9 < mean(CHOSEN[2000], "cover90_beta")
+
+
+@claim("reentry-pf/bootstrap-similar")
+def _() -> None:
+    """N = 2000, handout's and chosen setting: the bootstrap filter's RMSE of h and v is within 10% of the auxiliary
+    filter's, and every coverage within 5 percentage points."""
+    for name, aux in (("handout", HANDOUT[2000]), ("chosen", CHOSEN[2000])):
+        boot = BOOTSTRAP[name]
+        for n in ("h", "v"):
+            ratio = mean(boot, f"rmse_{n}") / mean(aux, f"rmse_{n}")
+            assert 0.9 < ratio < 1.1, (name, n, ratio)
+        for column in (f"cover{p}_{n}" for p in (50, 90) for n in fo.STATE_NAMES):
+            assert abs(mean(boot, column) - mean(aux, column)) < 0.05, (name, column)
+
+
+@claim("reentry-pf/euler-error-small")
+def _() -> None:
+    """One Forward Euler step from the true state misses the true trajectory by less than 2 m in h and 1 m/s in v."""
+    t = fo.time_grid()
+    x, _ = ref.simulate_radar(fo.X0_TRUE, t, fo.SIGMA, np.random.default_rng(0))
+    miss = np.abs(x[:, :-1] + fo.DT * ref.tracking_dynamics(0.0, x[:, :-1]) - x[:, 1:]).max(axis=1)
+    assert miss[0] < 2.0 and miss[1] < 1.0, miss
+
+
+@claim("reentry-pf/fitness-ess-typical")
+def _() -> None:
+    """The median over a run of the fitness weights' ESS is above 0.8 N, in each of 10 fresh runs (N = 2000)."""
+    rate_at_least([np.median(h.ess_resample[1:]) > 0.8 * h.n_particles for h in handout_runs()], 1.0,
+                  "the median ESS of the fitness weights above 0.8 N")
