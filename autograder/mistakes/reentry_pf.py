@@ -11,7 +11,7 @@ MISTAKES = (
     Mistake("tracking_dynamics", "no-two", "drag g rho v^2 / beta: the 2 of equation (2) left out",
             "/ (2 * beta)", "/ beta"),
     Mistake("tracking_dynamics", "scalar-zero", "beta' written as the scalar 0.0: right for one state, breaks a particle cloud",
-            "np.zeros_like(beta)", "0.0"),
+            "np.zeros_like(beta)", "0.0", raises=ValueError),
     # simulate_radar
     Mistake("simulate_radar", "default-tolerances", "solve_ivp's default rtol = 1e-3: the truth is off by about 20 m and 6 m/s",
             ", rtol=1e-10, atol=1e-8", ""),
