@@ -253,11 +253,13 @@ def _() -> None:
 
 @claim("reentry-srekf/average-nees-overconfident-early")
 def _() -> None:
-    """Averaged over 40 falls, the NEES is above its band chi2(120)/40 at every step of the first 10 s, >= 5 on average over 5-10 s, and above 3.81 on average over 10-20 s."""
-    # Measured (seeds 7100-7139 / 500-539): every step of 0-10 s above the band's upper end 3.81;
-    # window averages 4.8 / 5.2 (0-2 s), 4.5 / 5.1 (2-5 s), 7.3 / 9.1 (5-10 s), 4.4 / 5.5 (10-20 s).
+    """Averaged over 40 falls, the NEES is above its band chi2(120)/40 at >= 95% of the steps of the first 10 s, >= 5 on average over 5-10 s, and above 3.81 on average over 10-20 s."""
+    # Measured (seeds 7100-7139 / 500-539): every step of 0-10 s above the band's upper end 3.81, the
+    # lowest at 3.87 / 4.17 (near 3.5 s); window averages 4.8 / 5.2 (0-2 s), 4.5 / 5.1 (2-5 s),
+    # 7.3 / 9.1 (5-10 s), 4.4 / 5.5 (10-20 s).
     early, _, upper = _average_nees_in(0.0, 10.0)
-    assert np.all(early > upper), f"the average NEES is inside or below its band at {np.sum(early <= upper)} steps of 0-10 s"
+    above = np.mean(early > upper)
+    assert above >= 0.95, f"the average NEES is above its band at only {above:.0%} of the steps of 0-10 s"
     mid, _, _ = _average_nees_in(5.0, 10.0)
     assert mid.mean() >= 5.0, f"the average NEES over 5-10 s is {mid.mean():.2f}"
     late, _, _ = _average_nees_in(10.0, 20.0)
