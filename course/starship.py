@@ -52,6 +52,12 @@ S0: NDArray[np.float64] = np.diag([2200.0, 100.0, 1e-3])  # upper-triangular squ
 
 STATE_NAMES: tuple[str, str, str] = ("h", "v", "c")
 
+# --- Simulated falls (the shipped data file is one of them) -------------------------------------
+X0_TRUE: NDArray[np.float64] = np.array([15_000.0, -500.0, 0.001])  #: true initial state [m, m/s, m^2/kg]
+N_ROWS: int = 500  #: measurements per fall
+DT: float = 0.1  #: measurement spacing [s]
+SUBSTEPS: int = 10  #: RK4 substeps per measurement interval in the truth simulation
+
 #: The handout's CSV header (the original lab's file can be dropped in instead of ours).
 CSV_HEADER: str = (
     "Time [sec],Altitude True [m],Velocity True [m/s],Ballistic Coefficient True [],"
@@ -330,6 +336,108 @@ def marginal_std(result: FilterResult, marginal: Marginal) -> Matrix:
     return std
 
 
+def simulate_fall(
+    rng: np.random.Generator,
+    dynamics: Dynamics,
+    predict: Dynamics,
+    n_rows: int = N_ROWS,
+    dt: float = DT,
+    x0: ArrayLike = X0_TRUE,
+    substeps: int = SUBSTEPS,
+) -> ReentryData:
+    """Simulate the truth of equation (11) and the radar of equation (13): one fall.
+
+    The SDE dx = f(x) dt + dw, cov(dw) = Q dt, is integrated with ``substeps`` RK4 steps per
+    measurement interval, each with its noise increment w = SQRT_Q^T e sqrt(dt/substeps),
+    e ~ N(0, I). Measurements are range + N(0, SIGMA_RANGE^2) [m], at t = 0, dt, 2 dt, ... [s].
+    ``dynamics`` is f (your ``ballistic_dynamics``), ``predict`` the range model (``radar_predict``).
+    """
+    h_sub = dt / substeps
+    t = np.arange(n_rows) * dt
+    truth = np.empty((n_rows, 3))
+    x = np.array(x0, dtype=float)
+    process_noise = rng.standard_normal((n_rows - 1, substeps, 3))
+    for k in range(n_rows):
+        if k > 0:
+            for e in process_noise[k - 1]:
+                x = rk4_step(dynamics, x, SQRT_Q.T @ e * np.sqrt(h_sub), h_sub)
+        truth[k] = x
+    range_true = np.array([float(np.asarray(predict(x)).reshape(-1)[0]) for x in truth])
+    range_meas = range_true + SIGMA_RANGE * rng.standard_normal(n_rows)
+    return ReentryData(path="simulated fall", n_lines=n_rows + 1, t=t, h=truth[:, 0], v=truth[:, 1], c=truth[:, 2],
+                       range_true=range_true, range_meas=range_meas)
+
+
+@dataclass(frozen=True)
+class MonteCarloRun:
+    """Simulated falls, each filtered from an initial mean drawn from the prior.
+
+    ``nees`` has shape (F, N): one row per fall, one column per step at times ``t`` (N,) [s];
+    ``mu``, ``truth`` and ``std`` have shape (F, N, 3); ``mu0`` (F, 3) the initial means.
+    """
+
+    t: Vector
+    nees: Matrix
+    mu: NDArray[np.float64]
+    truth: NDArray[np.float64]
+    std: NDArray[np.float64]
+    mu0: Matrix
+
+
+def monte_carlo_falls(
+    seeds: Sequence[int],
+    dynamics: Dynamics,
+    jacobian: Jacobian,
+    predict: Dynamics,
+    predict_jacobian: Jacobian,
+    sqrt_time_update: SqrtUpdate,
+    sqrt_measurement_update: SqrtUpdate,
+) -> MonteCarloRun:
+    """One simulated fall per seed, filtered from a prior that is honest about its error.
+
+    Each fall starts at X0_TRUE; its filter starts at mu0 = X0_TRUE - S0^T e, e ~ N(0, I) drawn
+    after the fall, so the initial error X0_TRUE - mu0 is a draw from N(0, S0^T S0), the prior's
+    own covariance. (Starting every fall from MU0 would give every fall the same initial error.)
+    """
+    runs = []
+    for seed in seeds:
+        rng = np.random.default_rng(seed)
+        data = simulate_fall(rng, dynamics, predict)
+        mu0 = X0_TRUE - S0.T @ rng.standard_normal(3)
+        result = run_square_root_ekf(data, dynamics, jacobian, predict, predict_jacobian, sqrt_time_update,
+                                     sqrt_measurement_update, mu0=mu0)
+        std = np.sqrt(np.einsum("kij,kij->kj", result.S, result.S))
+        runs.append((normalised_estimation_error_squared(data.truth, result), result.mu, data.truth, std, mu0))
+    nees, mu, truth, std, mu0 = (np.array(a) for a in zip(*runs))
+    return MonteCarloRun(t=np.arange(N_ROWS) * DT, nees=nees, mu=mu, truth=truth, std=std, mu0=mu0)
+
+
+def average_nees_band(n_falls: int, n_states: int = 3, probability: float = 0.95) -> tuple[float, float]:
+    """Central ``probability`` interval of the NEES averaged over ``n_falls`` independent falls: chi2(n F) / F."""
+    lower, upper = nees_band(n_states * n_falls, probability)
+    return lower / n_falls, upper / n_falls
+
+
+def plot_average_nees(run: MonteCarloRun) -> tuple[Figure, Axes]:
+    """The NEES averaged over the falls at each step, against its 95% band chi2(3F)/F."""
+    import matplotlib.pyplot as plt
+
+    n_falls = run.nees.shape[0]
+    lower, upper = average_nees_band(n_falls, run.mu.shape[2])
+    average = run.nees.mean(axis=0)
+    fig, ax = plt.subplots(figsize=(8, 4.5), layout="constrained")
+    ax.axhspan(lower, upper, color="C2", alpha=0.25, linewidth=0,
+               label=f"95% band of the average of {n_falls} consistent falls, χ²({3 * n_falls})/{n_falls}: "
+                     f"[{lower:.2f}, {upper:.2f}]")
+    ax.axhline(3.0, color="C2", linewidth=1.0, linestyle="--", label="3, the mean of χ²(3)")
+    ax.plot(run.t, average, color="C3", linewidth=1.2, label=f"NEES averaged over {n_falls} falls")
+    ax.set(xlabel="Time [s]", ylabel="average NEES [-]", yscale="log",
+           title=f"NEES averaged over {n_falls} simulated falls, initial errors drawn from the prior")
+    ax.grid(True, which="both", alpha=0.3)
+    ax.legend(loc="upper right", fontsize=9)
+    return fig, ax
+
+
 # =============================================================================================
 # Figures
 # =============================================================================================
@@ -527,12 +635,15 @@ def covariance_measurement_update(
     h_and_jacobian: Callable[[Vector], tuple[Vector, Matrix]],
     R_cov: ArrayLike,
     dtype: type = np.float64,
+    joseph: bool = False,
 ) -> tuple[Vector, Matrix]:
     """The textbook EKF update in covariance form, every product computed in ``dtype``.
 
-    K = P H^T (H P H^T + R)^-1, mu+ = mu + K (y - h(mu)), P+ = P - K H P. This is the form the
-    square-root filter replaces; it is given here only to compare the two. mu: (n,), P: (n, n),
-    y: (m,), R_cov: (m, m) the noise covariance. Returns (mu+, P+) as float64 arrays.
+    K = P H^T (H P H^T + R)^-1, mu+ = mu + K (y - h(mu)), and P+ = P - K H P (the short form) or,
+    with ``joseph``, P+ = (I - K H) P (I - K H)^T + K R K^T (Joseph's form, a sum of two positive
+    semi-definite terms). This is the form the square-root filter replaces; it is given here only
+    to compare the two. mu: (n,), P: (n, n), y: (m,), R_cov: (m, m) the noise covariance.
+    Returns (mu+, P+) as float64 arrays.
     """
     mu = np.asarray(mu, dtype=dtype)
     P = np.asarray(P, dtype=dtype)
@@ -543,8 +654,28 @@ def covariance_measurement_update(
     K = np.linalg.solve(innovation_cov, H @ P).T
     # mu+ = mu + K (y - h(mu)), P+ = P - K H P
     mu_post = mu + K @ (y - y_pred)
-    P_post = P - K @ H @ P
+    if joseph:
+        # P+ = (I - K H) P (I - K H)^T + K R K^T
+        I_KH = np.eye(mu.size, dtype=dtype) - K @ H
+        P_post = I_KH @ P @ I_KH.T + K @ np.asarray(R_cov, dtype=dtype) @ K.T
+    else:
+        # P+ = P - K H P
+        P_post = P - K @ H @ P
     return mu_post.astype(float), P_post.astype(float)
+
+
+def qr_posterior_square_root(S: ArrayLike, H: ArrayLike, sigma: float, dtype: type = np.float32) -> Matrix:
+    """The posterior square root alone, from one Q-less QR computed in ``dtype``.
+
+    Given only for the comparison of part 8 in single precision (your update works in float64):
+    [S H^T, S; sigma I, 0] = Q [R1, R2; 0, R3] gives S+ = R3 with S+^T S+ = P+. S: (n, n) upper
+    triangular, H: (m, n), sigma [m] the noise standard deviation. Returns S+ (n, n) as float64.
+    """
+    S, H = np.asarray(S, dtype=dtype), np.asarray(H, dtype=dtype)
+    m, n = H.shape
+    pre_array = np.block([[S @ H.T, S], [dtype(sigma) * np.eye(m, dtype=dtype), np.zeros((m, n), dtype=dtype)]])
+    post_array = np.linalg.qr(pre_array, mode="r")
+    return post_array[m:, m:].astype(float)
 
 
 def is_positive_definite(P: ArrayLike) -> bool:
@@ -571,9 +702,13 @@ class FirstUpdateComparison:
     square_root: Vector  #: your square-root update, float64 [m^2]
     covariance64: Vector  #: the covariance form in float64 [m^2]
     covariance32: Vector  #: the covariance form in float32 [m^2]
+    joseph64: Vector  #: Joseph's covariance form in float64 [m^2]
+    square_root32: Vector  #: the square-root form (one QR) in float32 [m^2]
     pd_square_root: NDArray[np.bool_]  #: whether each posterior covariance is positive definite
     pd_covariance64: NDArray[np.bool_]
     pd_covariance32: NDArray[np.bool_]
+    pd_joseph64: NDArray[np.bool_]
+    pd_square_root32: NDArray[np.bool_]
 
 
 def compare_first_update(
@@ -604,50 +739,57 @@ def compare_first_update(
     P_prior = S0.T @ S0
     prior_hh, H_h = P_prior[0, 0], H[0, 0]
     exact = prior_hh * sigma**2 / (H_h**2 * prior_hh + sigma**2)
-    out: dict[str, list] = {key: [] for key in ("sr", "c64", "c32", "pd_sr", "pd_c64", "pd_c32")}
+    keys = ("sr", "c64", "c32", "j64", "sr32")
+    out: dict[str, list] = {key: [] for key in keys + tuple(f"pd_{key}" for key in keys)}
     for s in sigma:
         _, S_post = _checked_belief(sqrt_measurement_update(mu0, S0, y_obs, measure, s * np.eye(1)),
                                     "sqrt_measurement_update", 3)
         P_sr = S_post.T @ S_post
         _, P64 = covariance_measurement_update(mu0, P_prior, y_obs, measure, s**2 * np.eye(1), np.float64)
         _, P32 = covariance_measurement_update(mu0, P_prior, y_obs, measure, s**2 * np.eye(1), np.float32)
-        for key, P in (("sr", P_sr), ("c64", P64), ("c32", P32)):
+        _, J64 = covariance_measurement_update(mu0, P_prior, y_obs, measure, s**2 * np.eye(1), np.float64, joseph=True)
+        S32 = qr_posterior_square_root(S0, H, s, np.float32)
+        for key, P in (("sr", P_sr), ("c64", P64), ("c32", P32), ("j64", J64), ("sr32", S32.T @ S32)):
             out[key].append(P[0, 0])
             out[f"pd_{key}"].append(is_positive_definite(P))
     return FirstUpdateComparison(
         sigma=sigma, exact=exact, square_root=np.array(out["sr"]), covariance64=np.array(out["c64"]),
-        covariance32=np.array(out["c32"]), pd_square_root=np.array(out["pd_sr"]),
-        pd_covariance64=np.array(out["pd_c64"]), pd_covariance32=np.array(out["pd_c32"]),
+        covariance32=np.array(out["c32"]), joseph64=np.array(out["j64"]), square_root32=np.array(out["sr32"]),
+        pd_square_root=np.array(out["pd_sr"]), pd_covariance64=np.array(out["pd_c64"]),
+        pd_covariance32=np.array(out["pd_c32"]), pd_joseph64=np.array(out["pd_j64"]),
+        pd_square_root32=np.array(out["pd_sr32"]),
     )
 
 
 def plot_first_update_comparison(comparison: FirstUpdateComparison) -> tuple[Figure, Axes]:
     """Relative error of the posterior altitude variance against the radar's precision, per filter.
 
-    Filled markers: the posterior covariance is positive definite; crosses: it is not (a negative
-    or zero variance, or no Cholesky factor). Errors below 1e-17 are drawn at 1e-17.
+    Filled markers: the posterior covariance is positive definite; crosses: it is not (a zero or
+    negative variance, or no Cholesky factor). Errors below 1e-17 are drawn at 1e-17.
     """
     import matplotlib.pyplot as plt
 
-    fig, ax = plt.subplots(figsize=(8, 4.5), layout="constrained")
+    fig, ax = plt.subplots(figsize=(8, 5.5), layout="constrained")
     floor = 1e-17
     series = (
-        ("covariance form, float32", comparison.covariance32, comparison.pd_covariance32, "C3"),
-        ("covariance form, float64", comparison.covariance64, comparison.pd_covariance64, "C1"),
-        ("square-root form (yours), float64", comparison.square_root, comparison.pd_square_root, "C0"),
+        ("covariance, short form P − KHP, float32", comparison.covariance32, comparison.pd_covariance32, "C3", "-"),
+        ("covariance, short form P − KHP, float64", comparison.covariance64, comparison.pd_covariance64, "C1", "-"),
+        ("covariance, Joseph form, float64", comparison.joseph64, comparison.pd_joseph64, "C4", "--"),
+        ("square root (one QR), float32", comparison.square_root32, comparison.pd_square_root32, "C2", "--"),
+        ("square root (yours, QR), float64", comparison.square_root, comparison.pd_square_root, "C0", "-"),
     )
-    for label, value, pd, colour in series:
+    for label, value, pd, colour, style in series:
         error = np.maximum(np.abs(value - comparison.exact) / comparison.exact, floor)
-        ax.plot(comparison.sigma, error, color=colour, linewidth=1.2, label=label)
+        ax.plot(comparison.sigma, error, color=colour, linestyle=style, linewidth=1.2, label=label)
         ax.plot(comparison.sigma[pd], error[pd], "o", color=colour, markersize=4)
         ax.plot(comparison.sigma[~pd], error[~pd], "x", color=colour, markersize=8, markeredgewidth=2)
     ax.plot([], [], "kx", markersize=8, markeredgewidth=2, label="covariance not positive definite")
     ax.set(xscale="log", yscale="log", xlabel="Radar noise standard deviation σ_rng [m]",
            ylabel="Relative error of var(h) after update [-]",
-           title="First radar update from the 2200 m prior: covariance form against square-root form")
+           title="First radar update from the 2200 m prior: covariance forms against square-root forms")
     ax.invert_xaxis()
     ax.grid(True, which="major", alpha=0.3)
-    ax.legend(loc="upper left", fontsize=9)
+    fig.legend(loc="outside lower center", ncol=2, fontsize=9)
     return fig, ax
 
 

@@ -202,39 +202,16 @@ def run_reference(data: starship.ReentryData) -> starship.FilterResult:
 
 
 DATA_SEED: int = 20230503  #: seed of the shipped data file
-X0_TRUE: Vector = np.array([15_000.0, -500.0, 0.001])  #: true initial state [m, m/s, m^2/kg]
-N_ROWS: int = 500
-DT: float = 0.1  #: measurement spacing [s]
-SUBSTEPS: int = 10  #: RK4 substeps per measurement interval in the truth simulation
+X0_TRUE, N_ROWS, DT, SUBSTEPS = starship.X0_TRUE, starship.N_ROWS, starship.DT, starship.SUBSTEPS
 
 
-def simulate_reentry(
-    rng: np.random.Generator,
-    n_rows: int = N_ROWS,
-    dt: float = DT,
-    x0: ArrayLike = X0_TRUE,
-    substeps: int = SUBSTEPS,
-) -> tuple[Vector, Matrix, Vector, Vector]:
-    """Simulate the truth of equation (11) and the radar of equation (13).
+def simulate_reentry(rng: np.random.Generator) -> tuple[Vector, Matrix, Vector, Vector]:
+    """One fall of :func:`course.starship.simulate_fall` with the reference model.
 
-    The SDE dx = f(x) dt + dw, cov(dw) = Q dt, is integrated with ``substeps`` RK4 steps per
-    measurement interval, each with its noise increment w = SQRT_Q^T e sqrt(dt/substeps),
-    e ~ N(0, I). Measurements are range + N(0, SIGMA_RANGE^2), at t = 0, dt, 2 dt, ...
     Returns t (N,) [s], truth (N, 3), range_true (N,) [m], range_meas (N,) [m].
     """
-    h_sub = dt / substeps
-    t = np.arange(n_rows) * dt
-    truth = np.empty((n_rows, 3))
-    x = np.array(x0, dtype=float)
-    process_noise = rng.standard_normal((n_rows - 1, substeps, 3))
-    for k in range(n_rows):
-        if k > 0:
-            for e in process_noise[k - 1]:
-                x = starship.rk4_step(ballistic_dynamics, x, SQRT_Q.T @ e * np.sqrt(h_sub), h_sub)
-        truth[k] = x
-    range_true = np.array([radar_predict(x)[0] for x in truth])
-    range_meas = range_true + SIGMA_RANGE * rng.standard_normal(n_rows)
-    return t, truth, range_true, range_meas
+    data = starship.simulate_fall(rng, ballistic_dynamics, radar_predict)
+    return data.t, data.truth, data.range_true, data.range_meas
 
 
 def data_text(seed: int = DATA_SEED) -> str:

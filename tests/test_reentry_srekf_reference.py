@@ -432,11 +432,63 @@ def test_first_update_figure_marks_broken_covariances() -> None:
     fig, ax = starship.plot_first_update_comparison(cmp)
     try:
         crosses = [line for line in ax.get_lines() if line.get_marker() == "x" and len(line.get_xdata())]
-        broken = (~cmp.pd_covariance32).sum() + (~cmp.pd_covariance64).sum() + (~cmp.pd_square_root).sum()
+        broken = sum((~getattr(cmp, f"pd_{name}")).sum()
+                     for name in ("covariance32", "covariance64", "joseph64", "square_root32", "square_root"))
         assert sum(len(line.get_xdata()) for line in crosses) == broken > 0
-        assert ax.get_xscale() == "log" and "[m]" in ax.get_xlabel() and ax.get_legend() is not None
+        assert ax.get_xscale() == "log" and "[m]" in ax.get_xlabel() and len(fig.legends) == 1
     finally:
         plt.close(fig)
+
+
+def test_joseph_form_and_float32_square_root_agree_with_the_update_when_well_conditioned() -> None:
+    rng = np.random.default_rng(12)
+    S = random_upper_sqrt(rng, 3, scales=np.array([300.0, 30.0, 3e-4]))
+    mu = np.array([9000.0, -300.0, 1e-3])
+    measure = lambda x: (ref.radar_predict(x), ref.radar_jacobian(x))  # noqa: E731
+    y = ref.radar_predict(mu) + 20.0
+    _, S_s = ref.sqrt_measurement_update(mu, S, y, measure, SIGMA_RANGE * np.eye(1))
+    _, P_j = starship.covariance_measurement_update(mu, S.T @ S, y, measure, SIGMA_RANGE**2 * np.eye(1), joseph=True)
+    assert_cov_close(P_j, S_s.T @ S_s, rtol=1e-9)
+    S32 = starship.qr_posterior_square_root(S, ref.radar_jacobian(mu), SIGMA_RANGE, np.float32)
+    assert_cov_close(S32.T @ S32, S_s.T @ S_s, rtol=1e-5)
+    S64 = starship.qr_posterior_square_root(S, ref.radar_jacobian(mu), SIGMA_RANGE, np.float64)
+    assert_cov_close(S64.T @ S64, S_s.T @ S_s, rtol=1e-12)
+
+
+def test_monte_carlo_draws_each_initial_error_from_the_prior_and_averages_the_nees() -> None:
+    falls = starship.monte_carlo_falls(range(3), ref.ballistic_dynamics, ref.ballistic_jacobian, ref.radar_predict,
+                                       ref.radar_jacobian, ref.sqrt_time_update, ref.sqrt_measurement_update)
+    assert falls.nees.shape == (3, starship.N_ROWS) and falls.mu.shape == falls.truth.shape == (3, starship.N_ROWS, 3)
+    np.testing.assert_array_equal(falls.truth[:, 0], np.tile(starship.X0_TRUE, (3, 1)))
+    # each fall's initial error is its own: X0_TRUE - mu0 = S0^T e with e drawn after the fall's noise
+    whitened = np.linalg.solve(starship.S0.T, (starship.X0_TRUE - falls.mu0).T).T
+    assert len({tuple(np.round(w, 12)) for w in whitened}) == 3
+    rng = np.random.default_rng(1)
+    ref.simulate_reentry(rng)
+    np.testing.assert_allclose(whitened[1], rng.standard_normal(3), rtol=1e-12)
+    # chi-square(120) quantiles from tables: 91.57 (2.5%) and 152.21 (97.5%), divided by 40 falls
+    lower, upper = starship.average_nees_band(40)
+    assert lower == pytest.approx(91.573 / 40, abs=1e-3) and upper == pytest.approx(152.211 / 40, abs=1e-3)
+    fig, ax = starship.plot_average_nees(falls)
+    try:
+        line = next(line for line in ax.get_lines() if len(line.get_xdata()) == starship.N_ROWS)
+        np.testing.assert_allclose(line.get_ydata(), falls.nees.mean(axis=0))
+        assert "[s]" in ax.get_xlabel() and ax.get_legend() is not None
+    finally:
+        plt.close(fig)
+
+
+def test_hidden_test_accepts_sign_correct_drag() -> None:
+    from autograder.hidden_tests.reentry_srekf import check_ballistic_dynamics
+
+    def ballistic_dynamics(x):
+        h, v, c = np.asarray(x, dtype=float)
+        T = T0 - L * h
+        rho = P0 * (1 - L * h / T0) ** (G * M / (R * L)) * M / (R * T)
+        # drag against the motion whatever its direction: -rho v |v| c / 2
+        return np.array([v, -0.5 * rho * v * abs(v) * c - G, 0.0])
+
+    check_ballistic_dynamics(ballistic_dynamics)
 
 
 def test_positive_definite_check() -> None:

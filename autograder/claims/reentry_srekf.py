@@ -2,9 +2,10 @@
 
 Two kinds of claim. Those about the shipped fall (course/data/starship_reentry.csv) are
 deterministic and are checked on that file. Those about the filter in general (the NEES, the
-coverage of the bands, the lag of the altitude's uncertainty) are checked over simulated falls,
-drawn with ``solutions.reentry_srekf.simulate_reentry`` from fixed seeds, as rates or ranges with
-tolerances stated in each check.
+coverage of the bands, the lag of the altitude's uncertainty, the negative c) are checked over the
+notebook's Monte Carlo (``course.starship.monte_carlo_falls``: simulated falls whose filters start
+from initial errors drawn from the prior), as rates or ranges with tolerances stated in each check.
+Each tolerance was also checked on a second set of 40 falls, seeds 500-539.
 """
 
 from __future__ import annotations
@@ -20,7 +21,7 @@ from course.starship import G, L, M, P0, R, RADAR_R2, T0
 from solutions import reentry_srekf as ref
 
 FALL_SEEDS = range(7100, 7140)
-"""Seeds of the simulated falls (40 falls; one fall takes about 0.25 s to simulate and filter)."""
+"""Seeds of the simulated falls, the notebook's (40 falls; one takes about 0.25 s to simulate and filter)."""
 
 
 @functools.cache
@@ -32,23 +33,18 @@ def _shipped() -> tuple[starship.ReentryData, starship.FilterResult, np.ndarray]
 
 
 @functools.cache
-def _falls() -> dict[str, np.ndarray]:
-    """Per simulated fall: NEES inside its 95% band (fraction of steps), mean NEES, every error inside
-    its 3-sigma band at every step, and the lag [s] of the altitude's widest band after passing r2."""
-    lower, upper = starship.nees_band()
-    out: dict[str, list] = {"nees_inside": [], "nees_mean": [], "all_inside": [], "lag": []}
-    for seed in FALL_SEEDS:
-        t, truth, range_true, range_meas = ref.simulate_reentry(np.random.default_rng(seed))
-        data = starship.ReentryData(path=f"simulated fall {seed}", n_lines=t.size + 1, t=t, h=truth[:, 0],
-                                    v=truth[:, 1], c=truth[:, 2], range_true=range_true, range_meas=range_meas)
-        result = ref.run_reference(data)
-        std = np.sqrt(np.einsum("kij,kij->kj", result.S, result.S))
-        nees = starship.normalised_estimation_error_squared(truth, result)
-        out["nees_inside"].append(np.mean((nees >= lower) & (nees <= upper)))
-        out["nees_mean"].append(nees.mean())
-        out["all_inside"].append(bool(np.all(np.abs(truth - result.mu) <= 3 * std)))
-        out["lag"].append(_widest_altitude_band_after_first_seconds(t, std) - _crossing_time(t, truth[:, 0]))
-    return {key: np.array(value) for key, value in out.items()}
+def _falls() -> starship.MonteCarloRun:
+    """The notebook's Monte Carlo: one fall per seed, each filtered from an initial mean drawn from the prior."""
+    return starship.monte_carlo_falls(FALL_SEEDS, ref.ballistic_dynamics, ref.ballistic_jacobian, ref.radar_predict,
+                                      ref.radar_jacobian, ref.sqrt_time_update, ref.sqrt_measurement_update)
+
+
+def _average_nees_in(start: float, stop: float) -> tuple[np.ndarray, float, float]:
+    """The NEES averaged over the falls at the steps with start <= t < stop, and its 95% band."""
+    falls = _falls()
+    lower, upper = starship.average_nees_band(falls.nees.shape[0])
+    window = (falls.t >= start) & (falls.t < stop)
+    return falls.nees.mean(axis=0)[window], lower, upper
 
 
 def _crossing_time(t: np.ndarray, h: np.ndarray) -> float:
@@ -141,20 +137,21 @@ def _() -> None:
 # ---------------------------------------------------------------------------------------------
 @claim("reentry-srekf/covariance-form-breaks")
 def _() -> None:
-    """Covariance form: float32 wrong by >= 100% and not PD for every sigma <= 0.3-1 m; float64 from 1e-5-1e-4 m down, error growing before."""
+    """Short covariance form: float32 wrong by 100% (variance exactly 0) for every sigma <= 0.2-0.5 m; float64 not PD (variance <= 0) from 1e-5-3e-5 m down, error growing before."""
     comparison = _first_update_comparison()
     error = {
         name: np.abs(getattr(comparison, name) - comparison.exact) / comparison.exact
         for name in ("covariance32", "covariance64")
     }
-    for name, low, high in (("covariance32", 0.1, 1.0), ("covariance64", 1e-5, 1e-4)):
+    # measured: float32 from 0.32 m down, float64 from 1.8e-5 m down (grid of 4 points a decade)
+    for name, low, high in (("covariance32", 0.2, 0.5), ("covariance64", 1e-5, 3e-5)):
         broken = ~getattr(comparison, f"pd_{name}")
         assert broken.any(), f"the {name} form stays positive definite"
         threshold = comparison.sigma[broken].max()
         assert low <= threshold <= high, f"the {name} form breaks from sigma = {threshold:.3g} m"
         assert broken[comparison.sigma <= threshold].all(), f"the {name} form recovers below {threshold:.3g} m"
-        if name == "covariance32":
-            assert np.all(error[name][broken] >= 1.0 - 1e-6), "float32 breaks with an error below 100%"
+        assert np.all(getattr(comparison, name)[broken] <= 0.0), f"the {name} form breaks with a positive variance"
+    assert np.all(comparison.covariance32[~comparison.pd_covariance32] == 0.0), "float32 breaks with a non-zero variance"
     # float64: the error grows as the radar gets more precise (by over eight decades before breaking)
     working = comparison.pd_covariance64
     assert error["covariance64"][working][-1] > 1e8 * error["covariance64"][working][0], "float64's error does not grow"
@@ -162,11 +159,74 @@ def _() -> None:
 
 @claim("reentry-srekf/square-root-form-holds")
 def _() -> None:
-    """The square-root update is within 1e-15 relative error of the exact variance and positive definite at every sigma."""
+    """The square-root update is within 1e-15 (float64) and 1e-6 (float32) of the exact variance and positive definite at every sigma."""
     comparison = _first_update_comparison()
-    error = np.abs(comparison.square_root - comparison.exact) / comparison.exact
-    assert comparison.pd_square_root.all(), "the square-root form loses positive definiteness"
-    assert error.max() <= 1e-15, f"the square-root form's largest relative error is {error.max():.2g}"
+    # measured: largest relative errors 5.2e-16 (float64) and 1.7e-7 (float32, whose epsilon is 6e-8)
+    for name, bound in (("square_root", 1e-15), ("square_root32", 1e-6)):
+        error = np.abs(getattr(comparison, name) - comparison.exact) / comparison.exact
+        assert getattr(comparison, f"pd_{name}").all(), f"the {name} form loses positive definiteness"
+        assert error.max() <= bound, f"the {name} form's largest relative error is {error.max():.2g}"
+
+
+@claim("reentry-srekf/joseph-form-holds")
+def _() -> None:
+    """Joseph's covariance form in float64 stays positive definite at every sigma, with relative error <= 1e-4 (1.8e-5 at 1e-10 m)."""
+    comparison = _first_update_comparison()
+    error = np.abs(comparison.joseph64 - comparison.exact) / comparison.exact
+    assert comparison.pd_joseph64.all(), "Joseph's form loses positive definiteness"
+    assert 1e-6 <= error.max() <= 1e-4, f"Joseph's form's largest relative error is {error.max():.2g}"
+
+
+@functools.cache
+def _float32_covariance_filter_on_shipped_fall() -> tuple[np.ndarray, np.ndarray, bool]:
+    """The shipped fall filtered by a covariance-form EKF in float32 (short form): (mu (N, 3), P (N, 3, 3), always PD)."""
+    data = starship.load()
+    Q = starship.SQRT_Q.T @ starship.SQRT_Q
+
+    def measure(x: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        return ref.radar_predict(x), ref.radar_jacobian(x)
+
+    mu, P, time = starship.MU0.copy(), starship.S0.T @ starship.S0, 0.0
+    mus, Ps, always_pd = [], [], True
+    for k in range(len(data)):
+        dt = float(data.t[k] - time)
+        if dt > 0:
+            mu, J = starship.rk4_step_with_jacobian(ref.ballistic_dynamics, ref.ballistic_jacobian, mu, np.zeros(3), dt)
+            J32 = J.astype(np.float32)
+            # P+ = J blkdiag(P, Q dt) J^T, in float32
+            Pz = np.zeros((6, 6), dtype=np.float32)
+            Pz[:3, :3], Pz[3:, 3:] = P, Q * dt
+            P = (J32 @ Pz @ J32.T).astype(float)
+        time = float(data.t[k])
+        mu, P = starship.covariance_measurement_update(mu, P, data.range_meas[k : k + 1], measure,
+                                                       starship.SIGMA_RANGE**2 * np.eye(1), np.float32)
+        always_pd &= starship.is_positive_definite(P)
+        mus.append(mu)
+        Ps.append(P)
+    return np.array(mus), np.array(Ps), always_pd
+
+
+@claim("reentry-srekf/radar-50m-safe")
+def _() -> None:
+    """At the lab's radar (sigma 50 m) float32 covariance updates are fine: first update within 1e-4; over the shipped fall variances within 1e-4, means within 1e-3 sigma, always PD."""
+    comparison = _starship_50m_comparison()
+    error = np.abs(comparison.covariance32 - comparison.exact) / comparison.exact
+    assert error.max() <= 1e-4, f"float32's first update at 50 m is off by {error.max():.2g}"
+    _, result, std = _shipped()
+    mu, P, always_pd = _float32_covariance_filter_on_shipped_fall()
+    variance = std**2
+    variance_error = np.max(np.abs(np.diagonal(P, axis1=1, axis2=2) - variance) / variance)
+    mean_error = np.max(np.abs(mu - result.mu) / std)
+    # measured: 4.4e-5 (variances) and 3.2e-4 (means)
+    assert always_pd, "the float32 covariance filter loses positive definiteness on the shipped fall"
+    assert variance_error <= 1e-4, f"the float32 covariance filter's variances differ by up to {variance_error:.2g}"
+    assert mean_error <= 1e-3, f"the float32 covariance filter's means differ by up to {mean_error:.2g} sigma"
+
+
+def _starship_50m_comparison() -> starship.FirstUpdateComparison:
+    """The comparison of part 8 at the lab's radar, sigma = 50 m."""
+    return starship.compare_first_update(ref.sqrt_measurement_update, ref.radar_predict, ref.radar_jacobian,
+                                         np.array([starship.SIGMA_RANGE]))
 
 
 # ---------------------------------------------------------------------------------------------
@@ -191,34 +251,54 @@ def _() -> None:
     assert 3.1 <= nees.mean() <= 3.5, f"the mean NEES is {nees.mean():.2f}"
 
 
-@claim("reentry-srekf/nees-over-falls")
+@claim("reentry-srekf/average-nees-overconfident-early")
 def _() -> None:
-    """Over 40 falls: NEES inside its 95% band at 92-98% of steps on average, mean NEES 2.8-3.8, single falls from < 90% to >= 99%."""
+    """Averaged over 40 falls, the NEES is above its band chi2(120)/40 at >= 95% of the steps of the first 10 s, >= 5 on average over 5-10 s, and above 3.81 on average over 10-20 s."""
+    # Measured (seeds 7100-7139 / 500-539): every step of 0-10 s above the band's upper end 3.81, the
+    # lowest at 3.87 / 4.17 (near 3.5 s); window averages 4.8 / 5.2 (0-2 s), 4.5 / 5.1 (2-5 s),
+    # 7.3 / 9.1 (5-10 s), 4.4 / 5.5 (10-20 s).
+    early, _, upper = _average_nees_in(0.0, 10.0)
+    above = np.mean(early > upper)
+    assert above >= 0.95, f"the average NEES is above its band at only {above:.0%} of the steps of 0-10 s"
+    mid, _, _ = _average_nees_in(5.0, 10.0)
+    assert mid.mean() >= 5.0, f"the average NEES over 5-10 s is {mid.mean():.2f}"
+    late, _, _ = _average_nees_in(10.0, 20.0)
+    assert late.mean() > upper, f"the average NEES over 10-20 s is {late.mean():.2f}, inside its band (up to {upper:.2f})"
+
+
+@claim("reentry-srekf/average-nees-consistent-late")
+def _() -> None:
+    """From 20 s on, the NEES averaged over 40 falls is 2.8-4.2 in every 10 s window and inside its band at >= 60% of the steps."""
+    # Measured (seeds 7100-7139 / 500-539): window averages 3.2 / 3.8 (20-30 s), 3.3 / 3.5 (30-40 s),
+    # 3.2 / 3.4 (40-50 s); inside the band at 100% / 79% of the steps from 20 s on. A few falls with
+    # large errors can lift the average of 40 just above the band, hence the tolerances.
+    for start in (20.0, 30.0, 40.0):
+        window, _, _ = _average_nees_in(start, start + 10.0)
+        assert 2.8 <= window.mean() <= 4.2, f"the average NEES over {start:g}-{start + 10:g} s is {window.mean():.2f}"
+    late, lower, upper = _average_nees_in(20.0, np.inf)
+    inside = np.mean((late >= lower) & (late <= upper))
+    assert inside >= 0.60, f"from 20 s on the average NEES is inside its band at only {inside:.0%} of the steps"
+
+
+@claim("reentry-srekf/pooled-nees-hides-it")
+def _() -> None:
+    """Pooled over all falls and steps, 85-94% of the NEES values lie in the single-step band [0.22, 9.35]."""
+    # Measured: 0.913 (seeds 7100-7139) and 0.889 (500-539); a consistent filter gives 0.95.
     falls = _falls()
-    # Spread, measured over 100 other falls (seeds 1000-1099): the fraction inside the band averaged
-    # 0.954 with a standard deviation of 0.049 between falls, so the average of 40 falls has one of
-    # about 0.008 (the band is over 3 of those either side of 0.95); the mean NEES averaged 2.98 with
-    # a standard deviation of 1.14 between falls, so the average of 40 has one of about 0.18 (the band
-    # reaches 3 of those above 3.1, the average over all 140 falls, with a heavy upper tail).
-    average = falls["nees_inside"].mean()
-    assert 0.92 <= average <= 0.98, f"the NEES is inside its band at {average:.1%} of the steps on average"
-    mean_nees = falls["nees_mean"].mean()
-    assert 2.8 <= mean_nees <= 3.8, f"the mean NEES over the falls is {mean_nees:.2f}"
-    # 11 of the 100 falls had a fraction below 0.9 (none of 40 does so with probability 0.89^40 = 0.01)
-    # and 16 a fraction of 1
-    assert falls["nees_inside"].min() < 0.90 and falls["nees_inside"].max() >= 0.99, (
-        f"single falls range from {falls['nees_inside'].min():.1%} to {falls['nees_inside'].max():.1%}"
-    )
+    lower, upper = starship.nees_band()
+    pooled = np.mean((falls.nees >= lower) & (falls.nees <= upper))
+    assert 0.85 <= pooled <= 0.94, f"the pooled fraction inside the single-step band is {pooled:.3f}"
 
 
 @claim("reentry-srekf/coverage-over-falls")
 def _() -> None:
-    """In about three falls in four (at least 60%, at most 95% of 40), every error stays inside its 3-sigma band."""
+    """In about three falls in five (40-85% of 40), every error stays inside its 3-sigma band throughout."""
     falls = _falls()
-    # over 100 other falls the rate was 0.81; with that rate, 40 falls give fewer than 24 (60%) with
-    # probability 0.0005 and more than 38 (95%) with probability 0.002 (binomial)
-    rate = rate_at_least(falls["all_inside"], 0.60, "every error inside its 3-sigma band throughout a fall")
-    assert rate <= 0.95, f"every error stays inside its band in {rate:.0%} of the falls, more than about three in four"
+    all_inside = np.all(np.abs(falls.truth - falls.mu) <= 3 * falls.std, axis=(1, 2))
+    # measured 0.65 (seeds 7100-7139) and 0.60 (500-539); with a rate of 0.62, 40 falls give a rate
+    # below 0.40 or above 0.85 with probability about 0.004 (binomial, standard deviation 0.077)
+    rate = rate_at_least(all_inside, 0.40, "every error inside its 3-sigma band throughout a fall")
+    assert rate <= 0.85, f"every error stays inside its band in {rate:.0%} of the falls, more than about three in five"
 
 
 # ---------------------------------------------------------------------------------------------
@@ -236,8 +316,10 @@ def _() -> None:
     assert 38.0 <= widest <= 39.0, f"sigma_h is widest at t = {widest} s"
     peak = std[int(np.argmin(np.abs(data.t - widest))), 0]
     assert 27.0 <= peak <= 31.0, f"the widest sigma_h is {peak:.1f} m"
-    lags = _falls()["lag"]
-    # over 100 other falls the lag ranged from 4.2 to 5.0 s (one measurement interval is 0.1 s)
+    falls = _falls()
+    lags = np.array([_widest_altitude_band_after_first_seconds(falls.t, std) - _crossing_time(falls.t, truth[:, 0])
+                     for truth, std in zip(falls.truth, falls.std)])
+    # measured: 4.1-4.9 s (seeds 7100-7139), 4.2-4.7 s (500-539); one measurement interval is 0.1 s
     assert np.all((lags >= 4.0 - 1e-9) & (lags <= 5.0 + 1e-9)), f"the lags range from {lags.min():.1f} to {lags.max():.1f} s"
 
 
@@ -260,3 +342,29 @@ def _() -> None:
     assert 5 <= negative.sum() <= 7, f"the c estimate is negative at {negative.sum()} steps"
     assert 2.5 <= times[0] and times[-1] <= 3.5, f"negative from t = {times[0]} to {times[-1]} s"
     assert -2.4e-4 <= result.mu[:, 2].min() <= -2.0e-4, f"the lowest estimate is {result.mu[:, 2].min():.3g}"
+
+
+@claim("reentry-srekf/c-negative-velocity-correlation")
+def _() -> None:
+    """Shipped fall: corr(v, c) is 0.75-0.8 at t = 2 s and 0.92-0.96 at 3 s; with the true v0 (and h0) c still goes negative."""
+    data, result, _ = _shipped()
+    for time, low, high in ((2.0, 0.75, 0.80), (3.0, 0.92, 0.96)):
+        k = int(np.argmin(np.abs(data.t - time)))
+        P = result.S[k].T @ result.S[k]
+        correlation = P[1, 2] / np.sqrt(P[1, 1] * P[2, 2])
+        assert low <= correlation <= high, f"corr(v, c) at t = {time:g} s is {correlation:.2f}"
+    for mu0 in (np.array([starship.MU0[0], data.v[0], starship.MU0[2]]), np.array([data.h[0], data.v[0], starship.MU0[2]])):
+        run = starship.run_square_root_ekf(data, ref.ballistic_dynamics, ref.ballistic_jacobian, ref.radar_predict,
+                                           ref.radar_jacobian, ref.sqrt_time_update, ref.sqrt_measurement_update, mu0=mu0)
+        assert np.any(run.mu[:, 2] < 0), f"from mu0 = {mu0} the c estimate never goes negative"
+
+
+@claim("reentry-srekf/c-negative-over-falls")
+def _() -> None:
+    """In about a quarter to a third of the simulated falls (10-50% of 40) the c estimate goes negative at some step."""
+    falls = _falls()
+    negative = np.any(falls.mu[:, :, 2] < 0, axis=1)
+    # measured 0.25 (seeds 7100-7139) and 0.35 (500-539); with a rate of 0.3, 40 falls give a rate
+    # outside 0.10-0.50 with probability about 0.005 (binomial, standard deviation 0.072)
+    rate = rate_at_least(negative, 0.10, "the c estimate negative at some step of a fall")
+    assert rate <= 0.50, f"the c estimate goes negative in {rate:.0%} of the falls"

@@ -32,9 +32,9 @@ SIZES = (2, 3, 4, 5, 6, 7)
 
 
 def _random_states(rng: np.random.Generator, count: int = 12) -> np.ndarray:
-    """States [h, v, c] over the lower atmosphere, falling and (a few) rising, some c < 0."""
+    """States [h, v, c] over the lower atmosphere, falling (v < 0, as equation (10) assumes), some c < 0."""
     h = rng.uniform(0.0, 25_000.0, count)
-    v = rng.uniform(-900.0, -20.0, count) * np.where(rng.random(count) < 0.2, -1.0, 1.0)
+    v = rng.uniform(-900.0, -20.0, count)
     c = rng.uniform(-2e-4, 3e-3, count)
     return np.column_stack([h, v, c])
 
