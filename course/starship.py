@@ -664,18 +664,33 @@ def covariance_measurement_update(
     return mu_post.astype(float), P_post.astype(float)
 
 
-def qr_posterior_square_root(S: ArrayLike, H: ArrayLike, sigma: float, dtype: type = np.float32) -> Matrix:
-    """The posterior square root alone, from one Q-less QR computed in ``dtype``.
+FLOAT32_SQUARE_ROOT_FILE: Path = DATA_FILE.parent / "starship_float32_square_root.csv"
+"""The square-root form's first update in single precision, over FIRST_UPDATE_SIGMA, from the
+instructors' reference (your update works in float64, so part 8 cannot run it in float32)."""
+FIRST_UPDATE_SIGMA: Vector = np.logspace(2, -10, 49)
+"""The radar noise standard deviations [m] of part 8's comparison, 100 m down to 1e-10 m."""
 
-    Given only for the comparison of part 8 in single precision (your update works in float64):
-    [S H^T, S; sigma I, 0] = Q [R1, R2; 0, R3] gives S+ = R3 with S+^T S+ = P+. S: (n, n) upper
-    triangular, H: (m, n), sigma [m] the noise standard deviation. Returns S+ (n, n) as float64.
-    """
-    S, H = np.asarray(S, dtype=dtype), np.asarray(H, dtype=dtype)
-    m, n = H.shape
-    pre_array = np.block([[S @ H.T, S], [dtype(sigma) * np.eye(m, dtype=dtype), np.zeros((m, n), dtype=dtype)]])
-    post_array = np.linalg.qr(pre_array, mode="r")
-    return post_array[m:, m:].astype(float)
+
+_LAB_S0 = S0
+"""The lab's prior square root, by another name: compare_first_update's argument S0 hides S0."""
+
+
+def float32_square_root_first_update(sigma: ArrayLike) -> tuple[Vector, NDArray[np.bool_]] | None:
+    """The shipped float32 square-root results at ``sigma`` [m]: var(h) after the update [m^2] and
+    whether each posterior covariance is positive definite, both (K,); None if a sigma is not one
+    of FIRST_UPDATE_SIGMA."""
+    table = np.loadtxt(FLOAT32_SQUARE_ROOT_FILE, delimiter=",", skiprows=1, ndmin=2)
+    rows = [np.flatnonzero(np.isclose(table[:, 0], s, rtol=1e-12, atol=0.0)) for s in np.atleast_1d(sigma)]
+    if any(row.size != 1 for row in rows):
+        return None
+    picked = table[np.concatenate(rows)]
+    return picked[:, 1], picked[:, 2].astype(bool)
+
+
+def format_float32_square_root_csv(sigma: ArrayLike, var_h: ArrayLike, positive_definite: ArrayLike) -> str:
+    """The text of FLOAT32_SQUARE_ROOT_FILE: one row per sigma [m], var(h) [m^2], positive definite (0/1)."""
+    rows = (f"{float(s)!r},{float(v)!r},{int(pd)}" for s, v, pd in zip(sigma, var_h, positive_definite))
+    return "sigma_m,var_h_m2,positive_definite\n" + "\n".join(rows) + "\n"
 
 
 def is_positive_definite(P: ArrayLike) -> bool:
@@ -703,12 +718,12 @@ class FirstUpdateComparison:
     covariance64: Vector  #: the covariance form in float64 [m^2]
     covariance32: Vector  #: the covariance form in float32 [m^2]
     joseph64: Vector  #: Joseph's covariance form in float64 [m^2]
-    square_root32: Vector  #: the square-root form (one QR) in float32 [m^2]
+    square_root32: Vector | None  #: the square-root form in float32 [m^2], shipped; None off FIRST_UPDATE_SIGMA
     pd_square_root: NDArray[np.bool_]  #: whether each posterior covariance is positive definite
     pd_covariance64: NDArray[np.bool_]
     pd_covariance32: NDArray[np.bool_]
     pd_joseph64: NDArray[np.bool_]
-    pd_square_root32: NDArray[np.bool_]
+    pd_square_root32: NDArray[np.bool_] | None
 
 
 def compare_first_update(
@@ -739,7 +754,7 @@ def compare_first_update(
     P_prior = S0.T @ S0
     prior_hh, H_h = P_prior[0, 0], H[0, 0]
     exact = prior_hh * sigma**2 / (H_h**2 * prior_hh + sigma**2)
-    keys = ("sr", "c64", "c32", "j64", "sr32")
+    keys = ("sr", "c64", "c32", "j64")
     out: dict[str, list] = {key: [] for key in keys + tuple(f"pd_{key}" for key in keys)}
     for s in sigma:
         _, S_post = _checked_belief(sqrt_measurement_update(mu0, S0, y_obs, measure, s * np.eye(1)),
@@ -748,16 +763,18 @@ def compare_first_update(
         _, P64 = covariance_measurement_update(mu0, P_prior, y_obs, measure, s**2 * np.eye(1), np.float64)
         _, P32 = covariance_measurement_update(mu0, P_prior, y_obs, measure, s**2 * np.eye(1), np.float32)
         _, J64 = covariance_measurement_update(mu0, P_prior, y_obs, measure, s**2 * np.eye(1), np.float64, joseph=True)
-        S32 = qr_posterior_square_root(S0, H, s, np.float32)
-        for key, P in (("sr", P_sr), ("c64", P64), ("c32", P32), ("j64", J64), ("sr32", S32.T @ S32)):
+        for key, P in (("sr", P_sr), ("c64", P64), ("c32", P32), ("j64", J64)):
             out[key].append(P[0, 0])
             out[f"pd_{key}"].append(is_positive_definite(P))
+    # the shipped float32 run starts from the lab's own prior only
+    shipped32 = float32_square_root_first_update(sigma) if np.array_equal(mu0, MU0) and np.array_equal(S0, _LAB_S0) else None
+    square_root32, pd_square_root32 = shipped32 if shipped32 is not None else (None, None)
     return FirstUpdateComparison(
         sigma=sigma, exact=exact, square_root=np.array(out["sr"]), covariance64=np.array(out["c64"]),
-        covariance32=np.array(out["c32"]), joseph64=np.array(out["j64"]), square_root32=np.array(out["sr32"]),
+        covariance32=np.array(out["c32"]), joseph64=np.array(out["j64"]), square_root32=square_root32,
         pd_square_root=np.array(out["pd_sr"]), pd_covariance64=np.array(out["pd_c64"]),
         pd_covariance32=np.array(out["pd_c32"]), pd_joseph64=np.array(out["pd_j64"]),
-        pd_square_root32=np.array(out["pd_sr32"]),
+        pd_square_root32=pd_square_root32,
     )
 
 
@@ -779,6 +796,8 @@ def plot_first_update_comparison(comparison: FirstUpdateComparison) -> tuple[Fig
         ("square root (yours, QR), float64", comparison.square_root, comparison.pd_square_root, "C0", "-"),
     )
     for label, value, pd, colour, style in series:
+        if value is None:
+            continue
         error = np.maximum(np.abs(value - comparison.exact) / comparison.exact, floor)
         ax.plot(comparison.sigma, error, color=colour, linestyle=style, linewidth=1.2, label=label)
         ax.plot(comparison.sigma[pd], error[pd], "o", color=colour, markersize=4)

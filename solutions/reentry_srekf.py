@@ -214,6 +214,28 @@ def simulate_reentry(rng: np.random.Generator) -> tuple[Vector, Matrix, Vector, 
     return data.t, data.truth, data.range_true, data.range_meas
 
 
+def posterior_square_root(S: ArrayLike, H: ArrayLike, sigma: float, dtype: type = np.float32) -> Matrix:
+    """The posterior square root alone, from one Q-less QR computed in ``dtype``.
+
+    [S H^T, S; sigma I, 0] = Q [R1, R2; 0, R3] gives S+ = R3 with S+^T S+ = P+. S: (n, n) upper
+    triangular, H: (m, n), sigma [m] the noise standard deviation. Returns S+ (n, n) as float64.
+    Hidden, because it is the heart of sqrt_measurement_update; part 8 gets its float32 results as data.
+    """
+    S, H = np.asarray(S, dtype=dtype), np.asarray(H, dtype=dtype)
+    m, n = H.shape
+    pre_array = np.block([[S @ H.T, S], [dtype(sigma) * np.eye(m, dtype=dtype), np.zeros((m, n), dtype=dtype)]])
+    return np.linalg.qr(pre_array, mode="r")[m:, m:].astype(float)
+
+
+def float32_square_root_text() -> str:
+    """The text of the shipped float32 square-root results of part 8, over starship.FIRST_UPDATE_SIGMA."""
+    H = radar_jacobian(starship.MU0)
+    covariances = [S.T @ S for S in (posterior_square_root(starship.S0, H, s) for s in starship.FIRST_UPDATE_SIGMA)]
+    return starship.format_float32_square_root_csv(
+        starship.FIRST_UPDATE_SIGMA, [P[0, 0] for P in covariances], [starship.is_positive_definite(P) for P in covariances]
+    )
+
+
 def data_text(seed: int = DATA_SEED) -> str:
     """The shipped data file's text, built from ``seed``."""
     t, truth, range_true, range_meas = simulate_reentry(np.random.default_rng(seed))
@@ -221,11 +243,14 @@ def data_text(seed: int = DATA_SEED) -> str:
 
 
 def write_data(directory: str | Path, seed: int = DATA_SEED) -> list[Path]:
-    """Build the shipped data file ``starship_reentry.csv`` from ``seed`` into ``directory``."""
+    """Build the shipped data files (``starship_reentry.csv`` from ``seed``, and the float32
+    square-root results of part 8) into ``directory``."""
     path = Path(directory) / starship.DATA_FILE.name
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_bytes(data_text(seed).encode("ascii"))
-    return [path]
+    float32_path = Path(directory) / starship.FLOAT32_SQUARE_ROOT_FILE.name
+    float32_path.write_bytes(float32_square_root_text().encode("ascii"))
+    return [path, float32_path]
 
 
 def main(argv: Sequence[str] | None = None) -> None:

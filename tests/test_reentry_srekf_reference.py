@@ -449,9 +449,9 @@ def test_joseph_form_and_float32_square_root_agree_with_the_update_when_well_con
     _, S_s = ref.sqrt_measurement_update(mu, S, y, measure, SIGMA_RANGE * np.eye(1))
     _, P_j = starship.covariance_measurement_update(mu, S.T @ S, y, measure, SIGMA_RANGE**2 * np.eye(1), joseph=True)
     assert_cov_close(P_j, S_s.T @ S_s, rtol=1e-9)
-    S32 = starship.qr_posterior_square_root(S, ref.radar_jacobian(mu), SIGMA_RANGE, np.float32)
+    S32 = ref.posterior_square_root(S, ref.radar_jacobian(mu), SIGMA_RANGE, np.float32)
     assert_cov_close(S32.T @ S32, S_s.T @ S_s, rtol=1e-5)
-    S64 = starship.qr_posterior_square_root(S, ref.radar_jacobian(mu), SIGMA_RANGE, np.float64)
+    S64 = ref.posterior_square_root(S, ref.radar_jacobian(mu), SIGMA_RANGE, np.float64)
     assert_cov_close(S64.T @ S64, S_s.T @ S_s, rtol=1e-12)
 
 
@@ -534,9 +534,26 @@ def test_filter_is_consistent_with_the_truth(data, result) -> None:
 # Data and report
 # ---------------------------------------------------------------------------------------------
 def test_shipped_data_rebuilds_bit_for_bit(tmp_path: Path) -> None:
-    [rebuilt] = ref.write_data(tmp_path)
+    rebuilt, float32_results = ref.write_data(tmp_path)
     assert rebuilt.name == starship.DATA_FILE.name
     assert rebuilt.read_bytes() == starship.DATA_FILE.read_bytes()
+    assert float32_results.name == starship.FLOAT32_SQUARE_ROOT_FILE.name
+    assert float32_results.read_bytes() == starship.FLOAT32_SQUARE_ROOT_FILE.read_bytes()
+
+
+def test_shipped_float32_square_root_results_are_a_float32_qr_of_the_lab_prior() -> None:
+    """The shipped values, read back at every fourth sigma, against the QR computed here in float32."""
+    sigma = starship.FIRST_UPDATE_SIGMA[::4]
+    var_h, positive_definite = starship.float32_square_root_first_update(sigma)
+    H = ref.radar_jacobian(starship.MU0)
+    for s, v, pd in zip(sigma, var_h, positive_definite):
+        S = ref.posterior_square_root(starship.S0, H, s, np.float32)
+        assert (S.T @ S)[0, 0] == v and pd == starship.is_positive_definite(S.T @ S)
+    # off the shipped grid, or from another prior, there are no float32 values to show
+    assert starship.float32_square_root_first_update([50.0]) is None
+    other_prior = starship.compare_first_update(ref.sqrt_measurement_update, ref.radar_predict, ref.radar_jacobian,
+                                                sigma, S0=2 * starship.S0)
+    assert other_prior.square_root32 is None
 
 
 def test_shipped_data_format_and_truth(data) -> None:

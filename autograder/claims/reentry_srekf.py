@@ -61,7 +61,7 @@ def _widest_altitude_band_after_first_seconds(t: np.ndarray, std: np.ndarray, af
 def _first_update_comparison() -> starship.FirstUpdateComparison:
     """The comparison of part 8, on the notebook's grid of radar precisions."""
     return starship.compare_first_update(ref.sqrt_measurement_update, ref.radar_predict, ref.radar_jacobian,
-                                         np.logspace(2, -10, 49))
+                                         starship.FIRST_UPDATE_SIGMA)
 
 
 # ---------------------------------------------------------------------------------------------
