@@ -41,8 +41,6 @@ SIGMA_GPS = 50.0
 """Standard deviation of the GPS error, m (each axis): the handout's "50 m radius"."""
 SIGMA_WALK = 30.0
 """Default random-walk step of the rank-2 filter, m per minute: 0.5 m/s current x 60 s."""
-SIGMA_V0 = 0.5
-"""Prior standard deviation of the constant-velocity control's first velocity, m/s (the current's speed)."""
 N_FIXES = 120
 """Fixes in a drift: two hours."""
 SUBSTEPS = 3
@@ -233,14 +231,22 @@ Tracks = dict[str, tuple[np.ndarray, np.ndarray | None]]
 NAMES = ("moving average", "rank-2 KF", "CV control", "rank-4 KF")
 """The estimators compared: the trailing mean of 3 fixes, the rank-2 random-walk filter, the
 constant-velocity control (4 states, no current map) and the rank-4 filter (4 states, the current known)."""
+NO_MAP = "rank-4, no map"
+"""The ablation scored beside them: the rank-4 filter told the sea is still (its damped-velocity model
+alpha, sigma_F kept, the current map removed). It is not one of NAMES: it is not counted in "best on"."""
+
+
+def still_water(p: np.ndarray, t: float | np.ndarray) -> np.ndarray:
+    """A current of 0 m/s everywhere: the flow given to the rank-4 filter for the NO_MAP ablation."""
+    return np.zeros(np.shape(p))
 
 
 def constant_velocity_filter(
     kalman_step: Callable[..., tuple[np.ndarray, np.ndarray]],
     transition_matrix: Callable[[float, float], np.ndarray],
     observation_matrix: Callable[[], np.ndarray],
+    sigma_v0: float,
     sigma_v: float = SIGMA_F,
-    sigma_v0: float = SIGMA_V0,
     sigma_gps: float = SIGMA_GPS,
     dt: float = DT,
 ) -> Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]:
@@ -249,7 +255,8 @@ def constant_velocity_filter(
     The state [x, y, vx, vy] holds Bob's velocity over the ground, which the filter must learn from
     the fixes: A = transition_matrix(dt, 1) (alpha = 1, no damping), the velocity a random walk of
     sigma_v [m/s] per step, Q = diag(0, 0, sigma_v^2, sigma_v^2), no input. It starts from the first
-    fix with velocity 0 +- sigma_v0 [m/s]. Built from the given blanks; returns run(y (n, 2) [m]) ->
+    fix with velocity 0 +- sigma_v0 [m/s]: pass the speed of the current Bob drifts in (flow.current),
+    the size of the velocity it has to learn. Built from the given blanks; returns run(y (n, 2) [m]) ->
     estimates (n, 4), covariances (n, 4, 4).
     """
     # x[k+1] = A(dt, alpha = 1) x[k] + [0, 0, e_x, e_y],  e ~ N(0, sigma_v^2 I_2);  y[k] = H x[k] + n_y
@@ -313,8 +320,9 @@ def compare(
     ellipse_area: Callable[..., np.ndarray],
     sigma_walk: float = SIGMA_WALK,
 ) -> Comparison:
-    """Score the four estimators on every drift with the given RMSE and ellipse-area functions."""
-    rmse: dict[str, list[float]] = {name: [] for name in NAMES}
+    """Score the four estimators on every drift with the given RMSE and ellipse-area functions, and
+    the NO_MAP ablation (run_rank4 in still water) by its RMSE only."""
+    rmse: dict[str, list[float]] = {name: [] for name in NAMES + (NO_MAP,)}
     area: dict[str, list[float]] = {name: [] for name in NAMES[1:]}
     inside: dict[str, list[float]] = {name: [] for name in NAMES[1:]}
     for drift in drifts:
@@ -327,6 +335,8 @@ def compare(
                 e = np.asarray(estimate) - drift.position
                 mahalanobis2 = np.einsum("ni,ni->n", e, np.linalg.solve(P, e[..., None])[..., 0])
                 inside[name].append(float(np.mean(mahalanobis2 <= 4.0)))
+        rmse[NO_MAP].append(float(track_rmse(np.asarray(run_rank4(drift.fixes, still_water, drift.t)[0])[:, :2],
+                                             drift.position)))
     as_arrays = lambda scores: {k: np.array(v) for k, v in scores.items()}  # noqa: E731
     return Comparison(as_arrays(rmse), as_arrays(area), as_arrays(inside), len(drifts[0].t))
 
@@ -351,6 +361,10 @@ def format_comparison(result: Comparison, raw_gps: np.ndarray | None = None) -> 
         inside = f"{np.mean(result.inside[name]) * 100:>11.1f}%" if name in result.inside else ""
         lines.append(f"{name:<16}{np.mean(r):>9.1f} m{np.std(r):>8.1f}{np.median(r):>9.1f}{wins[k]:>9d}{area:>15}"
                      f"{inside:>12}")
+    if NO_MAP in result.rmse:
+        r = result.rmse[NO_MAP]
+        lines.append(f"{NO_MAP:<16}{np.mean(r):>9.1f} m{np.std(r):>8.1f}{np.median(r):>9.1f}{'-':>9}"
+                     f"   (ablation: the rank-4 filter told the sea is still)")
     return "\n".join(lines)
 
 
@@ -597,13 +611,19 @@ def plot_errors(drift: Drift, tracks: Tracks, ax: Axes | None = None) -> Axes:
     return ax
 
 
-def plot_comparison(results: dict[str, Comparison], ax: Axes | None = None) -> Axes:
-    """Each estimator's RMSE [m] on every drift (dots) and its mean (bar), per current.
+PAIRS = ((NAMES[1], NAMES[2], "tab:purple"), (NAMES[2], NAMES[3], "tab:brown"), (NO_MAP, NAMES[3], "tab:olive"))
+"""The paired differences of plot_comparison: (first, second, colour); above 0 the second is better."""
+
+
+def plot_comparison(results: dict[str, Comparison]) -> Figure:
+    """Left: each estimator's RMSE [m] on every drift (dots) and its mean (bar), per current.
+    Then, one panel per current: the paired per-drift differences of RMSE [m] of PAIRS (dots),
+    their mean (bar), and the share of drifts on which the second of a pair is better.
 
     ``results`` maps a current's label to its ``Comparison``; drifts are jittered sideways.
     """
-    if ax is None:
-        _, ax = plt.subplots(figsize=(9, 4.2))
+    fig, axes = plt.subplots(1, 1 + len(results), figsize=(15, 4.6), width_ratios=(1.4,) + (1.0,) * len(results))
+    ax = axes[0]
     rng = np.random.default_rng(0)  # the sideways jitter only
     width = 0.8 / len(NAMES)
     for g, (label, result) in enumerate(results.items()):
@@ -617,6 +637,19 @@ def plot_comparison(results: dict[str, Comparison], ax: Axes | None = None) -> A
     ax.set_xlabel("current")
     ax.set_ylabel("RMSE over a drift (m)")
     ax.set_ylim(bottom=0.0)
-    ax.set_title("Every drift's RMSE (dots) and the mean (bar) of each estimator")
-    ax.legend(loc="upper left", bbox_to_anchor=(1.01, 1.0), fontsize=8)
-    return ax
+    ax.set_title("Every drift's RMSE (dots) and the mean (bar)", fontsize=11)
+    ax.legend(loc="lower center", ncol=2, fontsize=8)
+
+    for diff, (label, result) in zip(axes[1:], results.items()):
+        ticks = []
+        for k, (first, second, colour) in enumerate(PAIRS):
+            d = result.rmse[first] - result.rmse[second]
+            diff.plot(k + rng.uniform(-0.25, 0.25, len(d)), d, ".", color=colour, ms=3, alpha=0.6)
+            diff.hlines(np.mean(d), k - 0.35, k + 0.35, color=colour, lw=2.5)
+            ticks.append(f"{first}\n- {second}\n(> 0 on {np.mean(d > 0):.0%})")
+        diff.axhline(0.0, color="black", lw=0.8)
+        diff.set_xticks(range(len(PAIRS)), ticks, fontsize=7)
+        diff.set_ylabel("difference of RMSE on a drift (m)")
+        diff.set_title(f"{label}: paired differences\n(above 0: the second is better)", fontsize=10)
+    fig.tight_layout()
+    return fig

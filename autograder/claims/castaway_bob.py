@@ -35,14 +35,17 @@ def _drifts(condition: str) -> tuple[ocean.Flow, list[ocean.Drift]]:
     return flow, ocean.simulate_drifts(flow, np.random.default_rng(SEED), N_DRIFTS)
 
 
-def _cv(**options: float):
-    return ocean.constant_velocity_filter(ref.kalman_step, ref.transition_matrix, ref.observation_matrix, **options)
+def _cv(condition: str, **options: float):
+    """The CV control as in the notebook: its first velocity 0 +- the current's speed."""
+    flow = _drifts(condition)[0]
+    return ocean.constant_velocity_filter(ref.kalman_step, ref.transition_matrix, ref.observation_matrix,
+                                          sigma_v0=flow.current, **options)
 
 
 @functools.cache
 def _comparison(condition: str) -> ocean.Comparison:
     flow, drifts = _drifts(condition)
-    return ocean.compare(drifts, flow, ref.trailing_mean, ref.run_rank2, _cv(), ref.run_rank4, ref.track_rmse,
+    return ocean.compare(drifts, flow, ref.trailing_mean, ref.run_rank2, _cv(condition), ref.run_rank4, ref.track_rmse,
                          ref.ellipse_area, sigma_walk=CONDITIONS[condition][1])
 
 
@@ -241,8 +244,8 @@ def _() -> None:
 
 @claim("castaway-bob/rank4-best-in-both")
 def _() -> None:
-    """The rank-4 filter has the lowest mean RMSE in both currents, and the lowest RMSE of the four on at least 70 % of drifts in each ("about 4 in 5 or more": 90-97 % and 81-91 % measured on 4 seeds of 100 drifts; 70 % is about 3 sd of such a rate below 80 %)."""
-    for condition, minimum in (("current", 0.7), ("slack", 0.7)):
+    """The rank-4 filter has the lowest mean RMSE of the four in both currents, and the lowest RMSE of the four on at least 80 % of drifts in the current ("about 9 in 10": 90-97 % measured on 3 seeds of 100 drifts) and 60 % in slack water ("2 in 3 or more": 73-81 % measured on 3 seeds of 100 drifts, 64 % on the notebook's 50; 60 % is 3 sd of such a rate below 73 %)."""
+    for condition, minimum in (("current", 0.8), ("slack", 0.6)):
         means = {name: float(np.mean(_rmse(condition, name))) for name in ocean.NAMES}
         assert min(means, key=means.get) == RANK4, f"{condition}: mean RMSEs {means}"
         stacked = np.column_stack([_rmse(condition, name) for name in ocean.NAMES])
@@ -252,11 +255,11 @@ def _() -> None:
 
 @claim("castaway-bob/rank4-same-in-both")
 def _() -> None:
-    """The rank-4 filter's mean RMSE is 28-32 m in both currents, and the two means differ by less than 1.5 m."""
-    current, slack = (float(np.mean(_rmse(c, RANK4))) for c in CONDITIONS)
-    _between(current, 28.0, 32.0, "the rank-4 mean RMSE in the current [m]")
-    _between(slack, 28.0, 32.0, "the rank-4 mean RMSE in slack water [m]")
-    _between(abs(current - slack), 0.0, 1.5, "the difference of the rank-4 means [m]")
+    """The rank-4 filter's mean RMSE is 28-32 m in both currents, and on matched drifts (same seed: same starts, forces and GPS errors) its RMSE in the two currents differs by less than 1 m on at least 90 % of drifts (98-99 % measured on 3 seeds of 100 drifts)."""
+    current, slack = (_rmse(c, RANK4) for c in CONDITIONS)
+    _between(float(np.mean(current)), 28.0, 32.0, "the rank-4 mean RMSE in the current [m]")
+    _between(float(np.mean(slack)), 28.0, 32.0, "the rank-4 mean RMSE in slack water [m]")
+    rate_at_least(np.abs(current - slack) < 1.0, 0.9, "the rank-4 RMSE differing by < 1 m between the currents on a matched drift")
 
 
 @claim("castaway-bob/rank2-ties-moving-average-in-current")
@@ -276,6 +279,39 @@ def _() -> None:
     for step in (5.0, 10.0, 15.0, 20.0, 30.0, 45.0, 60.0):
         rank2 = float(np.mean([ref.track_rmse(ref.run_rank2(d.fixes, sigma_walk=step)[0], d.position) for d in drifts]))
         assert rank2 > ma - 2.0, f"sigma_walk = {step} m: rank-2 {rank2:.1f} m against the moving average's {ma:.1f} m"
+
+
+@claim("castaway-bob/rank2-lag-formula")
+def _() -> None:
+    """In the current (sigma_walk = 30 m) the rank-2 filter's steady-state gain is K = 0.44-0.45, and its mean lag along Bob's track after the first 20 minutes is 27-34 m and 0.9-1.05 times v dt (1 - K) / K with v dt Bob's mean step (0.97-1.01 measured on 3 seeds of 100 drifts)."""
+    q, r = ocean.SIGMA_WALK**2, ocean.SIGMA_GPS**2
+    # steady state of P- = P + q, P = P- r / (P- + r): P-^2 - q P- - q r = 0
+    predicted_variance = (q + np.sqrt(q * q + 4.0 * q * r)) / 2.0
+    K = predicted_variance / (predicted_variance + r)
+    _between(K, 0.44, 0.45, "the rank-2 steady-state gain")
+    lags, steps = [], []
+    for d in _drifts("current")[1]:
+        step = np.diff(d.position, axis=0)[20:]  # the step into fix n, for n >= 21
+        error = (ref.run_rank2(d.fixes, sigma_walk=ocean.SIGMA_WALK)[0] - d.position)[21:]
+        direction = step / np.linalg.norm(step, axis=1, keepdims=True)
+        lags.append(-np.mean(np.sum(error * direction, axis=1)))
+        steps.append(np.mean(np.linalg.norm(np.diff(d.position, axis=0), axis=1)))
+    lag, predicted = float(np.mean(lags)), float(np.mean(steps)) * (1.0 - K) / K
+    _between(lag, 27.0, 34.0, "the rank-2 filter's mean lag along the track [m]")
+    _between(lag / predicted, 0.9, 1.05, f"the measured lag / v dt (1 - K) / K = {predicted:.1f} m")
+
+
+@claim("castaway-bob/slack-walk-step-from-grid")
+def _() -> None:
+    """In slack water sigma_walk = 15 m gives the rank-2 filter's lowest mean RMSE of the steps 5, 10, 15, 20, 25, 30 m, and 5 m (a minute's travel) a mean RMSE above the moving average's."""
+    _, drifts = _drifts("slack")
+    # 15 m is the comparison's own step: reuse its scores
+    means = {step: float(np.mean(_rmse("slack", RANK2))) if step == CONDITIONS["slack"][1] else
+             float(np.mean([ref.track_rmse(ref.run_rank2(d.fixes, sigma_walk=step)[0], d.position) for d in drifts]))
+             for step in (5.0, 10.0, 15.0, 20.0, 25.0, 30.0)}
+    assert min(means, key=means.get) == 15.0, f"slack water: rank-2 mean RMSE by sigma_walk {means}"
+    ma = float(np.mean(_rmse("slack", MA)))
+    assert means[5.0] > ma, f"slack water: sigma_walk = 5 m gives {means[5.0]:.1f} m, the moving average {ma:.1f} m"
 
 
 @claim("castaway-bob/rank2-beats-moving-average-in-slack")
@@ -303,44 +339,68 @@ def _() -> None:
     rate_at_least(diff > 0, 0.8, "current: the rank-4 filter better than the CV control on a drift")
 
 
-@claim("castaway-bob/velocity-state-no-gain-in-slack")
+@claim("castaway-bob/no-map-fails-in-current")
 def _() -> None:
-    """In slack water the CV control and the rank-2 filter are within 2 m of each other on average (both 31-35 m)."""
-    cv, rank2 = (float(np.mean(_rmse("slack", n))) for n in (CV, RANK2))
-    _between(abs(cv - rank2), 0.0, 2.0, "|CV - rank-2| mean RMSE in slack water [m]")
-    for value, name in ((cv, CV), (rank2, RANK2)):
-        _between(value, 31.0, 35.0, f"the {name} mean RMSE in slack water [m]")
+    """In the current the rank-4 filter told the sea is still scores a mean RMSE of 50-70 m, worse than the moving average, and worse than the rank-4 filter on at least 95 % of drifts (100 % measured on 3 seeds)."""
+    no_map = _rmse("current", ocean.NO_MAP)
+    _between(float(np.mean(no_map)), 50.0, 70.0, "the no-map mean RMSE in the current [m]")
+    _between(float(np.mean(no_map - _rmse("current", MA))), 0.0, np.inf, "no-map minus moving-average mean RMSE [m]")
+    rate_at_least(no_map > _rmse("current", RANK4), 0.95, "current: the rank-4 filter better than its no-map ablation on a drift")
+
+
+@claim("castaway-bob/velocity-state-small-gain-in-slack")
+def _() -> None:
+    """In slack water the CV control beats the rank-2 filter by 0.5-2.5 m on average (1.2-1.9 m measured on 3 seeds of 100 drifts, standard error 0.3 m), on at least half the drifts (62-75 % measured)."""
+    diff = _rmse("slack", RANK2) - _rmse("slack", CV)
+    _between(float(np.mean(diff)), 0.5, 2.5, "rank-2 minus CV mean RMSE in slack water [m]")
+    rate_at_least(diff > 0, 0.5, "slack water: the CV control better than the rank-2 filter on a drift")
 
 
 @claim("castaway-bob/rank4-gain-in-slack")
 def _() -> None:
-    """In slack water the rank-4 filter beats the CV control by 2-4.5 m on average, and on at least 80 % of drifts (91-95 % measured on 4 seeds)."""
+    """In slack water the rank-4 filter beats the CV control by 1-2.5 m on average (1.5-1.6 m measured on 3 seeds, standard error 0.15 m), and on at least 70 % of drifts (81-86 % measured)."""
     diff = _rmse("slack", CV) - _rmse("slack", RANK4)
-    _between(float(np.mean(diff)), 2.0, 4.5, "CV minus rank-4 mean RMSE in slack water [m]")
-    rate_at_least(diff > 0, 0.8, "slack water: the rank-4 filter better than the CV control on a drift")
+    _between(float(np.mean(diff)), 1.0, 2.5, "CV minus rank-4 mean RMSE in slack water [m]")
+    rate_at_least(diff > 0, 0.7, "slack water: the rank-4 filter better than the CV control on a drift")
+
+
+@claim("castaway-bob/map-gain-in-slack")
+def _() -> None:
+    """In slack water the current map is worth 0.2-1 m: the rank-4 filter beats its no-map ablation by that much on average (0.4-0.7 m measured on 3 seeds, standard error 0.12 m), on at least half the drifts (65-69 % measured)."""
+    diff = _rmse("slack", ocean.NO_MAP) - _rmse("slack", RANK4)
+    _between(float(np.mean(diff)), 0.2, 1.0, "no-map minus rank-4 mean RMSE in slack water [m]")
+    rate_at_least(diff > 0, 0.5, "slack water: the rank-4 filter better than its no-map ablation on a drift")
+
+
+@claim("castaway-bob/damping-gain-in-slack")
+def _() -> None:
+    """In slack water the damped-velocity model is worth 0.6-1.8 m: the no-map ablation beats the CV control by that much on average (0.8-1.1 m measured on 3 seeds, standard error 0.17 m), on at least 60 % of drifts (74-76 % measured)."""
+    diff = _rmse("slack", CV) - _rmse("slack", ocean.NO_MAP)
+    _between(float(np.mean(diff)), 0.6, 1.8, "CV minus no-map mean RMSE in slack water [m]")
+    rate_at_least(diff > 0, 0.6, "slack water: the no-map ablation better than the CV control on a drift")
 
 
 @claim("castaway-bob/cv-step-near-best")
 def _() -> None:
-    """The CV control's sigma_v = sigma_F = 0.02 m/s is within 5 % of the best mean RMSE over sigma_v in {0.01, 0.02, 0.04} m/s, in both currents."""
+    """The CV control's sigma_v = sigma_F = 0.02 m/s gives a mean RMSE within 0.5 m of the best over sigma_v in {0.01, 0.015, 0.02, 0.03} m/s, in both currents."""
     for condition in CONDITIONS:
         _, drifts = _drifts(condition)
-        means = {}
-        for sigma_v in (0.01, 0.02, 0.04):
-            run = _cv(sigma_v=sigma_v)
+        means = {ocean.SIGMA_F: float(np.mean(_rmse(condition, CV)))}  # the comparison's own step
+        for sigma_v in (0.01, 0.015, 0.03):
+            run = _cv(condition, sigma_v=sigma_v)
             means[sigma_v] = float(np.mean([ref.track_rmse(run(d.fixes)[0][:, :2], d.position) for d in drifts]))
-        assert means[0.02] <= 1.05 * min(means.values()), f"{condition}: mean RMSE by sigma_v {means}"
+        assert means[ocean.SIGMA_F] <= min(means.values()) + 0.5, f"{condition}: mean RMSE by sigma_v {means}"
 
 
 @claim("castaway-bob/coverage")
 def _() -> None:
-    """The 2-sigma ellipses of the CV control and the rank-4 filter hold Bob 84-91 % of the time (86.5 % if honest) in both currents; the rank-2 filter's 80-86 % in the current and 89-95 % in slack water."""
+    """The 2-sigma ellipses of the CV control and the rank-4 filter hold Bob 84-91 % of the time (86.5 % if honest) in both currents; the rank-2 filter's 81-85 % ("about 83 %") in the current and 90-94 % ("about 92 %") in slack water."""
     for condition in CONDITIONS:
         inside = _comparison(condition).inside
         for name in (CV, RANK4):
             _between(float(np.mean(inside[name])), 0.84, 0.91, f"{condition}: the {name} coverage")
-    _between(float(np.mean(_comparison("current").inside[RANK2])), 0.80, 0.86, "current: the rank-2 coverage")
-    _between(float(np.mean(_comparison("slack").inside[RANK2])), 0.89, 0.95, "slack water: the rank-2 coverage")
+    _between(float(np.mean(_comparison("current").inside[RANK2])), 0.81, 0.85, "current: the rank-2 coverage")
+    _between(float(np.mean(_comparison("slack").inside[RANK2])), 0.90, 0.94, "slack water: the rank-2 coverage")
 
 
 @claim("castaway-bob/rank4-smallest-ellipses")
