@@ -25,8 +25,8 @@ T_RADAR = 5.0
 """The lecture's measurement interval, s."""
 L1, L2 = 0.16, 0.01
 """Process-noise intensities of the coordinated-turn model: acceleration (m^2/s^3) and turn rate (rad^2/s^3)."""
-R_RADAR = np.diag([10.0**2, (1.0 * DEG) ** 2])
-"""Radar noise covariance: 10 m in range, 1 deg in bearing."""
+R_RADAR = np.diag([100.0**2, (1.0 * DEG) ** 2])
+"""Radar noise covariance: 100 m in range, 1 deg in bearing (the authors' code: diag((1e2)^2, (pi/180)^2))."""
 X0_TRUE = np.array([25000.0, 10000.0, -120.0, 0.0, 0.0])
 """The aircraft at t = 0: 25 km east, 10 km north, flying west at 120 m/s, not turning."""
 M0 = np.array([25000.0, 10000.0, -120.0, 0.0, 1e-6])

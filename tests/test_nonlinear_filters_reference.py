@@ -302,5 +302,6 @@ def test_the_shipped_table_loads_and_is_the_reference_build():
     assert all(curve.shape == (100, 3) for curve in shipped.rmse_curves.values())
     assert all(values.shape == (len(ref.SWEEP_T), 3) for values in shipped.sweep.values())
     for row in shipped.table.values():
-        # the metric is the RMS over runs of each run's metric, so it is at least their median
-        assert row["median"]["position"] <= row["position"] * (1 + 1e-5)
+        # the metric is the RMS over runs of each run's metric; at least half the runs have a metric >= the
+        # median, so the mean square is at least median^2 / 2 (the RMS can be below the median itself)
+        assert row["median"]["position"] <= np.sqrt(2) * row["position"] * (1 + 1e-5)
