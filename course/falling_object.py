@@ -642,6 +642,7 @@ def plot_tuning(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING
         ax.set_title(f"{name}: coverage of the bands")
         ax.grid(alpha=0.3, axis="x")
     axes[0].set_yticks(rows, [s.label for s in settings], fontsize=8)
-    axes[0].legend(loc="lower left", fontsize=8)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=9)
     fig.suptitle("Which settings are over-confident (left of the dotted lines) or under-confident (right)?")
     return axes
