@@ -73,9 +73,11 @@ TUNING_SETTINGS: tuple[TuningSetting, ...] = (
     TuningSetting("auxiliary", 500, CHOSEN),
     TuningSetting("bootstrap", 2000, HANDOUT_STD),
     TuningSetting("bootstrap", 2000, CHOSEN),
+    TuningSetting("auxiliary", 500, (10.0, 10.0, 5.0)),
 )
 """The settings of the shipped tuning study (course/data/falling_object_tuning.csv)."""
 TUNING_SEEDS: int = 50  # simulated half minutes per setting
+SCORE_FROM: float = 20.0  # the study scores RMSE and coverage at the readings t_j >= SCORE_FROM [s]
 WIDTH_EVERY: int = 10  # the study keeps the width of beta's 90% band at every 10th reading
 
 STATE_NAMES: tuple[str, str, str] = ("h", "v", "beta")
@@ -200,17 +202,21 @@ def load_tuning(path: str | Path | None = None) -> TuningStudy:
     return TuningStudy(runs, width_times)
 
 
-def format_tuning_table(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING_SETTINGS) -> str:
-    """A table of the study: RMSE of h, v, beta and the coverage of the 50% and 90% bands, per setting."""
+def format_tuning_table(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING_SETTINGS,
+                        ideal: dict[str, Vector] | None = None) -> str:
+    """A table of the study: RMSE of h, v, beta and the coverage of the 50% and 90% bands, per setting,
+    and with ``ideal`` (from ideal_scores) a last row with what an exact posterior would score."""
     rows = [f"{'setting':<44}{'RMSE h [m]':>11}{'v [m/s]':>9}{'beta':>7}{'in 50%: h':>11}{'v':>6}{'beta':>6}"
             f"{'in 90%: h':>11}{'v':>6}{'beta':>6}"]
-    for setting in settings:
-        m = study.summary(setting)
-        rows.append(f"{setting.label:<44}" + f"{m['rmse'][0]:>11.0f}{m['rmse'][1]:>9.0f}{m['rmse'][2]:>7.0f}"
+    named = [(setting.label, study.summary(setting)) for setting in settings]
+    if ideal is not None:
+        named.append(("exact posterior (linearised), expected", ideal))
+    for label, m in named:
+        rows.append(f"{label:<44}" + f"{m['rmse'][0]:>11.0f}{m['rmse'][1]:>9.0f}{m['rmse'][2]:>7.0f}"
                     + f"{m['cover50'][0]:>11.0%}{m['cover50'][1]:>6.0%}{m['cover50'][2]:>6.0%}"
                     + f"{m['cover90'][0]:>11.0%}{m['cover90'][1]:>6.0%}{m['cover90'][2]:>6.0%}")
     n = len(next(iter(study.runs.values()))["rmse_h"])
-    rows.append(f"(means over {n} simulated half minutes per setting; RMSE and coverage over t = 0.1 s to 30 s)")
+    rows.append(f"(means over {n} simulated half minutes per setting; RMSE and coverage over t = {SCORE_FROM:g} s to 30 s)")
     return "\n".join(rows)
 
 
@@ -254,33 +260,84 @@ def bootstrap_step(
     return x_new, w_new / np.sum(w_new)
 
 
-def beta_crb(dynamics: Dynamics, x0: Vector, t: Vector, sigma: float = SIGMA, prior_std: Vector = PRIOR_STD) -> Vector:
-    """The Cramer-Rao bound of beta [kg/(m s^2)] after the readings b_1..b_j, for every t_j (shape (len(t),)).
-
-    The noise-free model x' = f(x) (``dynamics``) from x0 makes the altitudes h_j(x0) a function of the
-    initial state; their sensitivities s_j = dh_j / dx0 (central differences of tight ODE solves) give
-    the Fisher information of the readings, J_j = C^-1 + sum_{i=1..j} s_i s_i^T / sigma^2, with the
-    prior covariance C = diag(prior_std^2) standing for what is known at t_0. The bound on the standard
-    deviation of any unbiased estimate of beta is sqrt([J_j^-1]_33); it is evaluated along the true
-    trajectory (x0 = the truth), and it knows nothing of the filter's artificial process noise.
-    """
+def state_sensitivities(dynamics: Dynamics, x0: Vector, t: Vector) -> NDArray[np.float64]:
+    """Phi_j = dx(t_j) / dx0 of the noise-free model x' = f(x) (``dynamics``) from x0, shape (len(t), 3, 3),
+    by central differences of tight ODE solves."""
     from scipy.integrate import solve_ivp
 
     t = np.asarray(t, dtype=float)
     x0 = np.asarray(x0, dtype=float)
     step = np.array([1.0, 0.1, 1.0])  # difference steps in h0 [m], v0 [m/s], beta [kg/(m s^2)]
 
-    def altitudes(start: Vector) -> Vector:
-        solution = solve_ivp(dynamics, (t[0], t[-1]), start, method="DOP853", t_eval=t, rtol=1e-12, atol=1e-9)
-        return solution.y[0]
+    def states(start: Vector) -> Matrix:
+        return solve_ivp(dynamics, (t[0], t[-1]), start, method="DOP853", t_eval=t, rtol=1e-12, atol=1e-9).y
 
-    # s_j = dh_j / dx0, one column per component of x0: (h(x0 + d e_i) - h(x0 - d e_i)) / (2 d)
-    S = np.column_stack([(altitudes(x0 + d * e) - altitudes(x0 - d * e)) / (2 * d) for d, e in zip(step, np.eye(3))])
+    # column i: (x(x0 + d e_i) - x(x0 - d e_i)) / (2 d)
+    return np.stack([(states(x0 + d * e) - states(x0 - d * e)) / (2 * d) for d, e in zip(step, np.eye(3))], axis=-1).transpose(1, 0, 2)
+
+
+def _information(phi: NDArray[np.float64], sigma: float, prior_std: Vector) -> NDArray[np.float64]:
+    """J_j = C^-1 + sum_{i=1..j} s_i s_i^T / sigma^2 for every j, s_i = dh_i / dx0 (row 0 of Phi_i)."""
+    S = phi[:, 0, :].copy()
     S[0] = 0.0  # b_0 is already in the prior (h_init = b_0)
-    # J_j = C^-1 + sum_{i <= j} s_i s_i^T / sigma^2, for every j at once
-    J = np.diag(1.0 / np.asarray(prior_std) ** 2) + np.cumsum(S[:, :, None] * S[:, None, :], axis=0) / sigma**2
+    return np.diag(1.0 / np.asarray(prior_std) ** 2) + np.cumsum(S[:, :, None] * S[:, None, :], axis=0) / sigma**2
+
+
+def beta_crb(dynamics: Dynamics, x0: Vector, t: Vector, sigma: float = SIGMA, prior_std: Vector = PRIOR_STD) -> Vector:
+    """The Cramer-Rao bound of beta [kg/(m s^2)] after the readings b_1..b_j, for every t_j (shape (len(t),)).
+
+    The noise-free model x' = f(x) (``dynamics``) from x0 makes the altitudes h_j(x0) a function of the
+    initial state; their sensitivities s_j = dh_j / dx0 give the Fisher information of the readings,
+    J_j = C^-1 + sum_{i=1..j} s_i s_i^T / sigma^2, with the prior covariance C = diag(prior_std^2)
+    standing for what is known at t_0. Because J includes the prior, sqrt([J_j^-1]_33) is a Bayesian
+    (Van Trees) bound: a floor for the root mean square error of any estimate of beta, averaged over
+    the prior; here it is evaluated along the true trajectory (x0 = the truth), where it is also the
+    posterior standard deviation of the linearised model. It knows nothing of the filter's
+    artificial process noise.
+    """
+    J = _information(state_sensitivities(dynamics, x0, t), sigma, prior_std)
     # [J^-1]_33 by solving J y = e_3
-    return np.sqrt(np.linalg.solve(J, np.broadcast_to([0.0, 0.0, 1.0], (t.shape[0], 3))[..., None])[:, 2, 0])
+    return np.sqrt(np.linalg.solve(J, np.broadcast_to([0.0, 0.0, 1.0], (J.shape[0], 3))[..., None])[:, 2, 0])
+
+
+def ideal_scores(
+    dynamics: Dynamics, x0: Vector, t: Vector, score_from: float = SCORE_FROM, sigma: float = SIGMA,
+    prior_std: Vector = PRIOR_STD, prior_mean: tuple[float, float] = (V_INIT, BETA_INIT),
+) -> dict[str, Vector]:
+    """What an exact posterior would score in the tuning study: the expected RMSE (3,) of its mean and the
+    expected coverage of its 50% and 90% bands (3,) for h, v, beta, over the readings t_j >= score_from.
+
+    The posterior is the exact one of the noise-free model x' = f(x) (``dynamics``), linearised at the
+    truth x0, with the lab's prior (h_init = b_0; v and beta at ``prior_mean``). Its error
+    x0_hat - x0 = J^-1 (C^-1 d + sum_i s_i e_i / sigma) has the fixed part mu = J^-1 C^-1 d, with d the
+    prior mean's offset from the truth, and a random part of covariance R = J^-1 (J - C_vb^-1) J^-1
+    (C_vb^-1: the prior precision of v and beta, whose means are not random). At t_j the error is
+    Phi_j times that, and the band mean +- z sd holds the truth with probability
+    Phi((z sd - m) / s) - Phi((-z sd - m) / s). Means over the scored t_j, as in the study.
+    """
+    from scipy.stats import norm
+
+    t = np.asarray(t, dtype=float)
+    phi = state_sensitivities(dynamics, x0, t)
+    J = _information(phi, sigma, prior_std)
+    prior_precision = np.diag(1.0 / np.asarray(prior_std) ** 2)
+    d = np.array([0.0, prior_mean[0] - x0[1], prior_mean[1] - x0[2]])
+    fixed_precision = np.diag([0.0, *np.diag(prior_precision)[1:]])
+    # mu_j = J_j^-1 C^-1 d,  R_j = J_j^-1 (J_j - C_vb^-1) J_j^-1,  P_j = J_j^-1 (the posterior covariance of x0)
+    P = np.linalg.inv(J)
+    mu = P @ (prior_precision @ d)
+    R = P @ (J - fixed_precision) @ P
+    scored = t >= score_from - 1e-9
+    phi, P, mu, R = phi[scored], P[scored], mu[scored], R[scored]
+    # at t_j: mean error m = Phi mu, posterior variance Phi P Phi^T, random part's variance Phi R Phi^T
+    m = np.einsum("jab,jb->ja", phi, mu)
+    sd = np.sqrt(np.einsum("jab,jbc,jac->ja", phi, P, phi))
+    s = np.sqrt(np.einsum("jab,jbc,jac->ja", phi, R, phi))
+    scores = {"rmse": np.sqrt(np.mean(m**2 + s**2, axis=0))}
+    for level in (50, 90):
+        a = norm.ppf(0.5 + level / 200) * sd
+        scores[f"cover{level}"] = np.mean(norm.cdf((a - m) / s) - norm.cdf((-a - m) / s), axis=0)
+    return scores
 
 
 # =============================================================================================
@@ -410,15 +467,16 @@ def _require_complete(history: FilterHistory, n_times: int) -> None:
 # Report and figures
 # =============================================================================================
 def coverage(data: RadarData, history: FilterHistory) -> dict[str, Vector]:
-    """The fraction of reading times at which the truth lies inside each band.
+    """The fraction of the reading times t_1..t_T at which the truth lies inside each band (t_0, where
+    the cloud is the prior, is left out, as in the tuning study).
 
     Returns ``{"50": (3,), "90": (3,)}``, one fraction per state variable (h, v, beta).
     """
     _require_complete(history, data.t.shape[0])
-    x = data.x_true
+    x, j = data.x_true[:, 1:], slice(1, None)
     return {
-        "50": np.mean((history.lo50 <= x) & (x <= history.hi50), axis=1),
-        "90": np.mean((history.lo90 <= x) & (x <= history.hi90), axis=1),
+        "50": np.mean((history.lo50[:, j] <= x) & (x <= history.hi50[:, j]), axis=1),
+        "90": np.mean((history.lo90[:, j] <= x) & (x <= history.hi90[:, j]), axis=1),
     }
 
 
@@ -450,8 +508,9 @@ def print_report(data: RadarData, history: FilterHistory) -> None:
 def plot_tracking(data: RadarData, history: FilterHistory, title: str = "", crb: Vector | None = None) -> NDArray[np.object_]:
     """The show and tell: h, v and beta against time with the truth, weighted mean, weighted
     median and the 50% and 90% credibility bands. With ``crb`` (the Cramer-Rao bound of beta at
-    every t_j, from beta_crb), the beta panels also show the truth +- 1.645 crb: the narrowest
-    90% band an unbiased estimate could have.
+    every t_j, from beta_crb), the beta panels also show the truth +- 1.645 crb: a curve of the
+    width of an ideal 90% band (an ideal band is centred on its estimate, not on the truth, so
+    only the widths compare).
 
     Altitude and speed change by tens of kilometres and kilometres per second, while the bands
     are a few hundred metres wide, so the top row shows the values and the bottom row shows
@@ -471,7 +530,7 @@ def plot_tracking(data: RadarData, history: FilterHistory, title: str = "", crb:
                 ax.plot(t, data.b - offset, ".", color="0.55", ms=2.5, label="radar reading $b_j$")
             ax.plot(t, data.x_true[i] - offset, color="k", lw=1.6, label="truth")
             ax.plot(t, history.mean[i] - offset, color="C3", lw=1.3, label="weighted mean")
-            ax.plot(t, history.median[i] - offset, color="C1", lw=1.1, ls="--", label="median")
+            ax.plot(t, history.median[i] - offset, color="C1", lw=1.1, ls="--", label="weighted median")
             ax.grid(alpha=0.3)
         if i == 2 and crb is not None:
             for row, offset in ((0, 0.0), (1, data.x_true[2])):
@@ -513,7 +572,16 @@ def plot_health(data: RadarData, histories: Mapping[str, FilterHistory]) -> NDAr
         ax.grid(alpha=0.3)
     for ax in axes[:2]:
         ax.set_ylim(0, 1.05 * max(h.n_particles for h in histories.values()))
+    # the no-information baseline: multinomial resampling with equal weights keeps 1 - 1/e of N as
+    # distinct parents per step, and n such steps leave about 2N / (n + 2) roots (pure genetic drift)
+    for N in sorted({h.n_particles for h in histories.values()}):
+        n = np.arange(data.t.shape[0])
+        axes[1].axhline((1 - np.exp(-1)) * N, color="0.3", lw=1.0, ls="--",
+                        label=f"equal weights: (1 - 1/e) N = {(1 - np.exp(-1)) * N:.0f}")
+        axes[2].semilogy(data.t, 2 * N / (n + 2), color="0.3", lw=1.0, ls="--", label="equal weights: 2N / (n + 2) after n steps")
     axes[0].legend(loc="lower left", fontsize=9)
+    axes[1].legend(loc="lower left", fontsize=9)
+    axes[2].legend(loc="lower left", fontsize=9)
     fig.suptitle("Health of the particle filter: resampling weights, parents and ancestry")
     return axes
 
@@ -530,7 +598,7 @@ def plot_band_widths(study: TuningStudy, settings: list[TuningSetting], t: Vecto
 
     if ax is None:
         _, ax = plt.subplots(figsize=(9, 4.2), layout="constrained")
-    for setting, colour in zip(settings, ("C0", "C1", "C2", "C3", "C5")):
+    for setting, colour in zip(sorted(settings, key=lambda s: s.N), ("C0", "C1", "C2", "C3", "C5")):
         widths = study.runs[setting]["width90_beta"]
         low, mid, high = np.percentile(widths, [10, 50, 90], axis=0)
         ax.fill_between(study.width_times, low, high, color=colour, alpha=0.2, lw=0)
@@ -547,11 +615,13 @@ def plot_band_widths(study: TuningStudy, settings: list[TuningSetting], t: Vecto
     return ax
 
 
-def plot_tuning(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING_SETTINGS) -> NDArray[np.object_]:
-    """Calibration of every setting: for h, v and beta, the fraction of the time the truth lies in
-    the 50% band (open circles) and the 90% band (dots), mean over the seeds with +- 2 standard
-    errors. Left of the dotted line at 50% or 90%, the bands are too narrow (over-confident);
-    right of it, too wide (under-confident). Returns the 3 Axes."""
+def plot_tuning(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING_SETTINGS,
+                ideal: dict[str, Vector] | None = None) -> NDArray[np.object_]:
+    """Calibration of every setting: for h, v and beta, the fraction of the scored time (t >= SCORE_FROM)
+    the truth lies in the 50% band (open circles) and the 90% band (squares), mean over the seeds with
+    +- 2 standard errors. Left of the dotted line at 50% or 90%, the bands are too narrow
+    (over-confident); right of it, too wide (under-confident). With ``ideal`` (from ideal_scores), a
+    green line marks what an exact posterior would score. Returns the 3 Axes."""
     import matplotlib.pyplot as plt
 
     fig, axes = plt.subplots(1, 3, figsize=(15, 0.42 * len(settings) + 1.8), sharey=True, layout="constrained")
@@ -564,11 +634,15 @@ def plot_tuning(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING
             ax.errorbar(mean, rows, xerr=error, fmt=marker, mfc="white" if level == "50" else "C0", color="C0", ms=6,
                         label=f"truth in the {level}% band")
             ax.axvline(int(level) / 100, color="k", lw=0.9, ls=":")
+            if ideal is not None:
+                ax.axvline(ideal[f"cover{level}"][i], color="C2", lw=1.2, alpha=0.8,
+                           label="exact posterior, expected" if level == "90" else None)
         ax.set_xlim(0, 1.02)
-        ax.set_xlabel(f"fraction of the time the truth of {name} is inside")
+        ax.set_xlabel(f"fraction of t = {SCORE_FROM:g}-30 s the truth of {name} is inside")
         ax.set_title(f"{name}: coverage of the bands")
         ax.grid(alpha=0.3, axis="x")
     axes[0].set_yticks(rows, [s.label for s in settings], fontsize=8)
-    axes[0].legend(loc="lower left", fontsize=8)
+    handles, labels = axes[0].get_legend_handles_labels()
+    fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=9)
     fig.suptitle("Which settings are over-confident (left of the dotted lines) or under-confident (right)?")
     return axes

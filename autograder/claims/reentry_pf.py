@@ -3,7 +3,7 @@
 The tuning study (course/data/falling_object_tuning.csv, 50 simulated half minutes per setting)
 is built by ``solutions.reentry_pf.tuning_runs`` and rebuilt byte for byte by
 ``python -m autograder data --check``, so the checks that quote it read the shipped file rather
-than rerun 650 filters. The Cramer-Rao bound is recomputed; the diagnostics of single runs are
+than rerun 700 filters. The Cramer-Rao bound is recomputed; the diagnostics of single runs are
 recomputed on 10 fresh seeds.
 """
 
@@ -19,6 +19,7 @@ from solutions import reentry_pf as ref
 
 HANDOUT = {N: fo.TuningSetting("auxiliary", N, fo.HANDOUT_STD) for N in (500, 2000, 5000)}
 CHOSEN = {N: fo.TuningSetting("auxiliary", N, fo.CHOSEN) for N in (500, 2000)}
+SMALL_BETA_NOISE = {N: fo.TuningSetting("auxiliary", N, (10.0, 10.0, 5.0)) for N in (500, 2000)}
 BOOTSTRAP = {"handout": fo.TuningSetting("bootstrap", 2000, fo.HANDOUT_STD), "chosen": fo.TuningSetting("bootstrap", 2000, fo.CHOSEN)}
 
 
@@ -43,8 +44,25 @@ def handout_runs(seeds: range = range(1000, 1010), N: int = 2000) -> list[fo.Fil
     return runs
 
 
+@functools.cache
+def ideal(score_from: float = fo.SCORE_FROM) -> dict[str, np.ndarray]:
+    return fo.ideal_scores(ref.tracking_dynamics, fo.X0_TRUE, fo.time_grid(), score_from=score_from)
+
+
+def prior_band() -> float:
+    return 2 * fo.Z90 * fo.PRIOR_STD[2]
+
+
 def mean(setting: fo.TuningSetting, column: str) -> float:
     return float(np.mean(study().runs[setting][column]))
+
+
+@claim("reentry-pf/crb-insensitive")
+def _() -> None:
+    """The bound at 30 s changes by less than 3% when the truth's beta moves by +-400 or its v0 by +-50."""
+    for shift in ([0.0, 0.0, 400.0], [0.0, 0.0, -400.0], [0.0, 50.0, 0.0], [0.0, -50.0, 0.0]):
+        moved = fo.beta_crb(ref.tracking_dynamics, fo.X0_TRUE + np.array(shift), fo.time_grid())[-1]
+        assert abs(moved / crb()[-1] - 1) < 0.03, (shift, moved, crb()[-1])
 
 
 @claim("reentry-pf/crb-information")
@@ -90,27 +108,70 @@ def _() -> None:
                   "the ESS of the fitness weights below 0.35 N at some reading")
 
 
+EQUAL_WEIGHTS_KEPT = 1 - np.exp(-1)  # distinct fraction that multinomial resampling keeps from equal weights
+
+
+def drift_roots(N: int, n: int) -> float:
+    """Roots left after n multinomial resamplings of N equally weighted particles: 2N / (n + 2)."""
+    return 2 * N / (n + 2)
+
+
 @claim("reentry-pf/parents-fraction")
 def _() -> None:
-    """Each resampling draws between 25% and 70% of the N particles as distinct parents, at every step of 10 fresh runs."""
+    """Handout's setting, N = 2000: in each of 10 fresh runs the median over the steps of the distinct-parent fraction
+    lies between 0.55 and 0.632 (1 - 1/e, the equal-weights value), and no step keeps more than 70%."""
     fractions = np.array([h.parents[1:] / h.n_particles for h in handout_runs()])
-    assert 0.25 < fractions.min() and fractions.max() < 0.7, (fractions.min(), fractions.max())
+    medians = np.median(fractions, axis=1)
+    rate_at_least(list((0.55 < medians) & (medians < EQUAL_WEIGHTS_KEPT)), 1.0,
+                  "a run's median distinct-parent fraction between 0.55 and 1 - 1/e")
+    assert fractions.max() < 0.7, fractions.max()
+
+
+@claim("reentry-pf/equal-weights-drift")
+def _() -> None:
+    """Multinomial resampling of N = 5000 equal weights, 300 times, on 5 seeds: the distinct-parent fraction is
+    0.632 +- 0.005 at each step on average, and the roots left are within a factor 1.5 of 2N / (n + 2) = 33 on each
+    seed (the spread of the root count at 33 is about +-17%, so a factor 1.5 is over 2 sigma each way)."""
+    N, steps = 5000, 300
+    for seed in range(5):
+        rng = np.random.default_rng([seed, 77])
+        root, kept = np.arange(N), []
+        for _ in range(steps):
+            k = np.searchsorted(np.arange(1, N + 1) / N, np.sort(rng.random(N)), side="right")
+            kept.append(np.unique(k).size / N)
+            root = root[k]
+        roots = np.unique(root).size
+        assert abs(np.mean(kept) - EQUAL_WEIGHTS_KEPT) < 0.005, np.mean(kept)
+        assert drift_roots(N, steps) / 1.5 < roots < 1.5 * drift_roots(N, steps), (seed, roots)
 
 
 @claim("reentry-pf/roots-collapse")
 def _() -> None:
-    """Handout's setting, N = 5000: fewer than 30 particles of t_0 have descendants at 30 s, in all 50 study runs."""
+    """Handout's setting, N = 5000: fewer than 30 particles of t_0 have descendants at 30 s, in all 50 study runs, and
+    the median run keeps more than a third of the 33 roots that equal weights would leave (2N / (n + 2))."""
     roots = study().runs[HANDOUT[5000]]["roots_end"]
-    assert roots.max() < 30, roots.max()
+    assert roots.max() < 30 and np.median(roots) > drift_roots(5000, 300) / 3, (roots.max(), np.median(roots))
 
 
 @claim("reentry-pf/fewer-particles-narrower")
 def _() -> None:
-    """Handout's setting: the median width of beta's 90% band at 30 s grows with N (500, 2000, 5000), and at
-    N = 500 it is narrower than the yardstick in some study runs."""
+    """Handout's setting: the median width of beta's 90% band at 30 s grows with N (500, 2000, 5000); at N = 500
+    it is narrower than the yardstick in some study runs; and at N = 500 the median band is already below 0.8 of
+    the prior's at 10 s, while the bound there is still above 0.99 of the prior's (narrowing without information)."""
     medians = [np.median(study().runs[HANDOUT[N]]["width90_beta"][:, -1]) for N in (500, 2000, 5000)]
     assert medians[0] < medians[1] < medians[2], medians
     assert study().runs[HANDOUT[500]]["width90_beta"][:, -1].min() < 2 * fo.Z90 * crb()[-1]
+    at_10 = int(np.flatnonzero(np.isclose(study().width_times, 10.0))[0])
+    early = np.median(study().runs[HANDOUT[500]]["width90_beta"][:, at_10]) / prior_band()
+    assert early < 0.8 and crb()[round(10 / fo.DT)] > 0.99 * fo.PRIOR_STD[2], (early, crb()[round(10 / fo.DT)])
+
+
+@claim("reentry-pf/handout-band-near-prior")
+def _() -> None:
+    """Handout's setting, N = 5000: the median width of beta's 90% band at 30 s is still above 0.8 of the prior's
+    90% band (4935)."""
+    ratio = np.median(study().runs[HANDOUT[5000]]["width90_beta"][:, -1]) / prior_band()
+    assert ratio > 0.8, ratio
 
 
 @claim("reentry-pf/handout-v-too-wide")
@@ -130,18 +191,22 @@ def _() -> None:
 
 @claim("reentry-pf/chosen-rmse")
 def _() -> None:
-    """N = 2000: the chosen setting's RMSE of h is below 0.7, of v below 0.45, of beta below 1 times the handout's."""
+    """N = 2000, scored over t >= 20 s: the chosen setting's RMSE of h is below 0.5, of v below 0.2, of beta below
+    0.6 times the handout's; its beta RMSE is within 1.3 to 1.8 times the exact posterior's, the handout's over 2.5."""
     ratios = [mean(CHOSEN[2000], f"rmse_{n}") / mean(HANDOUT[2000], f"rmse_{n}") for n in fo.STATE_NAMES]
-    assert ratios[0] < 0.7 and ratios[1] < 0.45 and ratios[2] < 1.0, ratios
+    assert ratios[0] < 0.5 and ratios[1] < 0.2 and ratios[2] < 0.6, ratios
+    to_ideal = [mean(s, "rmse_beta") / ideal()["rmse"][2] for s in (CHOSEN[2000], HANDOUT[2000])]
+    assert 1.3 < to_ideal[0] < 1.8 and to_ideal[1] > 2.5, to_ideal
 
 
 @claim("reentry-pf/chosen-coverage")
 def _() -> None:
-    """N = 2000, chosen setting: every 90% band holds the truth at least 90% of the time; the 50% band of h 45-60%,
-    of v over 70%, of beta over 55%."""
+    """N = 2000, chosen setting, scored over t >= 20 s: every 90% band holds the truth at least 90% of the time; the
+    50% band of h 45-60%, of v over 85%, of beta over 60%, while the exact posterior's 50% bands score 50-53%."""
     c90 = [mean(CHOSEN[2000], f"cover90_{n}") for n in fo.STATE_NAMES]
     c50 = [mean(CHOSEN[2000], f"cover50_{n}") for n in fo.STATE_NAMES]
-    assert min(c90) >= 0.9 and 0.45 <= c50[0] <= 0.6 and c50[1] > 0.7 and c50[2] > 0.55, (c50, c90)
+    assert min(c90) >= 0.9 and 0.45 <= c50[0] <= 0.6 and c50[1] > 0.85 and c50[2] > 0.6, (c50, c90)
+    assert np.all((0.5 <= ideal()["cover50"]) & (ideal()["cover50"] <= 0.53)), ideal()["cover50"]
 
 
 @claim("reentry-pf/small-noise-overconfident")
@@ -161,14 +226,14 @@ def _() -> None:
 @claim("reentry-pf/bootstrap-similar")
 def _() -> None:
     """N = 2000, handout's and chosen setting: the bootstrap filter's RMSE of h and v is within 10% of the auxiliary
-    filter's, and every coverage within 5 percentage points."""
+    filter's, and every coverage within 7 percentage points."""
     for name, aux in (("handout", HANDOUT[2000]), ("chosen", CHOSEN[2000])):
         boot = BOOTSTRAP[name]
         for n in ("h", "v"):
             ratio = mean(boot, f"rmse_{n}") / mean(aux, f"rmse_{n}")
             assert 0.9 < ratio < 1.1, (name, n, ratio)
         for column in (f"cover{p}_{n}" for p in (50, 90) for n in fo.STATE_NAMES):
-            assert abs(mean(boot, column) - mean(aux, column)) < 0.05, (name, column)
+            assert abs(mean(boot, column) - mean(aux, column)) < 0.07, (name, column)
 
 
 @claim("reentry-pf/euler-error-small")
@@ -185,3 +250,48 @@ def _() -> None:
     """The median over a run of the fitness weights' ESS is above 0.8 N, in each of 10 fresh runs (N = 2000)."""
     rate_at_least([np.median(h.ess_resample[1:]) > 0.8 * h.n_particles for h in handout_runs()], 1.0,
                   "the median ESS of the fitness weights above 0.8 N")
+
+
+@claim("reentry-pf/ideal-whole-run")
+def _() -> None:
+    """Scored over the whole run (t_1..t_T) at the lab's truth, an exact posterior's beta bands would hold the truth
+    70-75% (50% band) and 95-97% (90% band) of the time; scored over t >= 20 s, every band of h, v, beta scores
+    50-53% and 90-92%."""
+    whole = ideal(fo.DT)
+    assert 0.70 < whole["cover50"][2] < 0.75 and 0.95 < whole["cover90"][2] < 0.97, whole
+    late = ideal()
+    assert np.all((0.5 <= late["cover50"]) & (late["cover50"] <= 0.53)), late
+    assert np.all((0.9 <= late["cover90"]) & (late["cover90"] <= 0.92)), late
+
+
+@claim("reentry-pf/chosen-band-width")
+def _() -> None:
+    """Chosen setting, N = 2000: beta's 90% band at 30 s is 3 to 5 times the yardstick in the median study run and
+    over 2 times in every run; with N = 500 its median is below that of N = 2000 and its 90% band holds the truth
+    less than 75% of the scored time."""
+    yardstick = 2 * fo.Z90 * crb()[-1]
+    ratio = study().runs[CHOSEN[2000]]["width90_beta"][:, -1] / yardstick
+    assert 3 < np.median(ratio) < 5 and ratio.min() > 2, (np.median(ratio), ratio.min())
+    small = np.median(study().runs[CHOSEN[500]]["width90_beta"][:, -1]) / yardstick
+    assert small < np.median(ratio) and mean(CHOSEN[500], "cover90_beta") < 0.75, (small, mean(CHOSEN[500], "cover90_beta"))
+
+
+@claim("reentry-pf/beta-noise-robust")
+def _() -> None:
+    """Noise (10, 10, 5) against the chosen (10, 10, 50), scored over t >= 20 s: the same RMSE within 5% at N = 2000;
+    beta's 90% band holds the truth less than 30% of the time at N = 500 (chosen: over 60%) and less than 90% at
+    N = 2000 (chosen: over 95%)."""
+    for n in fo.STATE_NAMES:
+        assert abs(mean(SMALL_BETA_NOISE[2000], f"rmse_{n}") / mean(CHOSEN[2000], f"rmse_{n}") - 1) < 0.05, n
+    small = [mean(SMALL_BETA_NOISE[N], "cover90_beta") for N in (500, 2000)]
+    chosen = [mean(CHOSEN[N], "cover90_beta") for N in (500, 2000)]
+    assert small[0] < 0.3 and chosen[0] > 0.6 and small[1] < 0.9 and chosen[1] > 0.95, (small, chosen)
+
+
+@claim("reentry-pf/chosen-band-widens-early")
+def _() -> None:
+    """Chosen setting, N = 2000: in 30% to 70% of the study runs beta's 90% band is wider than the prior's at some
+    whole second between 10 s and 18 s."""
+    times = (study().width_times >= 10 - 1e-9) & (study().width_times <= 18 + 1e-9)
+    wider = np.mean(study().runs[CHOSEN[2000]]["width90_beta"][:, times].max(axis=1) > prior_band())
+    assert 0.3 <= wider <= 0.7, wider
