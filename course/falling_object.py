@@ -579,9 +579,9 @@ def plot_health(data: RadarData, histories: Mapping[str, FilterHistory]) -> NDAr
         axes[1].axhline((1 - np.exp(-1)) * N, color="0.3", lw=1.0, ls="--",
                         label=f"equal weights: (1 - 1/e) N = {(1 - np.exp(-1)) * N:.0f}")
         axes[2].semilogy(data.t, 2 * N / (n + 2), color="0.3", lw=1.0, ls="--", label="equal weights: 2N / (n + 2) after n steps")
-    axes[0].legend(loc="lower left", fontsize=9)
-    axes[1].legend(loc="lower left", fontsize=9)
-    axes[2].legend(loc="lower left", fontsize=9)
+    # one legend below the panels, so that it covers no curve: the runs, then each baseline once
+    labelled = {label: handle for ax in axes for handle, label in zip(*ax.get_legend_handles_labels())}
+    fig.legend(labelled.values(), labelled.keys(), loc="outside lower center", ncol=len(labelled), fontsize=9)
     fig.suptitle("Health of the particle filter: resampling weights, parents and ancestry")
     return axes
 
@@ -611,7 +611,7 @@ def plot_band_widths(study: TuningStudy, settings: list[TuningSetting], t: Vecto
     ax.set_ylabel(r"width of the 90% band of $\beta$ [kg/(m s$^2$)]")
     ax.set_title(r"How fast does the filter learn $\beta$? Width of the 90% band over many seeds")
     ax.grid(alpha=0.3)
-    ax.legend(loc="lower left", fontsize=8)
+    ax.legend(loc="upper center", bbox_to_anchor=(0.5, -0.16), ncol=2, fontsize=8)  # below the axes: covers no band
     return ax
 
 
