@@ -29,6 +29,14 @@ DISGUISED_KUPDATE = '''def kupdate(x_f, B_f, y, H, R):
 '''
 
 INDEPENDENT = {
+    "nees": '''def nees(errors, covariances):
+    values = []
+    for e, C in zip(errors, covariances):
+        L = np.linalg.cholesky(C)
+        z = np.linalg.solve(L, e)
+        values.append(z @ z)
+    return np.array(values)
+''',
     "gain_information_form": '''def gain_information_form(B, H, R):
     Rinv = np.linalg.inv(R)
     P = np.linalg.inv(np.linalg.inv(B) + H.T @ Rinv @ H)
