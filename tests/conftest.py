@@ -1,0 +1,23 @@
+"""Runs every test that draws random numbers on seed 0 and 20 other seeds (see tests/random_draws.py)."""
+
+import pytest
+
+from random_draws import SEEDS
+
+
+def pytest_configure(config: pytest.Config) -> None:
+    config.addinivalue_line(
+        "markers", "random_draws(false_fail, why, own_seeds, fixed_seed, scope): the test draws random "
+        "numbers; it states its false-fail probability, and a `seed` argument runs it on every seed in "
+        "tests/random_draws.py's SEEDS")
+
+
+def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
+    """Parametrise ``seed`` over SEEDS for a test marked random_draws; refuse an unmarked ``seed``."""
+    if "seed" not in metafunc.fixturenames:
+        return
+    marker = metafunc.definition.get_closest_marker("random_draws")
+    if marker is None:
+        raise pytest.UsageError(f"{metafunc.definition.nodeid} takes `seed` but states no false-fail "
+                                "probability: decorate it with @random_draws(...) (tests/random_draws.py)")
+    metafunc.parametrize("seed", SEEDS, ids=[f"seed{s}" for s in SEEDS], scope=marker.kwargs["scope"])
