@@ -1,5 +1,7 @@
 """The train-kf reference against independent implementations and hand-derived facts."""
 
+import functools
+
 import numpy as np
 import pytest
 import scipy.linalg
@@ -8,11 +10,13 @@ from filterpy.kalman import KalmanFilter
 import solutions.train_kf as ref
 from course import train
 from course.checks import random_spd
+from random_draws import random_draws
 
 
 @pytest.mark.parametrize("n, m", [(1, 1), (2, 2), (2, 1), (4, 3), (6, 2)])
-def test_gain_forms_agree_with_each_other_and_with_explicit_inverses(n, m):
-    rng = np.random.default_rng(n * 10 + m)
+@random_draws(false_fail=0.0, why="an identity between three formulas; the draw only picks well-conditioned B, H, R")
+def test_gain_forms_agree_with_each_other_and_with_explicit_inverses(n, m, seed):
+    rng = np.random.default_rng([seed, n, m])
     B, H, R = random_spd(rng, n), rng.standard_normal((m, n)), random_spd(rng, m)
     inv = np.linalg.inv
     # The textbook formulas, written with explicit inverses as an independent oracle.
@@ -29,12 +33,17 @@ def test_gain_with_direct_observation_is_B_over_B_plus_R():
     np.testing.assert_allclose(ref.gain_covariance_form(B, np.eye(2), R), np.diag([0.5, 0.9]))
 
 
-def test_process_noise_is_the_covariance_of_the_simulated_noise():
+@random_draws(false_fail=3e-10, why="(n-1) s^2 / sigma^2 is chi-square(n-1) with n = 200 000; a 2% band has both tails at 2.6e-10")
+def test_process_noise_is_the_covariance_of_the_simulated_noise(seed):
     # Q must be the covariance of one step of the true process (course.train.forward), which
-    # simulates Z = (z/60, z) without using Q. 200 000 one-step samples: 4 sigma tolerance.
-    rng = np.random.default_rng(7)
-    steps = np.array([train.forward(np.zeros(2), 1, rng)[1] for _ in range(20_000)])
-    np.testing.assert_allclose(np.cov(steps.T), ref.process_noise(15.0), rtol=0.05)
+    # simulates Z = (z/60, z) without using Q. The residuals x_{t+1} - A x_t of one 200 000-step path
+    # are 200 000 independent draws of Z = z (1/60, 1), so their sample covariance is s^2 (1/60, 1)(1/60, 1)^T,
+    # with (n - 1) s^2 / 15^2 ~ chi-square(n - 1): every entry is off by the one ratio s^2 / 15^2.
+    # P(|s^2 / 15^2 - 1| > 0.02) = chi2.sf(1.02 (n-1), n-1) + chi2.cdf(0.98 (n-1), n-1) = 2.6e-10 (scipy),
+    # and a Q wrong by more than 2% fails.
+    states = train.forward(np.zeros(2), 200_000, np.random.default_rng(seed))
+    residuals = states[1:] - states[:-1] @ train.model_matrix().T
+    np.testing.assert_allclose(np.cov(residuals.T), ref.process_noise(15.0), rtol=0.02)
     h = 1 / 60
     np.testing.assert_allclose(ref.process_noise(15.0), 225 * np.array([[h * h, h], [h, 1]]))
 
@@ -59,8 +68,9 @@ def test_filter_matches_filterpy_on_the_shipped_data():
         np.testing.assert_allclose(Bs[t], kf.P, rtol=1e-7, atol=1e-9)
 
 
-def test_filter_matches_filterpy_with_partial_observations():
-    rng = np.random.default_rng(5)
+@random_draws(false_fail=0.0, why="an identity: two implementations of one recursion; the draw only picks the model")
+def test_filter_matches_filterpy_with_partial_observations(seed):
+    rng = np.random.default_rng(seed)
     n, m, T = 4, 2, 25
     A = np.eye(n) + 0.1 * rng.standard_normal((n, n))
     Q, R, B0 = random_spd(rng, n), random_spd(rng, m), random_spd(rng, n)
@@ -134,18 +144,12 @@ def _quadratic_form_weights(C: np.ndarray, M: np.ndarray) -> np.ndarray:
     return np.linalg.eigvalsh(L.T @ M @ L)
 
 
-def test_filter_beats_gps_and_is_consistent_over_many_hours():
-    # Over 1000 simulated hours, the mean NEES of the filter is its state dimension 2 (a consistent
-    # filter), and its mean squared position and velocity errors are the means of its own P_t, which are
-    # far below the GPS's. Each statistic is a sum of independent hours of a quadratic form e^T M e of
-    # the hour's Gaussian errors e ~ N(0, C), so it is a weighted sum of chi-square(1) variables with
-    # weights known exactly (the eigenvalues of L^T M L). Each tolerance is the Chernoff bound for a
-    # two-sided false-fail probability of 1e-6 / 3, so the test fails wrongly with probability <= 1e-6.
-    # (The old check, |mean NEES - 2| < 0.1 over 200 hours, ignored that the NEES of one hour is strongly
-    # correlated from minute to minute: its standard deviation is about 0.08, and it failed for about a
-    # quarter of the seeds.) For 1000 hours the tolerances are about 0.21 for the mean NEES (about 6 of its
-    # standard deviations, 0.034), 0.27 mi^2 for the position and 2.6 mph^2 for the velocity mean squared errors.
-    T, n_hours = 60, 1000
+@functools.cache
+def _consistency_bounds(T: int, n_hours: int) -> tuple[dict, dict, dict]:
+    """The matrices M of the three statistics e^T M e, their expected means, and their tolerances.
+
+    The same for every seed, so computed once.
+    """
     C, P = _error_covariance(T)
     selectors = {"nees": np.linalg.inv(P), "position": np.array([[1.0, 0.0], [0.0, 0.0]]),
                  "velocity": np.array([[0.0, 0.0], [0.0, 1.0]])}
@@ -158,7 +162,26 @@ def test_filter_beats_gps_and_is_consistent_over_many_hours():
     # Before sampling: the filter's own variances are far below the GPS's (100 mi^2, 100 mph^2).
     assert np.sqrt(expected["position"] + tolerance["position"]) < 0.2 * 10.0
     assert expected["velocity"] + tolerance["velocity"] < 100.0
-    rng = np.random.default_rng(11)
+    return selectors, expected, tolerance
+
+
+@random_draws(false_fail=1e-6, why="Chernoff bounds on each statistic's two tails, 1e-6 / 3 per statistic, from its exact chi-square weights")
+def test_filter_beats_gps_and_is_consistent_over_many_hours(seed):
+    # Over 200 simulated hours, the mean NEES of the filter is its state dimension 2 (a consistent
+    # filter), and its mean squared position and velocity errors are the means of its own P_t, which are
+    # far below the GPS's. Each statistic is a sum of independent hours of a quadratic form e^T M e of
+    # the hour's Gaussian errors e ~ N(0, C), so it is a weighted sum of chi-square(1) variables with
+    # weights known exactly (the eigenvalues of L^T M L). Each tolerance is the Chernoff bound for a
+    # two-sided false-fail probability of 1e-6 / 3, so the test fails wrongly with probability <= 1e-6.
+    # (The old check, |mean NEES - 2| < 0.1 over 200 hours, ignored that the NEES of one hour is strongly
+    # correlated from minute to minute: its standard deviation is about 0.08, and it failed for about a
+    # quarter of the seeds.) For 200 hours the tolerances are about 0.51 for the mean NEES (about 7 of its
+    # standard deviations, 0.076), 0.67 mi^2 for the position and 5.9 mph^2 for the velocity mean squared
+    # errors. Power: a filter that takes R off by a factor of 2 has a mean NEES of 3.46 (R / 2) or
+    # 1.30 (2 R) and fails; the NEES hardly sees Q off by 2 (2.26 and 1.93), as section 9 shows.
+    T, n_hours = 60, 200
+    selectors, expected, tolerance = _consistency_bounds(T, n_hours)
+    rng = np.random.default_rng(seed)
     A, H, R, Q = train.model_matrix(), train.gps_operator(), train.gps_covariance(), ref.process_noise(15.0)
     x0, B0 = train.initial_belief()
     totals = {name: 0.0 for name in selectors}
@@ -182,8 +205,9 @@ def test_kupdate_moves_towards_the_observation():
     np.testing.assert_allclose(B_a, np.diag([2.0, 0.9]))
 
 
-def test_forward_follows_the_true_process():
-    rng = np.random.default_rng(3)
+@random_draws(false_fail=0.0, why="an identity of the simulated process: x_{t+1} - x_t = v_{t+1} / 60 for every draw")
+def test_forward_follows_the_true_process(seed):
+    rng = np.random.default_rng(seed)
     states = train.forward(np.array([0.0, 100.0]), 60, rng)
     assert states.shape == (61, 2)
     # x_{t+1} = x_t + v_{t+1}/60 holds exactly for the simulated process (x gets z/60 too).
