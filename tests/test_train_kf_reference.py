@@ -8,6 +8,8 @@ import scipy.linalg
 from filterpy.kalman import KalmanFilter
 
 import solutions.train_kf as ref
+from autograder import data
+from autograder.labs import get_lab
 from course import train
 from course.checks import random_spd
 from random_draws import random_draws
@@ -212,3 +214,7 @@ def test_forward_follows_the_true_process(seed):
     assert states.shape == (61, 2)
     # x_{t+1} = x_t + v_{t+1}/60 holds exactly for the simulated process (x gets z/60 too).
     np.testing.assert_allclose(np.diff(states[:, 0]), states[1:, 1] / 60)
+
+
+def test_shipped_data_is_rebuilt_bit_for_bit():
+    assert data.stale_files([get_lab("train-kf")]) == []
