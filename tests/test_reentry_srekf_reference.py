@@ -21,6 +21,7 @@ import pytest  # noqa: E402
 from matplotlib.collections import PolyCollection  # noqa: E402
 
 from course import starship  # noqa: E402
+from random_draws import random_draws  # noqa: E402
 from course.starship import G, L, M, P0, R, RADAR_R1, RADAR_R2, SIGMA_RANGE, T0  # noqa: E402
 from autograder.hidden_tests.reentry_srekf import BLANKS  # noqa: E402
 from solutions import reentry_srekf as ref  # noqa: E402
@@ -51,11 +52,12 @@ def complex_step_jacobian(fun, x: np.ndarray, step: float = 1e-30) -> np.ndarray
     return np.column_stack(columns)
 
 
-def central_difference_jacobian(fun, x: np.ndarray, rel_step: float = 1e-6) -> np.ndarray:
+def central_difference_jacobian(fun, x: np.ndarray, steps: np.ndarray) -> np.ndarray:
+    """Central differences (f(x + s e_j) - f(x - s e_j)) / (2 s) with the absolute steps s_j."""
     x = np.asarray(x, dtype=float)
     columns = []
     for j in range(x.size):
-        step = rel_step * max(abs(x[j]), 1e-3)
+        step = steps[j]
         e = np.zeros_like(x)
         e[j] = step
         columns.append((np.asarray(fun(x + e)) - np.asarray(fun(x - e))) / (2 * step))
@@ -70,6 +72,15 @@ def rk4_oracle(z: np.ndarray, dt: float) -> np.ndarray:
     k3 = f_oracle(x + (k2 * dt + w) / 2)
     k4 = f_oracle(x + k3 * dt + w)
     return x + dt * (k1 + 2 * k2 + 2 * k3 + k4) / 6 + w
+
+
+# Steps for central differences of f and the range in (h [m], v [m/s], c [m^2/kg]). f is quadratic in v
+# and linear in c, and the range does not depend on them, so central differences are exact there up to
+# rounding, which a large step keeps small: at most u |f| / s = 1.1e-16 x 1200 / 1e-4 ~ 1e-9 in c's column.
+# In h the functions vary on scales of (T0 - L h) / (L 5.26) > 4 km (pressure) and 5 km (range): the
+# truncation (s / 4 km)^2 / 6 < 1e-8 relative for s = 1 m, and the rounding u |f| / s < 1e-12. (Steps
+# relative to x, 1e-6 |x|, gave rounding errors above rtol 1e-6 for states near v = 0, c = 0 or h = 0.)
+FD_STEPS = np.array([1.0, 1.0, 1e-4])
 
 
 def random_upper_sqrt(rng: np.random.Generator, n: int, scales: np.ndarray | None = None) -> np.ndarray:
@@ -130,8 +141,9 @@ def test_dynamics_density_matches_standard_atmosphere(h: float, rho_isa: float) 
     assert rho == pytest.approx(rho_isa, rel=1e-3)
 
 
-def test_dynamics_matches_closed_form_and_drag_opposes_fall() -> None:
-    rng = np.random.default_rng(1)
+@random_draws(false_fail=0.0, why="an identity with the closed form to rtol 1e-12, and drag > 0 for every falling state; the draw only picks the states")
+def test_dynamics_matches_closed_form_and_drag_opposes_fall(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     for _ in range(50):
         x = np.array([rng.uniform(0, 20000), rng.uniform(-800, -50), rng.uniform(1e-4, 3e-3)])
         f = ref.ballistic_dynamics(x)
@@ -141,15 +153,16 @@ def test_dynamics_matches_closed_form_and_drag_opposes_fall() -> None:
         assert f[1] > -G, "drag must decelerate a falling vehicle (d > 0)"
 
 
-def test_jacobian_matches_finite_and_complex_step_differences() -> None:
-    rng = np.random.default_rng(2)
+@random_draws(false_fail=0.0, why="deterministic differences: complex step to machine precision, central differences to truncation and rounding far below rtol 1e-6; the draw only picks the states")
+def test_jacobian_matches_finite_and_complex_step_differences(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     for _ in range(30):
         x = np.array([rng.uniform(0, 20000), rng.uniform(-800, 800), rng.uniform(-1e-3, 3e-3)])
         J = ref.ballistic_jacobian(x)
         assert J.shape == (3, 3)
         np.testing.assert_allclose(J, complex_step_jacobian(f_oracle, x), rtol=1e-10, atol=1e-14)
         np.testing.assert_allclose(
-            J, central_difference_jacobian(ref.ballistic_dynamics, x), rtol=1e-6, atol=1e-9
+            J, central_difference_jacobian(ref.ballistic_dynamics, x, FD_STEPS), rtol=1e-6, atol=1e-9
         )
 
 
@@ -167,21 +180,23 @@ def test_radar_hand_cases() -> None:
     np.testing.assert_allclose(ref.radar_jacobian([1250.0, -300.0, 1e-3]), [[-0.6, 0.0, 0.0]], rtol=1e-14)
 
 
-def test_radar_jacobian_matches_finite_differences() -> None:
-    rng = np.random.default_rng(3)
+@random_draws(false_fail=0.0, why="deterministic central differences, accurate far below rtol 1e-6 on the smooth range; the draw only picks the states")
+def test_radar_jacobian_matches_finite_differences(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     for _ in range(30):
         x = np.array([rng.uniform(0, 20000), rng.uniform(-800, -50), rng.uniform(1e-4, 3e-3)])
         assert ref.radar_predict(x).shape == (1,)
         J = ref.radar_jacobian(x)
         assert J.shape == (1, 3)
-        np.testing.assert_allclose(J, central_difference_jacobian(ref.radar_predict, x), rtol=1e-6, atol=1e-9)
+        np.testing.assert_allclose(J, central_difference_jacobian(ref.radar_predict, x, FD_STEPS), rtol=1e-6, atol=1e-9)
 
 
 # ---------------------------------------------------------------------------------------------
 # Blank 3: marginal
 # ---------------------------------------------------------------------------------------------
-def test_marginal_of_head_is_top_left_block() -> None:
-    rng = np.random.default_rng(4)
+@random_draws(false_fail=0.0, why="an identity (equation 19) on a well-conditioned square root; the draw only picks the case")
+def test_marginal_of_head_is_top_left_block(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     S = random_upper_sqrt(rng, 5)
     mu = rng.standard_normal(5)
     mu_a, S_a = ref.marginal(mu, S, [0, 1])
@@ -190,9 +205,10 @@ def test_marginal_of_head_is_top_left_block() -> None:
     np.testing.assert_allclose(np.abs(S_a), np.abs(S[:2, :2]), rtol=1e-12)
 
 
-def test_marginal_handout_example_index_order() -> None:
+@random_draws(false_fail=0.0, why="an identity on a well-conditioned square root; the draw only picks the case")
+def test_marginal_handout_example_index_order(seed: int) -> None:
     # the handout's example I = [3 5 1] (1-based) -> [2, 4, 0]
-    rng = np.random.default_rng(5)
+    rng = np.random.default_rng([seed, 1])
     S = random_upper_sqrt(rng, 5)
     mu = np.arange(1.0, 6.0)
     P = S.T @ S
@@ -203,8 +219,9 @@ def test_marginal_handout_example_index_order() -> None:
 
 
 @pytest.mark.parametrize("n", range(2, 8))
-def test_marginal_random_index_sets(n: int) -> None:
-    rng = np.random.default_rng(100 + n)
+@random_draws(false_fail=0.0, why="an identity to rtol 1e-12 on the correlation scale, whatever the scales; the draw only picks the case")
+def test_marginal_random_index_sets(n: int, seed: int) -> None:
+    rng = np.random.default_rng([seed, n])
     S = random_upper_sqrt(rng, n, scales=10.0 ** rng.uniform(-3, 3, n))
     mu = rng.standard_normal(n)
     P = S.T @ S
@@ -234,8 +251,9 @@ def test_conditional_small_case_by_hand() -> None:
     np.testing.assert_allclose(S_c.T @ S_c, [[8.0 / 3.0]], rtol=1e-14)
 
 
-def test_conditional_tail_given_head_is_equation_25() -> None:
-    rng = np.random.default_rng(6)
+@random_draws(false_fail=0.0, why="an identity (equation 25) on a well-conditioned square root; the draw only picks the case")
+def test_conditional_tail_given_head_is_equation_25(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     S = random_upper_sqrt(rng, 5)
     mu = rng.standard_normal(5)
     x_a = rng.standard_normal(2)
@@ -247,8 +265,9 @@ def test_conditional_tail_given_head_is_equation_25() -> None:
 
 
 @pytest.mark.parametrize("n", range(2, 8))
-def test_conditional_matches_textbook_formulas(n: int) -> None:
-    rng = np.random.default_rng(200 + n)
+@random_draws(false_fail=0.0, why="an identity to rtol 1e-9 on the correlation scale between two algebraic forms; the draw only picks the case")
+def test_conditional_matches_textbook_formulas(n: int, seed: int) -> None:
+    rng = np.random.default_rng([seed, n])
     S = random_upper_sqrt(rng, n, scales=10.0 ** rng.uniform(-3, 3, n))
     mu = rng.standard_normal(n) * np.diag(S)
     P = S.T @ S
@@ -270,8 +289,9 @@ def test_conditional_matches_textbook_formulas(n: int) -> None:
 # ---------------------------------------------------------------------------------------------
 # Blank 5: the plot
 # ---------------------------------------------------------------------------------------------
-def test_plot_ballistic_coefficient_draws_truth_estimate_and_3_sigma_band() -> None:
-    rng = np.random.default_rng(7)
+@random_draws(false_fail=0.0, why="the figure's data are the arrays passed in, exactly; the draw only picks the curves")
+def test_plot_ballistic_coefficient_draws_truth_estimate_and_3_sigma_band(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     t = np.linspace(0, 5, 51)
     c_true = 1e-3 + 1e-5 * rng.standard_normal(51)
     c_mean = 1e-3 + 1e-4 * rng.standard_normal(51)
@@ -314,8 +334,9 @@ def framework_step(dt: float):
 
 
 @pytest.mark.parametrize("dt", [0.1, 0.05, 1.0])
-def test_sqrt_time_update_equals_dense_ekf(dt: float) -> None:
-    rng = np.random.default_rng(8)
+@random_draws(false_fail=0.0, why="an identity with a dense EKF to rtol 1e-9 on the correlation scale; the draw only picks the states")
+def test_sqrt_time_update_equals_dense_ekf(dt: float, seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     Q = np.diag([0.0, 1e-20, 25e-12])  # equation (12)
     cases = [(starship.MU0, starship.S0)]
     for _ in range(5):
@@ -333,8 +354,9 @@ def test_sqrt_time_update_equals_dense_ekf(dt: float) -> None:
 
 
 @pytest.mark.parametrize("n, q", [(2, 2), (3, 1), (5, 6), (7, 3)])
-def test_sqrt_time_update_on_random_linear_steps(n: int, q: int) -> None:
-    rng = np.random.default_rng(80 + n)
+@random_draws(false_fail=0.0, why="an identity to rtol 1e-9 on the correlation scale; the draw only picks the case")
+def test_sqrt_time_update_on_random_linear_steps(n: int, q: int, seed: int) -> None:
+    rng = np.random.default_rng([seed, n, q])
     for scales in (np.ones(n), 10.0 ** rng.uniform(-6, 6, n)):
         S = random_upper_sqrt(rng, n, scales=scales)
         S_Q = np.triu(rng.standard_normal((q, q)))
@@ -348,8 +370,9 @@ def test_sqrt_time_update_on_random_linear_steps(n: int, q: int) -> None:
         assert_cov_close(S_next.T @ S_next, J @ P_z @ J.T, rtol=1e-9)
 
 
-def test_measurement_update_equals_dense_kalman_update() -> None:
-    rng = np.random.default_rng(9)
+@random_draws(false_fail=0.0, why="an identity with the dense Joseph-form update to rtol 1e-9; the draw only picks the states")
+def test_measurement_update_equals_dense_kalman_update(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     for _ in range(10):
         mu = np.array([rng.uniform(2000, 15000), rng.uniform(-500, -150), rng.uniform(5e-4, 2e-3)])
         S = random_upper_sqrt(rng, 3, scales=np.array([300.0, 30.0, 3e-4]))
@@ -371,8 +394,9 @@ def test_measurement_update_equals_dense_kalman_update() -> None:
 
 
 @pytest.mark.parametrize("n, m", [(2, 1), (3, 2), (6, 3)])
-def test_sqrt_measurement_update_matches_joseph_form_with_correlated_noise(n: int, m: int) -> None:
-    rng = np.random.default_rng(90 + n)
+@random_draws(false_fail=0.0, why="an identity with the Joseph form to rtol 1e-9; the draw only picks the case")
+def test_sqrt_measurement_update_matches_joseph_form_with_correlated_noise(n: int, m: int, seed: int) -> None:
+    rng = np.random.default_rng([seed, n, m])
     S = random_upper_sqrt(rng, n, scales=10.0 ** rng.uniform(-2, 2, n))
     S_R = np.triu(rng.standard_normal((m, m))) + 2 * np.eye(m)
     H = rng.standard_normal((m, n))
@@ -398,8 +422,9 @@ def test_framework_rejects_data_that_go_back_in_time(data) -> None:
 # ---------------------------------------------------------------------------------------------
 # Why square roots, errors and NEES: the given comparison and diagnostics
 # ---------------------------------------------------------------------------------------------
-def test_covariance_form_update_equals_square_root_update_when_well_conditioned() -> None:
-    rng = np.random.default_rng(11)
+@random_draws(false_fail=0.0, why="an identity to rtol 1e-9 in float64 and 1e-3 in float32 on a well-conditioned prior; the draw only picks the prior")
+def test_covariance_form_update_equals_square_root_update_when_well_conditioned(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     S = random_upper_sqrt(rng, 3, scales=np.array([300.0, 30.0, 3e-4]))
     mu = np.array([9000.0, -300.0, 1e-3])
     measure = lambda x: (ref.radar_predict(x), ref.radar_jacobian(x))  # noqa: E731
@@ -440,8 +465,9 @@ def test_first_update_figure_marks_broken_covariances() -> None:
         plt.close(fig)
 
 
-def test_joseph_form_and_float32_square_root_agree_with_the_update_when_well_conditioned() -> None:
-    rng = np.random.default_rng(12)
+@random_draws(false_fail=0.0, why="an identity to rtol 1e-9 in float64 and 1e-5 in float32 on a well-conditioned prior; the draw only picks the prior")
+def test_joseph_form_and_float32_square_root_agree_with_the_update_when_well_conditioned(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     S = random_upper_sqrt(rng, 3, scales=np.array([300.0, 30.0, 3e-4]))
     mu = np.array([9000.0, -300.0, 1e-3])
     measure = lambda x: (ref.radar_predict(x), ref.radar_jacobian(x))  # noqa: E731
@@ -455,6 +481,8 @@ def test_joseph_form_and_float32_square_root_agree_with_the_update_when_well_con
     assert_cov_close(S64.T @ S64, S_s.T @ S_s, rtol=1e-12)
 
 
+@random_draws(false_fail=0.0, fixed_seed=True, why="checks monte_carlo_falls' seeding exactly: fall k draws from "
+              "default_rng(k), its initial error after its noise; three falls cost 5 s, so not rerun on 21 seeds")
 def test_monte_carlo_draws_each_initial_error_from_the_prior_and_averages_the_nees() -> None:
     falls = starship.monte_carlo_falls(range(3), ref.ballistic_dynamics, ref.ballistic_jacobian, ref.radar_predict,
                                        ref.radar_jacobian, ref.sqrt_time_update, ref.sqrt_measurement_update)
@@ -652,8 +680,9 @@ def test_default_load_names_the_shipped_file_portably() -> None:
 # ---------------------------------------------------------------------------------------------
 # The check helpers of course.starship accept right answers and reject wrong ones
 # ---------------------------------------------------------------------------------------------
-def test_check_helpers_accept_right_and_reject_wrong_answers() -> None:
-    rng = np.random.default_rng(10)
+@random_draws(false_fail=0.0, why="exact verdicts of the check helpers on a well-conditioned square root; the draw only picks it")
+def test_check_helpers_accept_right_and_reject_wrong_answers(seed: int) -> None:
+    rng = np.random.default_rng([seed, 1])
     S = random_upper_sqrt(rng, 4, scales=np.array([1e3, 1.0, 1e-3, 1e-6]))
     P = S.T @ S
     starship.check_square_root(-S, P, "S")  # row signs are free
