@@ -405,9 +405,14 @@ def print_table(table: dict, runs: int) -> None:
           f"{DIVERGED_KMS:g} km/s at some return")
 
 
+def _or_dash(value: float) -> str:
+    """A number to 4 significant figures, or '-' when it is undefined (every run was dropped)."""
+    return "-" if np.isnan(value) else f"{value:.4g}"
+
+
 def print_robust_table(table: dict) -> None:
-    """Print the medians over runs, the metric without the lost and without the diverged runs, and the
-    time-averaged position RMSE, beside the lost and diverged counts."""
+    """Print the medians over runs, the metric without the lost and without the diverged runs ('-' where every
+    run is dropped), and the time-averaged position RMSE, beside the lost and diverged counts."""
     print(f"{'filter':<10}{'median pos':>11}{'median vel':>11}{'pos w/o lost':>13}{'vel w/o lost':>13}"
           f"{'vel w/o div.':>13}{'time-avg pos':>13}{'lost':>6}{'diverged':>10}")
     print(f"{'':<10}{'[m]':>11}{'[m/s]':>11}{'[m]':>13}{'[m/s]':>13}{'[m/s]':>13}{'RMSE [m]':>13}")
@@ -415,7 +420,7 @@ def print_robust_table(table: dict) -> None:
         row = table[name]
         print(f"{LABELS[name]:<10}{row['median']['position']:>11.4g}{row['median']['velocity']:>11.4g}"
               f"{row['excluding_lost']['position']:>13.4g}{row['excluding_lost']['velocity']:>13.4g}"
-              f"{row['excluding_diverged']['velocity']:>13.4g}{row['time_averaged_rmse']['position']:>13.4g}"
+              f"{_or_dash(row['excluding_diverged']['velocity']):>13}{row['time_averaged_rmse']['position']:>13.4g}"
               f"{row['lost_runs']:>6}{row['diverged_runs']:>10}")
 
 
