@@ -37,9 +37,15 @@ LEGS = ((125.0, 0.0), (90.0, 1.0 * DEG), (125.0, 0.0), (30.0, -3.0 * DEG), (125.
 """The flight plan: (duration s, turn rate rad/s) of each leg, 495 s in all."""
 LOST_KM = 1.0
 """A run is lost when its position error at the last radar return exceeds this many km."""
+DIVERGED_KMS = 1.0
+"""A run has diverged when its velocity error exceeds this many km/s at any return: more than eight times the
+aircraft's speed (120 m/s), a hundred times the initial velocity uncertainty (10 m/s), so no tracking filter's
+error reaches it. The radar can keep a diverged run's position pinned while its velocity runs away."""
+SPEED = 120.0
+"""The aircraft's speed, m/s (constant: the coordinated-turn model keeps it)."""
 FILTERS = ("pf", "ekf", "ckf", "ukf", "cut4", "cut6", "cut8")
 LABELS = {"pf": "PF (mean)", "ekf": "EKF", "ckf": "CKF", "ukf": "UKF", "cut4": "CUT4", "cut6": "CUT6", "cut8": "CUT8"}
-COLOURS = {"pf": "black", "ekf": "tab:grey", "ckf": "tab:red", "ukf": "tab:orange", "cut4": "tab:purple",
+COLOURS = {"pf": "black", "ekf": "tab:brown", "ckf": "tab:red", "ukf": "tab:orange", "cut4": "tab:purple",
            "cut6": "tab:blue", "cut8": "tab:green"}
 LECTURE_TABLE = {
     "position": {"pf": 115.47, "ckf": 989.15, "ukf": 685.90, "cut4": 245.30, "cut6": 138.82, "cut8": 135.89},
@@ -98,13 +104,13 @@ def ct_jacobian(m: np.ndarray, T: float = T_RADAR) -> np.ndarray:
     return F
 
 
-def ct_process_noise(T: float = T_RADAR) -> np.ndarray:
-    """Q (5 x 5): L1 [[T^3/3, T^2/2], [T^2/2, T]] for each axis, and T L2 for the turn rate."""
+def ct_process_noise(T: float = T_RADAR, turn_noise: float = L2) -> np.ndarray:
+    """Q (5 x 5): L1 [[T^3/3, T^2/2], [T^2/2, T]] for each axis, and T L2 for the turn rate (L2 = turn_noise)."""
     block = L1 * np.array([[T**3 / 3.0, T**2 / 2.0], [T**2 / 2.0, T]])
     Q = np.zeros((5, 5))
     Q[np.ix_([0, 2], [0, 2])] = block
     Q[np.ix_([1, 3], [1, 3])] = block
-    Q[4, 4] = T * L2
+    Q[4, 4] = T * turn_noise
     return Q
 
 
@@ -166,30 +172,36 @@ def ekf_predict(m: np.ndarray, P: np.ndarray, T: float, Q: np.ndarray) -> tuple[
 
 @dataclass(frozen=True)
 class Scenario:
-    """The flight sampled every T seconds: times (K,) s and true states (K, 5), Q and R for step T."""
+    """The flight sampled every T seconds: times (K,) s and true states (K, 5), Q and R for step T.
+
+    ``turn_noise`` is the filters' turn-rate noise intensity L2 (rad^2/s^3) in Q.
+    """
 
     T: float
     times: np.ndarray
     truth: np.ndarray
+    turn_noise: float = L2
 
     @property
     def Q(self) -> np.ndarray:
-        return ct_process_noise(self.T)
+        return ct_process_noise(self.T, self.turn_noise)
 
     @property
     def R(self) -> np.ndarray:
         return R_RADAR
 
 
-def scenario(T: float = T_RADAR) -> Scenario:
-    """The noise-free flight plan LEGS, sampled every T s (T a whole number of seconds) from t = 0 to 495 s.
+def scenario(T: float = T_RADAR, legs: tuple[tuple[float, float], ...] = LEGS, turn_noise: float = L2) -> Scenario:
+    """The noise-free flight plan ``legs`` (default LEGS), sampled every T s (T a whole number of seconds) from t = 0.
+
+    ``turn_noise`` sets the filters' turn-rate noise intensity L2 in Q (default the lecture's 0.01 rad^2/s^3).
 
     The truth is built in one-second coordinated-turn steps (exact, since the model is the exact
     flow for a constant turn rate), with the turn rate of the leg that the next second belongs to.
     """
     if T != int(T) or T < 1:
         raise ValueError("T must be a whole number of seconds")
-    rates = np.concatenate([np.full(int(duration), rate) for duration, rate in LEGS])
+    rates = np.concatenate([np.full(int(duration), rate) for duration, rate in legs])
     states = [X0_TRUE.copy()]
     for rate in rates:
         current = states[-1].copy()
@@ -199,7 +211,7 @@ def scenario(T: float = T_RADAR) -> Scenario:
     states[-1][4] = 0.0
     states = np.array(states)
     times = np.arange(0, len(rates) + 1, int(T), dtype=float)
-    return Scenario(float(T), times, states[times.astype(int)])
+    return Scenario(float(T), times, states[times.astype(int)], float(turn_noise))
 
 
 def simulate_runs(sc: Scenario, runs: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
@@ -314,21 +326,31 @@ def lost_runs(err: np.ndarray) -> np.ndarray:
     return err[:, -1, 0] > 1000.0 * LOST_KM
 
 
+def diverged_runs(err: np.ndarray) -> np.ndarray:
+    """Which runs have diverged: a velocity error above DIVERGED_KMS at any return, (runs,) bool."""
+    return np.max(err[:, :, 1], axis=1) > 1000.0 * DIVERGED_KMS
+
+
 def summarise(err: np.ndarray) -> dict:
-    """The lecture's metric, the plain time-averaged RMSE, both without the lost runs, the medians, the lost count."""
-    lost = lost_runs(err)
-    kept = err[~lost] if np.any(~lost) else err[:0]
+    """The lecture's metric, the time-averaged RMSE, the metric without the lost (or the diverged) runs, the
+    medians, and the counts of lost and diverged runs."""
+    lost, diverged = lost_runs(err), diverged_runs(err)
     per_run = lecture_metric(err, axis=1)
 
     def named(values: np.ndarray) -> dict:
         return {q: float(v) for q, v in zip(QUANTITIES, values)}
 
+    def without(drop: np.ndarray) -> dict:
+        return named(lecture_metric(err[~drop]) if np.any(~drop) else np.full(3, np.nan))
+
     return {
         **named(lecture_metric(err)),
         "time_averaged_rmse": named(np.mean(rmse_over_time(err), axis=0)),
-        "excluding_lost": named(lecture_metric(kept) if len(kept) else np.full(3, np.nan)),
+        "excluding_lost": without(lost),
+        "excluding_diverged": without(diverged),
         "median": named(np.median(per_run, axis=0)),
         "lost_runs": int(np.sum(lost)),
+        "diverged_runs": int(np.sum(diverged)),
     }
 
 
@@ -350,6 +372,7 @@ class ShippedResults:
     sweep_T: np.ndarray
     sweep_runs: int
     sweep: dict
+    sweep_lost: dict
 
 
 def load(path: Path = DATA_FILE) -> ShippedResults:
@@ -360,13 +383,15 @@ def load(path: Path = DATA_FILE) -> ShippedResults:
         times=np.array(raw["times"]), rmse_curves={k: np.array(v) for k, v in raw["rmse_curves"].items()},
         sweep_T=np.array(raw["sweep"]["T"]), sweep_runs=raw["sweep"]["runs"],
         sweep={k: np.array(v) for k, v in raw["sweep"]["filters"].items()},
+        sweep_lost={k: np.array(v) for k, v in raw["sweep"]["lost_fraction"].items()},
     )
 
 
 def print_table(table: dict, runs: int) -> None:
     """Print the lecture's metric for every filter beside the lecture's, with factors relative to the PF."""
     print(f"The lecture's metric, sqrt(mean_k RMSE_k^2 / 5), over {runs} runs (lecture's value in brackets)")
-    print(f"{'filter':<10}{'position [m]':>24}{'velocity [m/s]':>26}{'turn rate [rad/s]':>24}{'x PF (pos)':>12}{'lost':>6}")
+    print(f"{'filter':<10}{'position [m]':>24}{'velocity [m/s]':>26}{'turn rate [rad/s]':>24}{'x PF (pos)':>12}{'lost':>6}"
+          f"{'diverged':>10}")
     for name in FILTERS:
         row = table[name]
         cells = []
@@ -374,18 +399,29 @@ def print_table(table: dict, runs: int) -> None:
             lecture = LECTURE_TABLE[q].get(name)
             cells.append(f"{row[q]:.4g}" + (f" ({lecture:.4g})" if lecture is not None else " (-)"))
         factor = row["position"] / table["pf"]["position"]
-        print(f"{LABELS[name]:<10}{cells[0]:>24}{cells[1]:>26}{cells[2]:>24}{factor:>12.2f}{row['lost_runs']:>6}")
+        print(f"{LABELS[name]:<10}{cells[0]:>24}{cells[1]:>26}{cells[2]:>24}{factor:>12.2f}{row['lost_runs']:>6}"
+              f"{row['diverged_runs']:>10}")
+    print(f"lost: position error above {LOST_KM:g} km at the last return; diverged: velocity error above "
+          f"{DIVERGED_KMS:g} km/s at some return")
+
+
+def _or_dash(value: float) -> str:
+    """A number to 4 significant figures, or '-' when it is undefined (every run was dropped)."""
+    return "-" if np.isnan(value) else f"{value:.4g}"
 
 
 def print_robust_table(table: dict) -> None:
-    """Print the medians over runs and the metric without the lost runs, beside the lost count."""
-    print(f"{'filter':<10}{'median pos [m]':>16}{'median vel [m/s]':>18}{'pos w/o lost [m]':>18}"
-          f"{'vel w/o lost [m/s]':>20}{'time-avg RMSE pos [m]':>23}{'lost':>6}")
+    """Print the medians over runs, the metric without the lost and without the diverged runs ('-' where every
+    run is dropped), and the time-averaged position RMSE, beside the lost and diverged counts."""
+    print(f"{'filter':<10}{'median pos':>11}{'median vel':>11}{'pos w/o lost':>13}{'vel w/o lost':>13}"
+          f"{'vel w/o div.':>13}{'time-avg pos':>13}{'lost':>6}{'diverged':>10}")
+    print(f"{'':<10}{'[m]':>11}{'[m/s]':>11}{'[m]':>13}{'[m/s]':>13}{'[m/s]':>13}{'RMSE [m]':>13}")
     for name in FILTERS:
         row = table[name]
-        print(f"{LABELS[name]:<10}{row['median']['position']:>16.4g}{row['median']['velocity']:>18.4g}"
-              f"{row['excluding_lost']['position']:>18.4g}{row['excluding_lost']['velocity']:>20.4g}"
-              f"{row['time_averaged_rmse']['position']:>23.4g}{row['lost_runs']:>6}")
+        print(f"{LABELS[name]:<10}{row['median']['position']:>11.4g}{row['median']['velocity']:>11.4g}"
+              f"{row['excluding_lost']['position']:>13.4g}{row['excluding_lost']['velocity']:>13.4g}"
+              f"{_or_dash(row['excluding_diverged']['velocity']):>13}{row['time_averaged_rmse']['position']:>13.4g}"
+              f"{row['lost_runs']:>6}{row['diverged_runs']:>10}")
 
 
 # ------------------------------------------------------------------------------------------------
@@ -426,17 +462,40 @@ def plot_position_error(times: np.ndarray, curves: dict, title: str) -> Figure:
     return fig
 
 
-def plot_rmse_against_interval(T: np.ndarray, sweep: dict, runs: int) -> Figure:
-    """The lecture's metric for the position and the velocity against the measurement interval T."""
-    fig, axes = plt.subplots(1, 2, figsize=(11, 5), layout="constrained")
-    for ax, (index, quantity, unit) in zip(axes, [(0, "position", "m"), (1, "velocity", "m/s")]):
+ZERO_VELOCITY_METRIC = SPEED / np.sqrt(5.0)
+"""The lecture's velocity metric of the estimate 'zero velocity' (error = the speed at every return), m/s."""
+
+
+def plot_rmse_against_interval(T: np.ndarray, sweep: dict, lost: dict, runs: int) -> Figure:
+    """The lecture's metric for the position and the velocity, and the fraction of lost runs, against T.
+
+    ``sweep[name]`` is (len(T), 3), the metric per interval; ``lost[name]`` (len(T),) the fraction of lost runs.
+    The metric axes stop at 1e5; a point beyond is drawn at the top as a triangle.
+    """
+    fig, axes = plt.subplots(1, 3, figsize=(15, 5), layout="constrained")
+    for ax, (index, quantity, unit, top) in zip(axes, [(0, "position", "m", 1e5), (1, "velocity", "m/s", 1e5)]):
         for name in FILTERS:
-            if name in sweep:
-                ax.semilogy(T, sweep[name][:, index], "o-", color=COLOURS[name], label=LABELS[name])
+            values = sweep[name][:, index]
+            ax.semilogy(T, np.minimum(values, top), "o-", color=COLOURS[name], label=LABELS[name])
+            off = values > top
+            ax.plot(T[off], np.full(off.sum(), top), "^", color=COLOURS[name], ms=10)
+        ax.set_ylim(top=top * 1.6)
         ax.set_xlabel("measurement interval T [s]")
         ax.set_ylabel(f"{quantity}: sqrt(mean_k RMSE_k^2 / 5) [{unit}]")
+        ax.set_title(f"{quantity} (triangle: off the scale, above $10^{{{np.log10(top):.0f}}}$ {unit})", fontsize="medium")
         ax.set_xticks(T)
+    axes[1].axhline(ZERO_VELOCITY_METRIC, color="grey", ls="--", lw=1.2)
+    axes[1].annotate(f"estimating zero velocity: {SPEED:g}/sqrt(5) = {ZERO_VELOCITY_METRIC:.1f} m/s",
+                     (T[1], ZERO_VELOCITY_METRIC), xytext=(0, 5), textcoords="offset points", fontsize="small",
+                     color="dimgrey")
+    for name in FILTERS:
+        axes[2].plot(T, 100 * lost[name], "o-", color=COLOURS[name], label=LABELS[name])
+    axes[2].set_ylim(-3, 103)
+    axes[2].set_xlabel("measurement interval T [s]")
+    axes[2].set_ylabel(f"runs lost (position error > {LOST_KM:g} km at the end) [%]")
+    axes[2].set_title("lost runs", fontsize="medium")
+    axes[2].set_xticks(T)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=len(labels), fontsize="small")
-    fig.suptitle(f"Error against the measurement interval ({runs} runs per T)")
+    fig.suptitle(f"Error and lost runs against the measurement interval ({runs} runs per T)")
     return fig

@@ -32,7 +32,7 @@ DATA_SEED = 20261122
 """Seed of the shipped Monte Carlo table (course/data/nonlinear_filters_air_traffic.json)."""
 DATA_RUNS = 400
 SWEEP_T = (5.0, 10.0, 15.0, 20.0)
-SWEEP_RUNS = 50
+SWEEP_RUNS = 200
 PARTICLES = 5000
 
 
@@ -176,13 +176,15 @@ def point_sets() -> dict[str, tuple[np.ndarray, np.ndarray]]:
 
 
 def monte_carlo(runs: int, seed: int, T: float = air_traffic.T_RADAR, particles: int = PARTICLES,
-                filters: tuple[str, ...] = air_traffic.FILTERS) -> dict[str, np.ndarray]:
+                filters: tuple[str, ...] = air_traffic.FILTERS, legs: tuple[tuple[float, float], ...] = air_traffic.LEGS,
+                turn_noise: float = air_traffic.L2) -> dict[str, np.ndarray]:
     """Errors (runs, K, 3) of each filter over ``runs`` runs from ``seed``.
 
     Every filter in a run sees the same initial mean and radar data; the particle filter draws its
-    particles and noise from a stream of its own.
+    particles and noise from a stream of its own. ``legs`` (the flight plan) and ``turn_noise`` (the
+    filters' L2) change the set-up for experiments.
     """
-    sc = air_traffic.scenario(T)
+    sc = air_traffic.scenario(T, legs, turn_noise)
     scenario_rng, particle_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
     m0, y = air_traffic.simulate_runs(sc, runs, scenario_rng)
     sets = point_sets()
@@ -221,15 +223,17 @@ def shipped_results(runs: int = DATA_RUNS, seed: int = DATA_SEED, sweep_runs: in
     """Everything the notebook loads: the T = 5 s table, RMSE_k curves, and the sweep over T."""
     err = monte_carlo(runs, seed, particles=particles)
     sweep = {name: [] for name in air_traffic.FILTERS}
+    sweep_lost = {name: [] for name in air_traffic.FILTERS}
     for i, T in enumerate(SWEEP_T):
         for name, e in monte_carlo(sweep_runs, seed + 1 + i, T=T, particles=particles).items():
             sweep[name].append(air_traffic.lecture_metric(e).tolist())
+            sweep_lost[name].append(float(np.mean(air_traffic.lost_runs(e))))
     return _rounded({
         "runs": runs, "seed": seed, "particles": particles,
         "filters": {name: air_traffic.summarise(e) for name, e in err.items()},
         "times": air_traffic.scenario().times.tolist(),
         "rmse_curves": {name: air_traffic.rmse_over_time(e).tolist() for name, e in err.items()},
-        "sweep": {"T": list(SWEEP_T), "runs": sweep_runs, "filters": sweep},
+        "sweep": {"T": list(SWEEP_T), "runs": sweep_runs, "filters": sweep, "lost_fraction": sweep_lost},
     })
 
 

@@ -320,6 +320,32 @@ def test_the_shipped_table_loads_and_is_the_reference_build():
         assert row["median"]["position"] <= np.sqrt(2) * row["position"] * (1 + 1e-5)
 
 
+def test_diverged_runs_are_those_whose_velocity_error_ever_exceeds_one_km_per_s():
+    err = np.zeros((3, 4, 3))
+    err[1, 2, 1] = 1001.0  # one return above 1 km/s: diverged, not lost
+    err[2, :, 1] = 999.0  # never above: not diverged
+    err[2, -1, 0] = 5000.0  # position 5 km off at the end: lost
+    assert air_traffic.diverged_runs(err).tolist() == [False, True, False]
+    summary = air_traffic.summarise(err)
+    assert summary["diverged_runs"] == 1 and summary["lost_runs"] == 1
+    assert np.isclose(summary["excluding_diverged"]["velocity"], air_traffic.lecture_metric(err[[0, 2]])[1])
+
+
+def test_the_set_up_options_change_the_flight_plan_and_the_turn_noise():
+    sc = air_traffic.scenario(5.0, legs=((495.0, 0.0),), turn_noise=1e-3)
+    assert np.allclose(sc.truth[:, 3:], 0.0) and np.allclose(np.diff(sc.truth[:, 0]), -600.0)
+    assert np.isclose(sc.Q[4, 4], 5e-3) and np.allclose(sc.Q[:4, :4], air_traffic.ct_process_noise(5.0)[:4, :4])
+
+
+def test_the_shipped_sweep_has_a_lost_fraction_per_interval():
+    shipped = air_traffic.load()
+    assert shipped.sweep_runs == ref.SWEEP_RUNS and set(shipped.sweep_lost) == set(air_traffic.FILTERS)
+    for fraction in shipped.sweep_lost.values():
+        assert fraction.shape == (len(ref.SWEEP_T),) and np.all((0 <= fraction) & (fraction <= 1))
+        assert np.allclose(fraction * ref.SWEEP_RUNS, np.round(fraction * ref.SWEEP_RUNS), atol=1e-3)
+    assert all(0 <= row["diverged_runs"] <= shipped.runs for row in shipped.table.values())
+
+
 @random_draws(false_fail=0.0, fixed_seed=True, why="a rebuild of the shipped table from its seed, compared byte for byte")
 def test_shipped_data_is_rebuilt_bit_for_bit():
     assert data.stale_files([get_lab("nonlinear-filters")]) == []

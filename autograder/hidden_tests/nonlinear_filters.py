@@ -93,12 +93,17 @@ def _rules_for(n: int) -> list[tuple[str, tuple[np.ndarray, np.ndarray]]]:
     return rules
 
 
-def _check_mean_cov(result, reference, n: int, label: str) -> None:
+SQRT_HINT = ("Did you place the points with S = symmetric_sqrt(P)? A Cholesky factor also has S S^T = P, and "
+             "gives the same answer for a linear model, but it places the points elsewhere, so with a nonlinear "
+             "model the mean and covariance differ.")
+
+
+def _check_mean_cov(result, reference, n: int, label: str, hint: str = "") -> None:
     m, P = check_pair(result, label, "m", "P")
-    check_close(check_array(m, f"the mean from {label}", (n,)), reference[0], f"the mean from {label}",
+    check_close(check_array(m, f"the mean from {label}", (n,)), reference[0], f"the mean from {label}", hint,
                 show_expected=False)
     check_close(check_array(P, f"the covariance from {label}", (n, n)), reference[1], f"the covariance from {label}",
-                rtol=1e-7, atol=1e-9, show_expected=False)
+                hint, rtol=1e-7, atol=1e-9, show_expected=False)
 
 
 def check_sigma_point_predict(func: Callable) -> None:
@@ -110,7 +115,7 @@ def check_sigma_point_predict(func: Callable) -> None:
         for name, (Z, w) in _rules_for(n):
             label = f"sigma_point_predict with {name} points, n = {n}, a random nonlinear f"
             _check_mean_cov(func(m.copy(), P.copy(), f, Z.copy(), w.copy(), Q.copy()),
-                            ref.sigma_point_predict(m, P, f, Z, w, Q), n, label)
+                            ref.sigma_point_predict(m, P, f, Z, w, Q), n, label, SQRT_HINT)
 
 
 def _bearing_case(rng: np.random.Generator) -> tuple:
@@ -131,7 +136,7 @@ def check_sigma_point_update(func: Callable) -> None:
         for name, (Z, w) in _rules_for(n):
             label = f"sigma_point_update with {name} points, n = {n}, p = {p}, a random nonlinear h"
             _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, R.copy(), Z.copy(), w.copy()),
-                            ref.sigma_point_update(m, P, y, h, R, Z, w), n, label)
+                            ref.sigma_point_update(m, P, y, h, R, Z, w), n, label, SQRT_HINT)
     m, P, y, h, R = _bearing_case(rng)
     for name, (Z, w) in _rules_for(3):
         label = (f"sigma_point_update with {name} points for a target due west (bearings near +-pi, angles=(1,)): "
