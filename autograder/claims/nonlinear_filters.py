@@ -7,7 +7,8 @@ seven filters with the particle filter (seeds 101-103), and one independent swee
 per interval (seeds 201-204). Claims that depend on the draw are checked as rates over the batches.
 The claims about the cause of the CKF's and UKF's divergence run two changed set-ups: the flight
 without its turns (STRAIGHT_RUNS runs, seed 301) and a ten times smaller turn-rate noise (SMALL_L2_RUNS
-runs, seed 302); the particle-count claim runs the PF with 20 000 particles at T = 20 s (seed 303).
+runs, seed 302; the EKF also on seed 304, and with L2 = 1e-5 on seeds 305-306); the particle-count claim runs
+the PF with 20 000 particles at T = 20 s (MANY_PARTICLE_RUNS runs on each of MANY_PARTICLE_SEEDS).
 """
 
 from __future__ import annotations
@@ -27,6 +28,7 @@ SWEEP_SEED, SWEEP_RUNS = 201, 20
 STRAIGHT = ((495.0, 0.0),)
 """The flight plan without its turns: 495 s straight west."""
 STRAIGHT_RUNS, SMALL_L2_RUNS, MANY_PARTICLES, MANY_PARTICLE_RUNS = 100, 50, 20_000, 16
+MANY_PARTICLE_SEEDS = (303, 306)
 
 
 @functools.cache
@@ -283,8 +285,8 @@ def _straight() -> dict:
 
 @functools.cache
 def _small_turn_noise() -> dict:
-    """Summaries of the five sigma-point filters with L2 = 1e-3 (SMALL_L2_RUNS runs, seed 302)."""
-    return _summaries(ref.monte_carlo(SMALL_L2_RUNS, 302, filters=GAUSSIAN[1:], turn_noise=1e-3))
+    """Summaries of the six Gaussian filters with L2 = 1e-3 (SMALL_L2_RUNS runs, seed 302)."""
+    return _summaries(ref.monte_carlo(SMALL_L2_RUNS, 302, filters=GAUSSIAN, turn_noise=1e-3))
 
 
 @claim("nonlinear-filters/straight-flight-still-lost")
@@ -299,11 +301,26 @@ def _() -> None:
 @claim("nonlinear-filters/small-turn-noise-no-loss")
 def _() -> None:
     """With L2 ten times smaller (1e-3), no sigma-point filter loses or diverges in any of 50 runs, and their position metrics are within 1.5% of each other."""
-    t = _small_turn_noise()
+    t = {name: row for name, row in _small_turn_noise().items() if name != "ekf"}
     for name, row in t.items():
         assert row["lost_runs"] == 0 and row["diverged_runs"] == 0, f"L2 = 1e-3, {name}: {row['lost_runs']} lost, {row['diverged_runs']} diverged"
     positions = [row["position"] for row in t.values()]
     assert max(positions) < 1.015 * min(positions), f"L2 = 1e-3: position metrics {positions}"
+
+
+@claim("nonlinear-filters/ekf-small-turn-noise")
+def _() -> None:
+    """At L2 = 1e-3 the EKF still loses 60-90% of the runs while the CKF loses none, in each of two batches of 50 runs
+    (seed 302 with all five sigma-point filters, seed 304 with the CKF; seen: 37 and 42 of 50 lost, 74% and 84%); with
+    L2 = 1e-5 it loses none of 50 runs on seeds 305 and 306. Pooled over these and the review's batch (117 of 150),
+    the EKF's lost rate at L2 = 1e-3 is about 78%; 50 runs then fall outside 30-45 lost with probability about 1%."""
+    batches = [_small_turn_noise(), _summaries(ref.monte_carlo(SMALL_L2_RUNS, 304, filters=("ekf", "ckf"), turn_noise=1e-3))]
+    for seed, t in zip((302, 304), batches):
+        lost = t["ekf"]["lost_runs"] / SMALL_L2_RUNS
+        assert 0.6 <= lost <= 0.9 and t["ckf"]["lost_runs"] == 0, f"L2 = 1e-3, seed {seed}: EKF lost {lost:.0%}, CKF {t['ckf']}"
+    for seed in (305, 306):
+        lost = air_traffic.lost_runs(ref.monte_carlo(SMALL_L2_RUNS, seed, filters=("ekf",), turn_noise=1e-5)["ekf"])
+        assert not lost.any(), f"L2 = 1e-5, seed {seed}: the EKF loses {lost.sum()} of {SMALL_L2_RUNS} runs"
 
 
 @claim("nonlinear-filters/diverged-runs")
@@ -318,7 +335,9 @@ def _() -> None:
 
 @claim("nonlinear-filters/diverged-but-pinned")
 def _() -> None:
-    """CUT4 and CUT6 diverge in at least twice as many runs as they lose (table and pooled batches), and most of their diverged runs end with the position within 1 km (pooled batches)."""
+    """CUT4 and CUT6 diverge in at least twice as many runs as they lose, in the 400-run table and pooled over the 390
+    batch runs (a single batch of 50 need not show it), and most of their diverged runs end with the position within
+    1 km, pooled over the 390 batch runs."""
     for name in ("cut4", "cut6"):
         diverged, lost = _fraction(name, "diverged_runs"), _fraction(name, "lost_runs")
         assert all(d >= 2 * l for d, l in zip(diverged, lost)), f"{name}: diverged {diverged}, lost {lost}"
@@ -416,16 +435,20 @@ def _() -> None:
 
 
 @functools.cache
-def _many_particles() -> float:
-    """The PF's lost fraction at T = 20 s with MANY_PARTICLES particles, over MANY_PARTICLE_RUNS runs (seed 303)."""
-    err = ref.monte_carlo(MANY_PARTICLE_RUNS, 303, T=20.0, particles=MANY_PARTICLES, filters=("pf",))["pf"]
-    return float(np.mean(air_traffic.lost_runs(err)))
+def _many_particles() -> list[int]:
+    """The PF's lost runs at T = 20 s with MANY_PARTICLES particles, out of MANY_PARTICLE_RUNS, on each of MANY_PARTICLE_SEEDS."""
+    return [int(np.sum(air_traffic.lost_runs(ref.monte_carlo(MANY_PARTICLE_RUNS, seed, T=20.0, particles=MANY_PARTICLES,
+                                                               filters=("pf",))["pf"])))
+            for seed in MANY_PARTICLE_SEEDS]
 
 
 @claim("nonlinear-filters/more-particles-help")
 def _() -> None:
-    """At T = 20 s, 20 000 particles lose under 80% of the runs (about half; 16 runs), where 5000 lose over 85% in the shipped sweep. With a true rate of 55%, 16 runs show 13 or more lost with probability about 2%."""
+    """At T = 20 s, 20 000 particles lose about half of the runs (25-75%, pooled over two seeds of 16 runs; seen: 10
+    and 6 of 16, and 8 of 16 on seed 307), where 5000 lose over 85% of the shipped sweep's 200. With a true rate of
+    50%, 32 runs fall outside 8-24 lost with probability about 0.2%."""
     shipped = _shipped()
     few = shipped.sweep_lost["pf"][list(shipped.sweep_T).index(20.0)]
-    many = _many_particles()
-    assert few > 0.85 and many < 0.8, f"PF lost at T = 20 s: {few:.0%} with {shipped.particles}, {many:.0%} with 20 000"
+    lost = _many_particles()
+    many = sum(lost) / (MANY_PARTICLE_RUNS * len(MANY_PARTICLE_SEEDS))
+    assert few > 0.85 and 0.25 <= many <= 0.75, f"PF lost at T = 20 s: {few:.0%} with {shipped.particles}, {lost} of {MANY_PARTICLE_RUNS} with 20 000"

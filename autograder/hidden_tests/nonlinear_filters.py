@@ -93,9 +93,10 @@ def _rules_for(n: int) -> list[tuple[str, tuple[np.ndarray, np.ndarray]]]:
     return rules
 
 
-SQRT_HINT = ("Did you place the points with S = symmetric_sqrt(P)? A Cholesky factor also has S S^T = P, and "
-             "gives the same answer for a linear model, but it places the points elsewhere, so with a nonlinear "
-             "model the mean and covariance differ.")
+SQRT_HINT = ("Did you place the points with S = symmetric_sqrt(P)? A Cholesky factor also has S S^T = P and gives "
+             "an equally valid rule of the same degree, but with other points, so a nonlinear model gives another "
+             "mean and covariance; this lab, like the authors' sqrtm, fixes the symmetric root so that answers can "
+             "be compared.")
 
 
 def _check_mean_cov(result, reference, n: int, label: str, hint: str = "") -> None:
