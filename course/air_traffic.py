@@ -35,6 +35,8 @@ P0 = np.diag([1000.0**2, 1000.0**2, 100.0, 100.0, (1.0 * DEG) ** 2])
 """The filters' initial covariance."""
 LEGS = ((125.0, 0.0), (90.0, 1.0 * DEG), (125.0, 0.0), (30.0, -3.0 * DEG), (125.0, 0.0))
 """The flight plan: (duration s, turn rate rad/s) of each leg, 495 s in all."""
+STRAIGHT_LEGS = ((495.0, 0.0),)
+"""The same flight without its turns: 495 s straight west."""
 LOST_KM = 1.0
 """A run is lost when its position error at the last radar return exceeds this many km."""
 DIVERGED_KMS = 1.0
@@ -361,7 +363,8 @@ def summarise(err: np.ndarray) -> dict:
 
 @dataclass(frozen=True)
 class ShippedResults:
-    """The reference's Monte Carlo results: the T = 5 s table, RMSE_k curves, and the sweep over T."""
+    """The reference's Monte Carlo results: the T = 5 s table, RMSE_k curves (and the CKF's and UKF's position
+    RMSE_k (K,) on the flight without turns), and the sweep over T with its lost and diverged fractions."""
 
     runs: int
     seed: int
@@ -369,10 +372,12 @@ class ShippedResults:
     table: dict
     times: np.ndarray
     rmse_curves: dict
+    straight_position_rmse: dict
     sweep_T: np.ndarray
     sweep_runs: int
     sweep: dict
     sweep_lost: dict
+    sweep_diverged: dict
 
 
 def load(path: Path = DATA_FILE) -> ShippedResults:
@@ -381,9 +386,11 @@ def load(path: Path = DATA_FILE) -> ShippedResults:
     return ShippedResults(
         runs=raw["runs"], seed=raw["seed"], particles=raw["particles"], table=raw["filters"],
         times=np.array(raw["times"]), rmse_curves={k: np.array(v) for k, v in raw["rmse_curves"].items()},
+        straight_position_rmse={k: np.array(v) for k, v in raw["straight_position_rmse"].items()},
         sweep_T=np.array(raw["sweep"]["T"]), sweep_runs=raw["sweep"]["runs"],
         sweep={k: np.array(v) for k, v in raw["sweep"]["filters"].items()},
         sweep_lost={k: np.array(v) for k, v in raw["sweep"]["lost_fraction"].items()},
+        sweep_diverged={k: np.array(v) for k, v in raw["sweep"]["diverged_fraction"].items()},
     )
 
 
@@ -446,8 +453,12 @@ def plot_flight(sc: Scenario, y: np.ndarray | None = None) -> Figure:
     return fig
 
 
-def plot_position_error(times: np.ndarray, curves: dict, title: str) -> Figure:
-    """RMSE_k of the position (over runs) against time, one line per filter, on a log scale."""
+def plot_position_error(times: np.ndarray, curves: dict, title: str, straight: dict | None = None) -> Figure:
+    """RMSE_k of the position (over runs) against time, one line per filter, on a log scale.
+
+    ``straight`` (optional): position RMSE_k (K,) of some filters on the flight without turns, drawn dashed in the
+    filters' colours, with the times of closest approach to the radar of both flights marked.
+    """
     fig, ax = plt.subplots(figsize=(9, 5), constrained_layout=True)
     for name in FILTERS:
         if name in curves:
@@ -455,7 +466,18 @@ def plot_position_error(times: np.ndarray, curves: dict, title: str) -> Figure:
                         label=LABELS[name])
     for start in np.cumsum([0.0] + [d for d, _ in LEGS])[1:-1]:
         ax.axvline(start, color="grey", lw=0.8, ls=":")
-    ax.set_xlabel("time [s] (dotted lines: a turn starts or ends)")
+    xlabel = "time [s] (dotted lines: a turn starts or ends"
+    if straight:
+        for name, curve in straight.items():
+            ax.semilogy(times, curve, color=COLOURS[name], lw=1.3, ls="--", label=f"{LABELS[name]}, no turns")
+        for legs, marker in ((LEGS, "v"), (STRAIGHT_LEGS, "^")):
+            truth = scenario(times[1] - times[0], legs).truth
+            k = int(np.argmin(np.hypot(truth[:, 0], truth[:, 1])))
+            ax.plot(times[k], 0.0, marker, color="grey", ms=10, transform=ax.get_xaxis_transform(), clip_on=False,
+                    label=f"closest to the radar ({np.hypot(*truth[k, :2]) / 1000:.0f} km), "
+                          + ("flight" if legs is LEGS else "no turns"))
+        xlabel += "; dashed: the same filters on the flight without turns"
+    ax.set_xlabel(xlabel + ")")
     ax.set_ylabel("position RMSE over runs [m]")
     ax.set_title(title)
     ax.legend(loc="upper left", ncols=4, fontsize="small")
@@ -466,10 +488,11 @@ ZERO_VELOCITY_METRIC = SPEED / np.sqrt(5.0)
 """The lecture's velocity metric of the estimate 'zero velocity' (error = the speed at every return), m/s."""
 
 
-def plot_rmse_against_interval(T: np.ndarray, sweep: dict, lost: dict, runs: int) -> Figure:
-    """The lecture's metric for the position and the velocity, and the fraction of lost runs, against T.
+def plot_rmse_against_interval(T: np.ndarray, sweep: dict, lost: dict, diverged: dict, runs: int) -> Figure:
+    """The lecture's metric for the position and the velocity, and the fractions of lost and diverged runs, against T.
 
-    ``sweep[name]`` is (len(T), 3), the metric per interval; ``lost[name]`` (len(T),) the fraction of lost runs.
+    ``sweep[name]`` is (len(T), 3), the metric per interval; ``lost[name]`` and ``diverged[name]`` (len(T),) the
+    fractions of lost and of diverged runs.
     The metric axes stop at 1e5; a point beyond is drawn at the top as a triangle.
     """
     fig, axes = plt.subplots(1, 3, figsize=(15, 5), layout="constrained")
@@ -490,12 +513,14 @@ def plot_rmse_against_interval(T: np.ndarray, sweep: dict, lost: dict, runs: int
                      color="dimgrey")
     for name in FILTERS:
         axes[2].plot(T, 100 * lost[name], "o-", color=COLOURS[name], label=LABELS[name])
+        axes[2].plot(T, 100 * diverged[name], "x--", color=COLOURS[name])
     axes[2].set_ylim(-3, 103)
     axes[2].set_xlabel("measurement interval T [s]")
-    axes[2].set_ylabel(f"runs lost (position error > {LOST_KM:g} km at the end) [%]")
-    axes[2].set_title("lost runs", fontsize="medium")
+    axes[2].set_ylabel("runs [%]")
+    axes[2].set_title(f"solid: lost (position error > {LOST_KM:g} km at the end)\n"
+                      f"dashed: diverged (velocity error > {DIVERGED_KMS:g} km/s at some return)", fontsize="medium")
     axes[2].set_xticks(T)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncols=len(labels), fontsize="small")
-    fig.suptitle(f"Error and lost runs against the measurement interval ({runs} runs per T)")
+    fig.suptitle(f"Error, lost and diverged runs against the measurement interval ({runs} runs per T)")
     return fig

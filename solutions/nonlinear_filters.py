@@ -220,20 +220,26 @@ def _rounded(value):
 
 def shipped_results(runs: int = DATA_RUNS, seed: int = DATA_SEED, sweep_runs: int = SWEEP_RUNS,
                     particles: int = PARTICLES) -> dict:
-    """Everything the notebook loads: the T = 5 s table, RMSE_k curves, and the sweep over T."""
+    """Everything the notebook loads: the T = 5 s table, RMSE_k curves, the CKF's and UKF's position RMSE_k on
+    the flight without turns (seed + 1 + len(SWEEP_T)), and the sweep over T (seeds seed + 1, ...)."""
     err = monte_carlo(runs, seed, particles=particles)
+    straight = monte_carlo(runs, seed + 1 + len(SWEEP_T), filters=("ckf", "ukf"), legs=air_traffic.STRAIGHT_LEGS)
     sweep = {name: [] for name in air_traffic.FILTERS}
     sweep_lost = {name: [] for name in air_traffic.FILTERS}
+    sweep_diverged = {name: [] for name in air_traffic.FILTERS}
     for i, T in enumerate(SWEEP_T):
         for name, e in monte_carlo(sweep_runs, seed + 1 + i, T=T, particles=particles).items():
             sweep[name].append(air_traffic.lecture_metric(e).tolist())
             sweep_lost[name].append(float(np.mean(air_traffic.lost_runs(e))))
+            sweep_diverged[name].append(float(np.mean(air_traffic.diverged_runs(e))))
     return _rounded({
         "runs": runs, "seed": seed, "particles": particles,
         "filters": {name: air_traffic.summarise(e) for name, e in err.items()},
         "times": air_traffic.scenario().times.tolist(),
         "rmse_curves": {name: air_traffic.rmse_over_time(e).tolist() for name, e in err.items()},
-        "sweep": {"T": list(SWEEP_T), "runs": sweep_runs, "filters": sweep, "lost_fraction": sweep_lost},
+        "straight_position_rmse": {name: air_traffic.rmse_over_time(e)[:, 0].tolist() for name, e in straight.items()},
+        "sweep": {"T": list(SWEEP_T), "runs": sweep_runs, "filters": sweep, "lost_fraction": sweep_lost,
+                  "diverged_fraction": sweep_diverged},
     })
 
 

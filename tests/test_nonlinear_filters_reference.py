@@ -338,12 +338,16 @@ def test_the_set_up_options_change_the_flight_plan_and_the_turn_noise():
     assert np.isclose(sc.Q[4, 4], 5e-3) and np.allclose(sc.Q[:4, :4], air_traffic.ct_process_noise(5.0)[:4, :4])
 
 
-def test_the_shipped_sweep_has_a_lost_fraction_per_interval():
+def test_the_shipped_sweep_has_a_lost_and_a_diverged_fraction_per_interval():
     shipped = air_traffic.load()
-    assert shipped.sweep_runs == ref.SWEEP_RUNS and set(shipped.sweep_lost) == set(air_traffic.FILTERS)
-    for fraction in shipped.sweep_lost.values():
-        assert fraction.shape == (len(ref.SWEEP_T),) and np.all((0 <= fraction) & (fraction <= 1))
-        assert np.allclose(fraction * ref.SWEEP_RUNS, np.round(fraction * ref.SWEEP_RUNS), atol=1e-3)
+    assert shipped.sweep_runs == ref.SWEEP_RUNS
+    for fractions in (shipped.sweep_lost, shipped.sweep_diverged):
+        assert set(fractions) == set(air_traffic.FILTERS)
+        for fraction in fractions.values():
+            assert fraction.shape == (len(ref.SWEEP_T),) and np.all((0 <= fraction) & (fraction <= 1))
+            assert np.allclose(fraction * ref.SWEEP_RUNS, np.round(fraction * ref.SWEEP_RUNS), atol=1e-3)
+    assert set(shipped.straight_position_rmse) == {"ckf", "ukf"}
+    assert all(curve.shape == shipped.times.shape for curve in shipped.straight_position_rmse.values())
     assert all(0 <= row["diverged_runs"] <= shipped.runs for row in shipped.table.values())
 
 
