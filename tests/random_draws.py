@@ -69,7 +69,7 @@ class Statement:
         return f"{len(SEEDS)} seeds"
 
 
-def _decorator_keywords(function: ast.FunctionDef | ast.AsyncFunctionDef) -> dict | None:
+def decorator_keywords(function: ast.FunctionDef | ast.AsyncFunctionDef) -> dict | None:
     """The literal keyword arguments of the function's ``random_draws(...)`` decorator, or None."""
     for decorator in function.decorator_list:
         if isinstance(decorator, ast.Call) and getattr(decorator.func, "id", None) == "random_draws":
@@ -83,7 +83,7 @@ def statements(files: list[Path] | None = None) -> list[Statement]:
     for path in files or sorted(TESTS.glob("test_*.py")):
         for node in ast.walk(ast.parse(path.read_text())):
             if isinstance(node, ast.FunctionDef | ast.AsyncFunctionDef):
-                keywords = _decorator_keywords(node)
+                keywords = decorator_keywords(node)
                 if keywords is not None:
                     found.append(Statement(
                         path.name, node.name, float(keywords["false_fail"]), keywords["why"],

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 
-from random_draws import FALSE_FAIL_LIMIT, SEEDS, TESTS, statements
+from random_draws import FALSE_FAIL_LIMIT, SEEDS, TESTS, decorator_keywords, statements
 
 FILES = sorted(TESTS.glob("test_*.py"))
 
@@ -39,20 +39,13 @@ def _draws(function: ast.FunctionDef, functions: dict[str, ast.FunctionDef], see
                for name in (called | requested) & functions.keys() - seen - {function.name})
 
 
-def _marked(function: ast.FunctionDef) -> dict | None:
-    for decorator in function.decorator_list:
-        if isinstance(decorator, ast.Call) and getattr(decorator.func, "id", None) == "random_draws":
-            return {k.arg: ast.literal_eval(k.value) for k in decorator.keywords}
-    return None
-
-
 @pytest.mark.parametrize("path", FILES, ids=[p.name for p in FILES])
 def test_every_test_that_draws_random_numbers_is_marked_and_seeded(path):
     tree = ast.parse(path.read_text())
     functions = _functions(tree)
     problems = []
     for name, function in functions.items():
-        marked = _marked(function)
+        marked = decorator_keywords(function)
         if name.startswith("test_") and marked is None and _draws(function, functions):
             problems.append(f"{name} draws random numbers but has no @random_draws(false_fail=..., why=...)")
         pinned = marked is not None and (marked.get("fixed_seed") or marked.get("own_seeds"))
@@ -86,6 +79,12 @@ def test_every_statement_is_within_the_limit_and_covers_21_seeds():
     assert not problems, "\n".join(problems)
 
 
+def _pytest(folder: Path) -> subprocess.CompletedProcess:
+    """pytest on ``folder`` alone, in a fresh process, with only this kit's seed hook."""
+    return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
+                           "--rootdir", str(folder), str(folder)], capture_output=True, text=True, cwd=folder)
+
+
 def test_a_seeded_test_runs_on_21_seeds_and_an_unmarked_one_is_refused(tmp_path):
     for name in ("conftest.py", "random_draws.py"):
         shutil.copy(TESTS / name, tmp_path / name)
@@ -93,12 +92,10 @@ def test_a_seeded_test_runs_on_21_seeds_and_an_unmarked_one_is_refused(tmp_path)
         "import numpy as np\nfrom random_draws import random_draws\n\n"
         "@random_draws(false_fail=0.0, why='an identity: the draw only picks the case')\n"
         "def test_marked(seed):\n    assert np.random.default_rng(seed).random() < 1\n")
-    run = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
-                          "--rootdir", str(tmp_path), str(tmp_path)], capture_output=True, text=True, cwd=tmp_path)
+    run = _pytest(tmp_path)
     assert f"{len(SEEDS)} passed" in run.stdout, run.stdout + run.stderr
     (tmp_path / "test_demo.py").write_text("def test_unmarked(seed):\n    pass\n")
-    run = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
-                          "--rootdir", str(tmp_path), str(tmp_path)], capture_output=True, text=True, cwd=tmp_path)
+    run = _pytest(tmp_path)
     assert run.returncode != 0 and "states no false-fail" in run.stdout + run.stderr, run.stdout + run.stderr
 
 

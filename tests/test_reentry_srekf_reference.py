@@ -9,6 +9,7 @@ import contextlib
 import io
 import subprocess
 import sys
+from collections.abc import Callable
 from pathlib import Path
 
 import matplotlib
@@ -422,13 +423,18 @@ def test_framework_rejects_data_that_go_back_in_time(data) -> None:
 # ---------------------------------------------------------------------------------------------
 # Why square roots, errors and NEES: the given comparison and diagnostics
 # ---------------------------------------------------------------------------------------------
-@random_draws(false_fail=0.0, why="an identity to rtol 1e-9 in float64 and 1e-3 in float32 on a well-conditioned prior; the draw only picks the prior")
-def test_covariance_form_update_equals_square_root_update_when_well_conditioned(seed: int) -> None:
+def _well_conditioned_radar_update(seed: int) -> tuple[np.ndarray, np.ndarray, np.ndarray, Callable]:
+    """A prior (mu, S) with well-separated scales, a reading y 20 m off its prediction, and the radar model."""
     rng = np.random.default_rng([seed, 1])
     S = random_upper_sqrt(rng, 3, scales=np.array([300.0, 30.0, 3e-4]))
     mu = np.array([9000.0, -300.0, 1e-3])
     measure = lambda x: (ref.radar_predict(x), ref.radar_jacobian(x))  # noqa: E731
-    y = ref.radar_predict(mu) + 20.0
+    return mu, S, ref.radar_predict(mu) + 20.0, measure
+
+
+@random_draws(false_fail=0.0, why="an identity to rtol 1e-9 in float64 and 1e-3 in float32 on a well-conditioned prior; the draw only picks the prior")
+def test_covariance_form_update_equals_square_root_update_when_well_conditioned(seed: int) -> None:
+    mu, S, y, measure = _well_conditioned_radar_update(seed)
     mu_c, P_c = starship.covariance_measurement_update(mu, S.T @ S, y, measure, SIGMA_RANGE**2 * np.eye(1))
     mu_s, S_s = ref.sqrt_measurement_update(mu, S, y, measure, SIGMA_RANGE * np.eye(1))
     np.testing.assert_allclose(mu_c, mu_s, rtol=1e-12)
@@ -467,11 +473,7 @@ def test_first_update_figure_marks_broken_covariances() -> None:
 
 @random_draws(false_fail=0.0, why="an identity to rtol 1e-9 in float64 and 1e-5 in float32 on a well-conditioned prior; the draw only picks the prior")
 def test_joseph_form_and_float32_square_root_agree_with_the_update_when_well_conditioned(seed: int) -> None:
-    rng = np.random.default_rng([seed, 1])
-    S = random_upper_sqrt(rng, 3, scales=np.array([300.0, 30.0, 3e-4]))
-    mu = np.array([9000.0, -300.0, 1e-3])
-    measure = lambda x: (ref.radar_predict(x), ref.radar_jacobian(x))  # noqa: E731
-    y = ref.radar_predict(mu) + 20.0
+    mu, S, y, measure = _well_conditioned_radar_update(seed)
     _, S_s = ref.sqrt_measurement_update(mu, S, y, measure, SIGMA_RANGE * np.eye(1))
     _, P_j = starship.covariance_measurement_update(mu, S.T @ S, y, measure, SIGMA_RANGE**2 * np.eye(1), joseph=True)
     assert_cov_close(P_j, S_s.T @ S_s, rtol=1e-9)
