@@ -65,8 +65,11 @@ c.GradingExecute.notebook_timeout = 300
 c.GradingExecute.max_output_bytes = 1_000_000
 # A kernel gets 3 minutes to start, not nbclient's 60 s: on a loaded machine (more grading jobs
 # than cores, or other work beside them) a start took longer than 60 s, and nbgrader then drops the
-# whole submission from the batch.
+# whole submission from the batch. Once, even 180 s was not enough (a full test run beside other
+# grading on two cores); a kernel that does not answer is shut down and another started, three
+# starts in all, before the submission is reported as not graded.
 c.Execute.startup_timeout = 180
+c.GradingExecute.kernel_start_attempts = 3
 # The kernel's own log goes to the grader's terminal, never into the graded notebook. At WARNING
 # level ipykernel 7 prints a notice about unencrypted loopback TCP for every submission, which
 # buries the grading summary; errors still show.

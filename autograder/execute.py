@@ -9,6 +9,8 @@
 - the integrity monitor (autograder/integrity.py): installed before any student cell, and probed
   after each graded test cell; its findings go to ``resources["integrity_findings"]`` for
   ``FlagCheating``;
+- a kernel that does not start (on a loaded machine a start can take minutes) is started again,
+  up to ``kernel_start_attempts`` times in all, rather than nbgrader dropping the submission;
 - recovery: when the kernel dies (``os._exit``, a crash, the memory cap) or a cell times out, the
   cell gets an error that says so, a fresh kernel replays the cells before it silently, and
   grading goes on. nbgrader alone throws the whole submission away when its kernel dies.
@@ -49,6 +51,7 @@ class GradingExecute(Execute):
     notebook_timeout = Integer(300, help="Seconds for a whole submission; later cells are not run.").tag(config=True)
     max_output_bytes = Integer(1_000_000, help="Text output kept per cell; the rest is dropped.").tag(config=True)
     max_restarts = Integer(12, help="Kernel restarts per submission before the rest is not run.").tag(config=True)
+    kernel_start_attempts = Integer(3, help="Kernel starts tried before a submission is given up.").tag(config=True)
 
     def _setup_code(self) -> str:
         lines = [PROBE]
@@ -58,7 +61,7 @@ class GradingExecute(Execute):
         return "\n".join(lines)
 
     async def async_start_new_kernel_client(self):
-        kc = await super().async_start_new_kernel_client()
+        kc = await self._async_start_kernel_client_with_retries()
         msg_id = await ensure_async(kc.execute(self._setup_code(), silent=True, store_history=False))
         reply = await self.async_wait_for_reply(msg_id)
         if reply is None or reply["content"]["status"] != "ok":
@@ -76,6 +79,21 @@ class GradingExecute(Execute):
             await self._async_cleanup_kernel()
             raise RuntimeError(f"The integrity monitor did not install in the grading kernel: {reply and reply['content']}")
         return kc
+
+    async def _async_start_kernel_client_with_retries(self):
+        """nbclient's client start, tried again with a fresh kernel when the kernel does not answer."""
+        for attempt in range(1, self.kernel_start_attempts + 1):
+            try:
+                return await super().async_start_new_kernel_client()
+            except RuntimeError as error:  # nbclient: "Kernel didn't respond in 180 seconds", or it died
+                if attempt == self.kernel_start_attempts:
+                    raise
+                self.log.warning("The grading kernel did not start (%s); starting another (attempt %d of %d).",
+                                 error, attempt + 1, self.kernel_start_attempts)
+                # nbclient has shut the failed kernel down and, having made a client, dropped its manager
+                if self.km is None:
+                    self.km = self.create_kernel_manager()
+                await self.async_start_new_kernel()
 
     # nbclient binds the synchronous twin to the base class's coroutine; bind it to ours.
     start_new_kernel_client = run_sync(async_start_new_kernel_client)

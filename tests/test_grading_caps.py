@@ -7,6 +7,7 @@ that says why (so they score 0 when they are test cells), and the grader's note 
 """
 
 import nbformat
+from nbclient import NotebookClient
 
 from autograder import grading
 from autograder.execute import NOT_RUN, GradingExecute
@@ -76,3 +77,45 @@ def test_a_kernel_restarted_too_often_stops_the_submission(tmp_path):
         "The kernel died in cell 2; it was restarted and the cells above it were run again.",
         "The cells from cell 3 on were not run: the kernel had to be restarted too often.",
     ], notes
+
+
+def test_a_kernel_that_does_not_start_is_started_again(tmp_path, monkeypatch):
+    """On a loaded machine a kernel once took more than nbclient's 180 s to answer, and nbgrader
+    dropped the submission. Here the first start fails as nbclient fails it (the kernel is shut
+    down, the error raised); the grader starts another, and the notebook runs in it."""
+    starts = []
+    start = NotebookClient.async_start_new_kernel_client
+
+    async def first_start_fails(self):
+        starts.append(self.km.kernel_id)
+        if len(starts) == 1:
+            self.kc = self.km.client()
+            await self._async_cleanup_kernel()
+            raise RuntimeError("Kernel didn't respond in 180 seconds")
+        return await start(self)
+
+    monkeypatch.setattr(NotebookClient, "async_start_new_kernel_client", first_start_fails)
+    nb = run(["a = 6 * 7", "print(a)"], tmp_path)
+    assert len(starts) == 2 and starts[0] != starts[1]
+    assert nb.cells[1].outputs[0].text == "42\n", nb.cells[1].outputs
+
+
+def test_a_kernel_that_never_starts_gives_up_after_the_attempts(tmp_path, monkeypatch):
+    """Three starts (the course's setting), then nbclient's error reaches nbgrader, which reports the
+    submission as not graded."""
+    starts = []
+
+    async def never_starts(self):
+        starts.append(self.km.kernel_id)
+        self.kc = self.km.client()
+        await self._async_cleanup_kernel()
+        raise RuntimeError("Kernel didn't respond in 180 seconds")
+
+    monkeypatch.setattr(NotebookClient, "async_start_new_kernel_client", never_starts)
+    try:
+        run(["a = 1"], tmp_path)
+    except RuntimeError as error:
+        assert "didn't respond" in str(error)
+    else:
+        raise AssertionError("a kernel that never starts was not reported")
+    assert len(starts) == 3 == len(set(starts))
