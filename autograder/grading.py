@@ -15,7 +15,7 @@ import re
 import shutil
 import tempfile
 import warnings
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -148,30 +148,36 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab]) -> dic
     return by_lab
 
 
-def _grade_students(workdir: Path, lab_id: str, students: list[str]) -> str:
-    """Autograde, then write the feedback of, each student in turn; nbgrader's log."""
+def _grade_student(workdir: Path, lab_id: str, student: str) -> str:
+    """Autograde, then write the feedback of, one student's submission of a lab; nbgrader's log."""
     log = []
-    for student in students:
-        for app_class in (Autograde, GenerateFeedback):
-            result = _run(app_class, workdir, Lab(lab_id), student)
-            log.append(result.get("log", "") + result.get("error", ""))
+    for app_class in (Autograde, GenerateFeedback):
+        result = _run(app_class, workdir, Lab(lab_id), student)
+        log.append(result.get("log", "") + result.get("error", ""))
     return "".join(log)
 
 
-def autograde(lab: Lab, workdir: Path, students: list[str], jobs: int = 1) -> str:
-    """``nbgrader autograde`` and feedback for these students' submissions of a lab in ``workdir``.
+def autograde(by_lab: dict[Lab, list[str]], workdir: Path, jobs: int = 1) -> dict[str, str]:
+    """``nbgrader autograde`` and feedback for these students' submissions of each lab in ``workdir``.
 
-    With ``jobs > 1`` the students are shared among that many processes, which all write to the
-    one gradebook (SQLite waits for its lock; a database server handles it natively). nbgrader
-    goes on past a submission it cannot grade; that is not raised here, so that one bad file does
-    not stop a class: the caller finds the submissions missing from the gradebook. Returns
-    nbgrader's log.
+    With ``jobs > 1``, one pool of that many processes takes the submissions of every lab one at a
+    time, so that a process that finishes early takes the next submission, whatever its lab, and
+    each process starts nbgrader once. They all write to the one gradebook (SQLite waits for its
+    lock; a database server handles it natively). nbgrader goes on past a submission it cannot
+    grade; that is not raised here, so that one bad file does not stop a class: the caller finds
+    the submissions missing from the gradebook. Returns nbgrader's log of each lab.
     """
-    if jobs <= 1 or len(students) <= 1:
-        return _grade_students(workdir, lab.id, students)
-    shares = [students[k::jobs] for k in range(jobs)]
-    with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-        return "".join(pool.map(_grade_students, [workdir] * jobs, [lab.id] * jobs, shares))
+    tasks = [(lab.id, student) for lab, students in by_lab.items() for student in students]
+    logs: dict[str, list[str]] = {lab.id: [] for lab in by_lab}
+    if jobs <= 1 or len(tasks) <= 1:
+        for lab_id, student in tasks:
+            logs[lab_id].append(_grade_student(workdir, lab_id, student))
+    else:
+        with ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn")) as pool:
+            futures = {pool.submit(_grade_student, workdir, lab_id, student): lab_id for lab_id, student in tasks}
+            for future in as_completed(futures):
+                logs[futures[future]].append(future.result())
+    return {lab_id: "".join(log) for lab_id, log in logs.items()}
 
 
 def all_graded_labs(workdir: Path) -> list[Lab]:
@@ -331,7 +337,7 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     generate_release(labs, workdir)
     late.set_due_dates(labs, course_config(workdir))
     by_lab = import_submissions(submissions, workdir, labs)
-    logs = {lab.id: autograde(lab, workdir, by_lab[lab.id], jobs) for lab in labs}
+    logs = autograde({lab: by_lab[lab.id] for lab in labs}, workdir, jobs)
     rows = read_grades(workdir, all_graded_labs(workdir))
     graded = {(row.student, row.lab) for row in rows}
     failures = {lab.id: [s for s in by_lab[lab.id] if (s, lab.id) not in graded] for lab in labs}
