@@ -1,22 +1,111 @@
-"""The demo: release every lab, make a synthetic class, grade it and print the table."""
+"""The demo: release every lab, make a synthetic class, grade it, print the table, and say whether
+every row came out as the catalogues say it must.
+
+The default class is small, so that a first run shows the kit working in a few minutes: for each
+lab a blank submission, the solved one, a few catalogued mistakes in different blanks, one cheat and
+one careless fault. ``full=True`` grades the whole catalogue instead: blank, solved and every
+catalogued mistake of every lab.
+"""
 
 from __future__ import annotations
 
+import shutil
 from pathlib import Path
 
-from autograder import grading, submissions
-from autograder.labs import ROOT, all_labs
+from autograder import cells, cheats, faults, grading, submissions
+from autograder.labs import ROOT, Lab, all_labs
+from autograder.mistakes import catalogue
 from autograder.release import release_all
+from autograder.synthetic_class import Outcome, cheat_outcome, fault_outcome
 
 DEMO_DIR = ROOT / "demo"
+QUICK_MISTAKES = 2
+"""Catalogued mistakes per lab in the quick class, each in a different blank."""
+QUICK_CHEAT = "import-reference"
+QUICK_FAULT = "numpy-warning"
 
 
-def run_demo(workdir: Path = DEMO_DIR, jobs: int = 2) -> list[grading.GradeRow]:
-    """Release all labs, write the demo class to ``workdir/class`` and grade it in ``workdir/course``
-    with ``jobs`` processes."""
+def _honest(lab: Lab, folder: Path, mistakes) -> list[Outcome]:
+    """Write the blank and solved submissions and one per mistake of ``lab``; their outcomes."""
+    submissions.write(submissions.solved(lab), folder, submissions.SOLVED, lab)
+    submissions.write(cells.read(lab.release_notebook), folder, submissions.BLANK, lab)
+    outcomes = [Outcome(submissions.BLANK, "blank", None, only=False, flagged=False),
+                Outcome(submissions.SOLVED, "solved", (), only=True, flagged=False)]
+    for mistake in mistakes:
+        submissions.write(submissions.with_mistake(lab, mistake), folder, mistake.student_id(lab), lab)
+        outcomes.append(Outcome(mistake.student_id(lab), "mistake", (f"test_{mistake.blank}",), only=True, flagged=False))
+    return outcomes
+
+
+def quick_mistakes(lab: Lab, count: int = QUICK_MISTAKES) -> list:
+    """``count`` catalogued mistakes of ``lab``, each in a different blank, spread over the lab."""
+    first = {}
+    for mistake in catalogue(lab):
+        first.setdefault(mistake.blank, mistake)
+    blanks = list(first)
+    return [first[blanks[round(k * (len(blanks) - 1) / max(count - 1, 1))]] for k in range(min(count, len(blanks)))]
+
+
+def write_demo_class(labs: list[Lab], folder: Path, full: bool = False) -> dict[tuple[str, str], Outcome]:
+    """Write the demo class as ``folder/<student>/<lab>/...``: (student, lab id) -> what grading must make of it."""
+    if folder.exists():
+        shutil.rmtree(folder)
+    expected: dict[tuple[str, str], Outcome] = {}
+    for lab in labs:
+        outcomes = _honest(lab, folder, catalogue(lab) if full else quick_mistakes(lab))
+        if not full:
+            cheat = cheats.get(QUICK_CHEAT)
+            submissions.write(cheat.notebook(lab), folder, cheat.name, lab)
+            [fault] = [f for f in faults.FAULTS if f.slug == QUICK_FAULT]
+            blank = cells.blank_names(cells.read(lab.source_notebook))[0]
+            faults.write_fault(fault, lab, blank, folder)
+            outcomes += [cheat_outcome(lab, cheat), fault_outcome(lab, fault, blank)]
+        expected |= {(o.student, lab.id): o for o in outcomes}
+    return expected
+
+
+def unexpected(rows: list[grading.GradeRow], expected: dict[tuple[str, str], Outcome]) -> list[str]:
+    """How the graded ``rows`` differ from what the catalogues say (empty: every row as expected)."""
+    by_key = {(row.student, row.lab): row for row in rows}
+    found = []
+    for (student, lab_id), outcome in expected.items():
+        row = by_key.get((student, lab_id))
+        found += [f"{lab_id}: {error}" for error in outcome.errors(row)] if row else [f"{lab_id}: {student} was not graded"]
+    return found
+
+
+def _plural(count: int, word: str) -> str:
+    return f"{count} {word}" if count == 1 else f"{count} {word}s"
+
+
+def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = False) -> bool:
+    """Release all labs, write the demo class to ``workdir/class``, grade it in ``workdir/course``
+    with ``jobs`` processes (default: one per core), and print whether every row came out as
+    expected and where to look next. Returns whether every row did."""
     labs = all_labs()
     release_all()
-    class_dir = workdir / "class"
-    students = submissions.write_class(labs, class_dir)
-    print(f"Demo class: {len(students)} students in {class_dir} (blank, solved, and one per catalogued mistake).")
-    return grading.grade(class_dir, workdir / "course", workdir / "grades.csv", jobs)
+    class_dir, course, grades_csv = workdir / "class", workdir / "course", workdir / "grades.csv"
+    expected = write_demo_class(labs, class_dir, full)
+    students = {student for student, _ in expected}
+    kinds = ("blank, solved and every catalogued mistake" if full else
+             f"blank, solved, {QUICK_MISTAKES} catalogued mistakes, one cheat and one careless fault")
+    print(f"Demo class: {_plural(len(expected), 'submission')} of {_plural(len(labs), 'lab')} from "
+          f"{_plural(len(students), 'student')} in {class_dir} ({kinds} per lab).")
+    rows = grading.grade(class_dir, course, grades_csv, jobs)
+    differ = unexpected(rows, expected)
+    if differ:
+        print(f"Not as expected: {_plural(len(differ), 'difference')} between the grades and the catalogues:")
+        print("\n".join(f"  {line}" for line in differ))
+    else:
+        print(f"All {_plural(len(expected), 'row')} came out as expected: the blank scores 0, the solved notebook "
+              "full marks, each mistake, cheat and fault loses what its catalogue says, and only the cheats are flagged.")
+    example = next((s for (s, lab), o in expected.items() if o.kind == "mistake"), submissions.SOLVED)
+    example_lab = next(lab for (s, lab) in expected if s == example)
+    print("Where to look next:")
+    print(f"  the grades, one row per submission: {grades_csv}")
+    print(f"  one student's feedback page: {course / 'feedback' / example / example_lab / f'{example_lab}.html'}")
+    print(f"  the written answers, graded by hand: .venv/bin/jupyter lab --CourseDirectory.root={course}, "
+          "then Nbgrader > Formgrader")
+    if not full:
+        print("  the whole catalogue (about 20 minutes on 2 cores): .venv/bin/python -m autograder demo --full")
+    return not differ

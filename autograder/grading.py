@@ -13,9 +13,11 @@ import csv
 import multiprocessing
 import re
 import shutil
+import sys
 import tempfile
+import textwrap
 import warnings
-from concurrent.futures import ProcessPoolExecutor
+from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -27,9 +29,10 @@ from nbgrader.coursedir import CourseDirectory
 from nbgrader.utils import capture_log
 from sqlalchemy.exc import SAWarning
 from traitlets.config import Config
+from tqdm import tqdm
 from traitlets.config.loader import PyFileConfigLoader
 
-from autograder import cells, late, versions
+from autograder import cells, default_jobs, late, versions
 from autograder.execute import GradingExecute
 from autograder.flag_cheating import FLAG
 from autograder.labs import ROOT, Lab
@@ -158,20 +161,32 @@ def _grade_students(workdir: Path, lab_id: str, students: list[str]) -> str:
     return "".join(log)
 
 
-def autograde(lab: Lab, workdir: Path, students: list[str], jobs: int = 1) -> str:
-    """``nbgrader autograde`` and feedback for these students' submissions of a lab in ``workdir``.
+def autograde(by_lab: dict[str, list[str]], workdir: Path, jobs: int | None = None) -> dict[str, str]:
+    """``nbgrader autograde`` and feedback for the submissions in ``workdir``: lab id -> students.
 
-    With ``jobs > 1`` the students are shared among that many processes, which all write to the
-    one gradebook (SQLite waits for its lock; a database server handles it natively). nbgrader
-    goes on past a submission it cannot grade; that is not raised here, so that one bad file does
-    not stop a class: the caller finds the submissions missing from the gradebook. Returns
-    nbgrader's log.
+    With ``jobs > 1`` (default: one per core) the submissions are graded that many at a time in
+    separate processes, which all write to the one gradebook (SQLite waits for its lock; a database
+    server handles it natively). A progress bar (tqdm, on stderr) counts the graded submissions.
+    nbgrader goes on past a submission it cannot grade; that is not raised here, so that one bad
+    file does not stop a class: the caller finds the submissions missing from the gradebook.
+    Returns nbgrader's log of each lab.
     """
-    if jobs <= 1 or len(students) <= 1:
-        return _grade_students(workdir, lab.id, students)
-    shares = [students[k::jobs] for k in range(jobs)]
-    with ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn")) as pool:
-        return "".join(pool.map(_grade_students, [workdir] * jobs, [lab.id] * jobs, shares))
+    jobs = jobs or default_jobs()
+    tasks = [(lab_id, student) for lab_id, students in by_lab.items() for student in students]
+    logs: dict[tuple[str, str], str] = {}
+    with tqdm(total=len(tasks), desc="Grading", unit="submission", file=sys.stderr, dynamic_ncols=True) as bar:
+        if jobs <= 1 or len(tasks) <= 1:
+            for lab_id, student in tasks:
+                logs[lab_id, student] = _grade_students(workdir, lab_id, [student])
+                bar.update()
+        else:
+            with ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn")) as pool:
+                futures = {pool.submit(_grade_students, workdir, lab_id, [student]): (lab_id, student)
+                           for lab_id, student in tasks}
+                for future in as_completed(futures):
+                    logs[futures[future]] = future.result()
+                    bar.update()
+    return {lab_id: "".join(logs[lab_id, student] for student in students) for lab_id, students in by_lab.items()}
 
 
 def all_graded_labs(workdir: Path) -> list[Lab]:
@@ -297,23 +312,59 @@ def write_csv(rows: list[GradeRow], path: Path) -> None:
                              f"{sum(row.max_cells.values()):g}", " | ".join(row.flags), " | ".join(notes)])
 
 
-def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None) -> None:
-    """Print the autograded score of each submission and the cells where it lost points."""
-    width = max([len(r.student) for r in rows] + [7])
-    print(f"{'student':<{width}}  {'lab':<16}{'autograded':>12}  lost points in")
+TABLE_WIDTH = 100
+"""The widest the summary table gets, in characters (narrower if the terminal is)."""
+
+
+def _lost_lines(row: GradeRow) -> list[str]:
+    """Each lost cell once, with why it lost its points; cells that lost them for the same reason share a line."""
+    by_reason: dict[str, list[str]] = {}
+    for cell in row.lost:
+        by_reason.setdefault(row.reasons.get(cell, "no reason was recorded"), []).append(cell)
+    return [f"{', '.join(lost)}: {reason}" for reason, lost in by_reason.items()]
+
+
+def format_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None, width: int | None = None) -> str:
+    """The summary table: one line per submission (student, lab, autograded score, what happened),
+    then the grader's notes and each lost cell with its reason, wrapped to ``width`` columns
+    (default: the terminal's, at most TABLE_WIDTH); a line cut short ends in an ellipsis."""
+    width = width or min(shutil.get_terminal_size((TABLE_WIDTH, 24)).columns, TABLE_WIDTH)
+    names = [r.student for r in rows] + [s for students in (failures or {}).values() for s in students]
+    student_w = min(max([len(n) for n in names] + [7]), 40)
+    lab_w = max([len(r.lab) for r in rows] + [len(lab) for lab in failures or {}] + [3])
+    lines = [f"{'student':<{student_w}}  {'lab':<{lab_w}}  {'score':>9}  result", "-" * width]
+    indent = " " * 4
+
+    def line(student: str, lab: str, score: str, result: str) -> list[str]:
+        if len(student) > student_w:  # a long name on a line of its own
+            return [student, f"{'':<{student_w}}  {lab:<{lab_w}}  {score:>9}  {result}"]
+        return [f"{student:<{student_w}}  {lab:<{lab_w}}  {score:>9}  {result}"]
+
     for row in rows:
-        score = f"{row.auto_score:g}/{row.auto_max:g}"
-        flagged = "FLAGGED FOR REVIEW; " if row.flags else ""
-        print(f"{row.student:<{width}}  {row.lab:<16}{score:>12}  {flagged}{', '.join(row.lost) or '-'}")
-        for line in [*row.notes, *(f"{cell}: {why}" for cell, why in row.reasons.items())]:
-            print(f"{'':<{width}}  {'':<16}{'':>12}    {line[:150]}")
+        if row.flags:
+            result = "flagged for review"
+        elif not row.lost:
+            result = "full marks"
+        else:
+            result = f"lost {len(row.lost)} of {len(row.autograded)} cells"
+        lines += line(row.student, row.lab, f"{row.auto_score:g}/{row.auto_max:g}", result)
+        for text in [*row.notes, *_lost_lines(row)]:
+            lines += textwrap.wrap(" ".join(text.split()), width, initial_indent=indent, subsequent_indent=indent + "  ",
+                                   max_lines=3, placeholder=" ...", break_on_hyphens=False)
     for lab_id, students in (failures or {}).items():
         for student in students:
-            print(f"{student:<{width}}  {lab_id:<16}{'NOT GRADED':>12}  nbgrader could not grade this file; see its log")
-    print("Written answers (derivations) are graded by hand in formgrader and are not counted above.")
+            lines += line(student, lab_id, "-", "not graded: see the log")
+    lines.append("-" * width)
+    lines += textwrap.wrap("Scores count the autograded cells only: written answers are graded by hand in formgrader.", width)
+    return "\n".join(lines)
 
 
-def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int = 1) -> list[GradeRow]:
+def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None) -> None:
+    """Print ``format_table``."""
+    print(format_table(rows, failures))
+
+
+def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int | None = None) -> list[GradeRow]:
     """Autograde ``submissions/<student>/<lab>/<lab>.ipynb`` in the course ``workdir``.
 
     Refuses to start unless the grading kernel can import ``solutions``. Grades only the
@@ -331,7 +382,7 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     generate_release(labs, workdir)
     late.set_due_dates(labs, course_config(workdir))
     by_lab = import_submissions(submissions, workdir, labs)
-    logs = {lab.id: autograde(lab, workdir, by_lab[lab.id], jobs) for lab in labs}
+    logs = autograde(by_lab, workdir, jobs)
     rows = read_grades(workdir, all_graded_labs(workdir))
     graded = {(row.student, row.lab) for row in rows}
     failures = {lab.id: [s for s in by_lab[lab.id] if (s, lab.id) not in graded] for lab in labs}
@@ -339,7 +390,8 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
         if students:
             log_path = workdir / f"autograde-{lab_id}.log"
             log_path.write_text(logs[lab_id])
-            print(f"{len(students)} submission(s) of {lab_id} could not be graded; nbgrader's log is in {log_path}")
+            count = "1 submission" if len(students) == 1 else f"{len(students)} submissions"
+            print(f"{count} of {lab_id} could not be graded; nbgrader's log is in {log_path}.")
     write_csv(rows, out_csv or workdir / "grades.csv")
     versions.record(out_csv or workdir / "grades.csv")
     print_table(rows, failures)
