@@ -29,7 +29,7 @@ def build_parser() -> argparse.ArgumentParser:
                                    "feedback page and the grades CSV from the gradebook, without grading again")
     feedback.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")
     feedback.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
-    demo = commands.add_parser("demo", help="release every lab, grade a small synthetic class of each (blank, solved, "
+    demo = commands.add_parser("demo", help="grade a small synthetic class of each lab (blank, solved, "
                                "a few catalogued mistakes, a cheat, a fault) and check every row")
     demo.add_argument("--workdir", type=Path, default=ROOT / "demo", help="the folder for the class, its course and grades (default: demo/)")
     demo.add_argument("--jobs", type=int, default=default_jobs(), help=JOBS_HELP)
