@@ -27,7 +27,9 @@ TEMPLATES = Path(__file__).resolve().parent / "templates"
 TEMPLATE = "kit_feedback"
 """The feedback template, which extends nbgrader's."""
 NBGRADER_TEMPLATES = Path(nbgrader.__file__).resolve().parent / "server_extensions" / "formgrader" / "templates"
-"""Where nbgrader keeps its feedback template."""
+"""Where nbgrader keeps its feedback template (``feedback/index.html.j2``, which ours extends)."""
+TEMPLATE_PATHS = [str(NBGRADER_TEMPLATES.parent / "static" / "node_modules" / "bootstrap" / "dist" / "css"), str(NBGRADER_TEMPLATES)]
+"""Where the feedback template finds nbgrader's CSS (as GenerateFeedback sets it) and nbgrader's template."""
 
 
 def _names_in(source: str) -> set[str]:
@@ -72,12 +74,13 @@ class FeedbackGrades(GetGrades):
         graded = [c for c in nb.cells if cells.meta(c).get("grade")]
         resources["nbgrader"]["ungraded_points"] = sum(
             c.metadata.nbgrader.get("points") or 0 for c in graded if c.metadata.nbgrader.get("needs_manual_grade"))
-        tests = {cells.grade_id(c)[len("test_"):]: c for c in graded if cells.grade_id(c).startswith("test_")}
+        tests = {cells.grade_id(c).removeprefix("test_"): c for c in graded if cells.grade_id(c).startswith("test_")}
         lost = [blank for blank, c in tests.items()
                 if (c.metadata.nbgrader.get("score") or 0) < c.metadata.nbgrader.get("points", 0)]
         for cell in nb.cells:
-            blank = cells.grade_id(cell)[len("check_"):] if cells.grade_id(cell).startswith("check_") else None
-            test = tests.get(blank)
+            grade_id = cells.meta(cell).get("grade_id", "")
+            blank = grade_id.removeprefix("check_")
+            test = tests.get(blank) if grade_id.startswith("check_") else None
             if test is None or not _failed(cell) or blank in lost:
                 continue
             uses = _names_in(cell.source)
