@@ -11,6 +11,7 @@ catalogued mistake of every lab.
 from __future__ import annotations
 
 import shutil
+import textwrap
 from pathlib import Path
 
 from autograder import cells, cheats, faults, grading, submissions
@@ -79,12 +80,14 @@ def _plural(count: int, word: str) -> str:
 
 
 def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = False) -> bool:
-    """Write the demo class to ``workdir/class``, grade it in ``workdir/course``
+    """Write the demo class to ``workdir/class``, grade it in a new ``workdir/course``
     with ``jobs`` processes (default: one per core), and print whether every row came out as
     expected and where to look next. Returns whether every row did."""
     labs = all_labs()
     class_dir, course, grades_csv = workdir / "class", workdir / "course", workdir / "grades.csv"
     expected = write_demo_class(labs, class_dir, full)
+    if course.exists():  # a new gradebook, so that the table holds this class and nothing else
+        shutil.rmtree(course)
     students = {student for student, _ in expected}
     kinds = ("blank, solved and every catalogued mistake" if full else
              f"blank, solved, {QUICK_MISTAKES} catalogued mistakes, one cheat and one careless fault")
@@ -94,17 +97,27 @@ def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = Fal
     differ = unexpected(rows, expected)
     if differ:
         print(f"Not as expected: {_plural(len(differ), 'difference')} between the grades and the catalogues:")
-        print("\n".join(f"  {line}" for line in differ))
+        for line in differ:
+            print(textwrap.fill(line, grading.TABLE_WIDTH, initial_indent="  - ", subsequent_indent="    "))
     else:
-        print(f"All {_plural(len(expected), 'row')} came out as expected: the blank scores 0, the solved notebook "
-              "full marks, each mistake, cheat and fault loses what its catalogue says, and only the cheats are flagged.")
+        print(textwrap.fill(f"All {_plural(len(expected), 'row')} came out as expected: the blank scores 0, the solved "
+                            "notebook full marks, each mistake, cheat and fault loses what its catalogue says, and "
+                            "only the cheats that the integrity checks catch are flagged.", grading.TABLE_WIDTH))
     example = next((s for (s, lab), o in expected.items() if o.kind == "mistake"), submissions.SOLVED)
     example_lab = next(lab for (s, lab) in expected if s == example)
-    print("Where to look next:")
-    print(f"  the grades, one row per submission: {grades_csv}")
-    print(f"  one student's feedback page: {course / 'feedback' / example / example_lab / f'{example_lab}.html'}")
-    print(f"  the written answers, graded by hand: .venv/bin/jupyter lab --CourseDirectory.root={course}, "
-          "then Nbgrader > Formgrader")
+    root = course.relative_to(ROOT) if course.is_relative_to(ROOT) else course
+    steps = [
+        f"The grades, one row per submission: {grades_csv}",
+        f"One student's feedback page: {course / 'feedback' / example / example_lab / f'{example_lab}.html'}",
+        f"The written answers, to grade by hand: from {ROOT}, run .venv/bin/jupyter lab "
+        f"--CourseDirectory.root={root} and open Nbgrader > Formgrader > Manual Grading; then "
+        f".venv/bin/python -m autograder feedback --workdir {root} rewrites the feedback pages and the grades.",
+    ]
     if not full:
-        print("  the whole catalogue (about 20 minutes on 2 cores): .venv/bin/python -m autograder demo --full")
+        steps.append("The whole catalogue (about 150 submissions, five times as many as here): "
+                     ".venv/bin/python -m autograder demo --full")
+    print("Where to look next:")
+    for step in steps:
+        print(textwrap.fill(step, grading.TABLE_WIDTH, initial_indent="  - ", subsequent_indent="    ",
+                            break_on_hyphens=False, break_long_words=False))
     return not differ

@@ -112,3 +112,29 @@ def test_the_table_fits_100_columns_with_whole_words_and_each_lost_cell_once():
     assert "6/8" in text and "lost 1 of 4 cells" in text and "full marks" in text and "no reason was recorded" in text
     assert any(line.endswith(" ...") for line in lines), "the long reason ends in an ellipsis"
     assert "unreadable" in text and "not graded" in text
+
+
+def test_the_quick_demo_class_and_its_check(tmp_path):
+    """The default demo class of one lab: blank, solved, two mistakes in different blanks, one cheat
+    and one fault, each with what grading must make of it; a row that differs is reported."""
+    from autograder import demo
+    from autograder.synthetic_class import Outcome
+
+    lab = Lab("train-kf")
+    expected = demo.write_demo_class([lab], tmp_path / "class")
+    kinds = sorted(outcome.kind for outcome in expected.values())
+    assert kinds == sorted(["blank", "solved", "mistake", "mistake", "cheat", "fault"])
+    mistakes = [o.zero for o in expected.values() if o.kind == "mistake"]
+    assert len(set(mistakes)) == 2, "the two mistakes are in different blanks"
+    assert sorted(p.parent.parent.name for p in (tmp_path / "class").glob(f"*/{lab.id}/*.ipynb")) == sorted(s for s, _ in expected)
+    assert (tmp_path / "class").exists() and all(key[1] == lab.id for key in expected)
+
+    points = {c: 2.0 for c in ("test_a", "test_b")}
+    solved = GradeRow("solved", lab.id, dict(points), dict(points), frozenset(points))
+    assert demo.unexpected([solved], {("solved", lab.id): Outcome("solved", "solved", (), True, False)}) == []
+    wrong = GradeRow("solved", lab.id, {"test_a": 0.0, "test_b": 2.0}, dict(points), frozenset(points),
+                     reasons={"test_a": "AssertionError: no"})
+    assert demo.unexpected([wrong], {("solved", lab.id): Outcome("solved", "solved", (), True, False)}) == [
+        "train-kf: solved: test_a lost marks (AssertionError: no)"]
+    assert demo.unexpected([], {("blank", lab.id): Outcome("blank", "blank", None, False, False)}) == [
+        "train-kf: blank was not graded"]
