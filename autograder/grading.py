@@ -377,7 +377,7 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     workdir.mkdir(parents=True, exist_ok=True)
     known = {p.parent.name for p in (ROOT / "source").glob("*/*.ipynb")}
     for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
-        print(f"skipped {folder}: there is no lab called {folder.name}")
+        print(f"Skipped {folder}: there is no lab called {folder.name}.")
     labs = [Lab(lab_id) for lab_id in sorted(known & {p.name for p in submissions.glob("*/*") if p.is_dir()})]
     generate_release(labs, workdir)
     late.set_due_dates(labs, course_config(workdir))

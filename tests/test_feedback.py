@@ -107,4 +107,4 @@ def test_long_messages_wrap(graded):
     style = " ".join(re.findall(r"<style[^>]*>(.*?)</style>", page(workdir), re.S))
     rule = re.search(r"div\.output_area pre[^{]*\{([^}]*)\}", style)
     assert rule, "no rule for the output's <pre>"
-    assert "white-space: pre-wrap" in rule.group(1) and "overflow-wrap: anywhere" in rule.group(1)
+    assert "white-space: pre-wrap" in rule.group(1) and "overflow-wrap: break-word" in rule.group(1)
