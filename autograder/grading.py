@@ -379,6 +379,8 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
         print(f"Skipped {folder}: there is no lab called {folder.name}.")
     labs = [Lab(lab_id) for lab_id in sorted(known & {p.name for p in submissions.glob("*/*") if p.is_dir()})]
+    count = "1 lab" if len(labs) == 1 else f"{len(labs)} labs"
+    print(f"Setting up the course folder {workdir} for {count} (nbgrader generate_assignment).")
     generate_release(labs, workdir)
     late.set_due_dates(labs, course_config(workdir))
     by_lab = import_submissions(submissions, workdir, labs)
@@ -392,6 +394,14 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
             log_path.write_text(logs[lab_id])
             count = "1 submission" if len(students) == 1 else f"{len(students)} submissions"
             print(f"{count} of {lab_id} could not be graded; nbgrader's log is in {log_path}.")
+    for lab in labs:
+        pages = [s for s in by_lab[lab.id] if (s, lab.id) in graded
+                 and not (workdir / "feedback" / s / lab.id / lab.notebook_name.replace(".ipynb", ".html")).exists()]
+        if pages:
+            log_path = workdir / f"autograde-{lab.id}.log"
+            log_path.write_text(logs[lab.id])
+            count = "1 graded submission" if len(pages) == 1 else f"{len(pages)} graded submissions"
+            print(f"No feedback page was written for {count} of {lab.id}; nbgrader's log is in {log_path}.")
     write_csv(rows, out_csv or workdir / "grades.csv")
     versions.record(out_csv or workdir / "grades.csv")
     print_table(rows, failures)
