@@ -91,8 +91,9 @@ def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = Fal
     students = {student for student, _ in expected}
     kinds = ("blank, solved and every catalogued mistake" if full else
              f"blank, solved, {QUICK_MISTAKES} catalogued mistakes, one cheat and one careless fault")
-    print(f"Demo class: {_plural(len(expected), 'submission')} of {_plural(len(labs), 'lab')} from "
-          f"{_plural(len(students), 'student')} in {class_dir} ({kinds} per lab).")
+    print(textwrap.fill(f"Demo class: {_plural(len(expected), 'submission')} of {_plural(len(labs), 'lab')} from "
+                        f"{_plural(len(students), 'student')} in {class_dir} ({kinds} per lab).", grading.TABLE_WIDTH,
+                        break_on_hyphens=False, break_long_words=False))
     rows = grading.grade(class_dir, course, grades_csv, jobs)
     differ = unexpected(rows, expected)
     if differ:
@@ -105,19 +106,24 @@ def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = Fal
                             "only the cheats that the integrity checks catch are flagged.", grading.TABLE_WIDTH))
     example = next((s for (s, lab), o in expected.items() if o.kind == "mistake"), submissions.SOLVED)
     example_lab = next(lab for (s, lab) in expected if s == example)
-    root = course.relative_to(ROOT) if course.is_relative_to(ROOT) else course
-    steps = [
-        f"The grades, one row per submission: {grades_csv}",
-        f"One student's feedback page: {course / 'feedback' / example / example_lab / f'{example_lab}.html'}",
-        f"The written answers, to grade by hand: from {ROOT}, run .venv/bin/jupyter lab "
-        f"--CourseDirectory.root={root} and open Nbgrader > Formgrader > Manual Grading; then "
-        f".venv/bin/python -m autograder feedback --workdir {root} rewrites the feedback pages and the grades.",
+    def shown(path: Path) -> Path:  # relative to the course root, where the commands run
+        return path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
+
+    root = shown(course)
+    steps = [  # what to look at, and where (a path or a command, on a line of its own to copy)
+        ("The grades, one row per submission:", [str(shown(grades_csv))]),
+        ("One student's feedback page:", [str(shown(course / "feedback" / example / example_lab / f"{example_lab}.html"))]),
+        (f"The written answers, to grade by hand: from {ROOT}, start JupyterLab on the demo's course and open "
+         "Nbgrader > Formgrader > Manual Grading; then rewrite the feedback pages and the grades:",
+         [f".venv/bin/jupyter lab --CourseDirectory.root={root}", f".venv/bin/python -m autograder feedback --workdir {root}"]),
     ]
     if not full:
-        steps.append("The whole catalogue (about 150 submissions, five times as many as here): "
-                     ".venv/bin/python -m autograder demo --full")
+        steps.append(("The whole catalogue (about 150 submissions, five times as many as here):",
+                      [".venv/bin/python -m autograder demo --full"]))
     print("Where to look next:")
-    for step in steps:
-        print(textwrap.fill(step, grading.TABLE_WIDTH, initial_indent="  - ", subsequent_indent="    ",
+    for text, lines in steps:
+        print(textwrap.fill(text, grading.TABLE_WIDTH, initial_indent="  - ", subsequent_indent="    ",
                             break_on_hyphens=False, break_long_words=False))
+        for line in lines:
+            print(f"      {line}")
     return not differ

@@ -138,3 +138,26 @@ def test_the_quick_demo_class_and_its_check(tmp_path):
         "train-kf: solved: test_a lost marks (AssertionError: no)"]
     assert demo.unexpected([], {("blank", lab.id): Outcome("blank", "blank", None, False, False)}) == [
         "train-kf: blank was not graded"]
+
+
+def test_the_demo_closes_with_a_verdict_and_where_to_look(tmp_path, monkeypatch, capsys):
+    """run_demo's own output around the grading (grading itself replaced: it grades nothing here,
+    so every row is missing and the verdict must say so)."""
+    from autograder import demo
+
+    monkeypatch.setattr(demo, "all_labs", lambda: [Lab("train-kf")])
+    monkeypatch.setattr(demo.grading, "grade", lambda *args, **kwargs: [])
+    assert demo.run_demo(tmp_path, 1) is False
+    out = capsys.readouterr().out
+    assert " ".join(out.split()).startswith("Demo class: 6 submissions of 1 lab from 6 students in ")
+    assert "Not as expected: 6 differences between the grades and the catalogues:" in out
+    assert "train-kf: solved was not graded" in out
+    for what in ("grades.csv", "/feedback/", "Nbgrader > Formgrader > Manual Grading", "autograder feedback --workdir",
+                 "demo --full"):
+        assert what in out, what
+    long = [line for line in out.splitlines() if len(line) > 100 and not line.startswith(" " * 6)
+            and not (len(line.split()) == 1 and "/" in line)]
+    assert long == [], "lines wider than 100 columns (other than a path or a command to copy)"
+    monkeypatch.setattr(demo, "unexpected", lambda rows, expected: [])
+    assert demo.run_demo(tmp_path, 1) is True
+    assert "All 6 rows came out as expected" in capsys.readouterr().out
