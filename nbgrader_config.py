@@ -30,7 +30,6 @@ from nbgrader.preprocessors import (  # noqa: E402
     ClearHiddenTests,
     ClearOutput,
     DeduplicateIds,
-    GetGrades,
     IgnorePattern,
     LimitOutput,
     OverwriteCells,
@@ -96,8 +95,15 @@ c.Autograde.autograde_preprocessors = [
     CheckCellMetadata,
 ]
 
-# Feedback shows students their graded notebook without the hidden tests' code.
-c.GenerateFeedback.preprocessors = [GetGrades, CSSHTMLHeaderPreprocessor, ClearHiddenTests]
+# Feedback shows students their graded notebook without the hidden tests' code, with the kit's
+# template over nbgrader's: written answers not graded yet say so, a test cell that earns its marks
+# under a failed visible check says why, long messages wrap (autograder/feedback.py).
+from autograder.feedback import NBGRADER_TEMPLATES, TEMPLATE, TEMPLATE_PATHS, TEMPLATES, FeedbackGrades  # noqa: E402
+
+c.GenerateFeedback.preprocessors = [FeedbackGrades, CSSHTMLHeaderPreprocessor, ClearHiddenTests]
+c.GenerateFeedback.HTMLExporter.template_name = TEMPLATE
+c.GenerateFeedback.HTMLExporter.extra_template_basedirs = [str(NBGRADER_TEMPLATES), str(TEMPLATES)]
+c.GenerateFeedback.HTMLExporter.extra_template_paths = TEMPLATE_PATHS
 
 # Late submissions: the labs' due dates are in due_dates.toml (`python -m autograder grade` writes
 # them into the gradebook). A late submission loses percent_per_day of its earned points for every

@@ -6,28 +6,39 @@ import argparse
 import sys
 from pathlib import Path
 
+from autograder import default_jobs
 from autograder.labs import ROOT
 
+JOBS_HELP = "grade this many submissions at a time (default: the number of cores, %(default)s here)"
 
-def main(argv: list[str] | None = None) -> int:
+
+def build_parser() -> argparse.ArgumentParser:
+    """The command line: one subcommand per step of the pipeline, each argument with its help."""
     parser = argparse.ArgumentParser(prog="python -m autograder", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
-    commands.add_parser("labs", help="list the labs: blanks, points, visible checks, hidden tests, catalogued mistakes, and the claims each checks")
+    commands.add_parser("labs", help="list each lab's blanks by name with their points and catalogued mistakes, and the claims the lab checks")
     commands.add_parser("release", help="generate release/<lab>/ for every lab with nbgrader, then check it for leaks")
     bundle = commands.add_parser("bundle", help="write the solution-free tree that students get, and check it for leaks")
     bundle.add_argument("out", type=Path, help="a new folder")
     grade = commands.add_parser("grade", help="autograde SUBMISSIONS/<student>/<lab>/<lab>.ipynb; write grades and feedback")
-    grade.add_argument("submissions", type=Path)
+    grade.add_argument("submissions", type=Path, help="the folder of submissions, SUBMISSIONS/<student>/<lab>/<lab>.ipynb")
     grade.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder to grade in (default: the course root)")
     grade.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
-    grade.add_argument("--jobs", type=int, default=1, help="grade this many submissions at a time (default 1)")
-    demo = commands.add_parser("demo", help="release, make a synthetic class (blank, solved, every catalogued mistake), grade it")
-    demo.add_argument("--workdir", type=Path, default=ROOT / "demo")
-    demo.add_argument("--jobs", type=int, default=2, help="grade this many submissions at a time (default 2)")
+    grade.add_argument("--jobs", type=int, default=default_jobs(), help=JOBS_HELP)
+    feedback = commands.add_parser("feedback", help="after grading written answers in formgrader: rewrite every "
+                                   "feedback page and the grades CSV from the gradebook, without grading again")
+    feedback.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")
+    feedback.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
+    demo = commands.add_parser("demo", help="grade a small synthetic class of each lab (blank, solved, "
+                               "a few catalogued mistakes, a cheat, a fault) and check every row")
+    demo.add_argument("--workdir", type=Path, default=ROOT / "demo", help="the folder for the class, its course and grades (default: demo/)")
+    demo.add_argument("--jobs", type=int, default=default_jobs(), help=JOBS_HELP)
+    demo.add_argument("--full", action="store_true", help="grade the whole catalogue instead: blank, solved and every "
+                      "catalogued mistake of every lab (about 150 submissions, five times the quick class)")
     data = commands.add_parser("data", help="rebuild the shipped data in course/data/ from the seeded reference builds")
     data.add_argument("--check", action="store_true", help="only check that a rebuild reproduces the shipped files")
     collect = commands.add_parser("collect", help="turn an LMS download of one lab (a zip or a folder) into SUBMISSIONS/<student>/<lab>/ with nbgrader's zip_collect")
-    collect.add_argument("lab")
+    collect.add_argument("lab", help="the lab's id, e.g. train-kf")
     collect.add_argument("download", type=Path, help="the LMS download: a zip file or a folder of files named by student")
     collect.add_argument("--students", type=Path, required=True, help="CSV with the columns lms_name and student_id")
     collect.add_argument("--out", type=Path, required=True, help="the SUBMISSIONS folder to write")
@@ -37,7 +48,11 @@ def main(argv: list[str] | None = None) -> int:
     similarity.add_argument("folder", type=Path, help="a SUBMISSIONS folder, or a course folder that has submitted/")
     similarity.add_argument("--threshold", type=float, default=0.8, help="list pairs scoring at least this (1 = identical; default 0.8)")
     similarity.add_argument("--out", type=Path, default=None, help="also write the pairs to this CSV")
-    args = parser.parse_args(argv)
+    return parser
+
+
+def main(argv: list[str] | None = None) -> int:
+    args = build_parser().parse_args(argv)
 
     if args.command == "labs":
         from autograder.inventory import print_inventory
@@ -57,10 +72,18 @@ def main(argv: list[str] | None = None) -> int:
         from autograder.grading import grade as grade_submissions
 
         grade_submissions(args.submissions.resolve(), args.workdir.resolve(), args.out, args.jobs)
+    elif args.command == "feedback":
+        from autograder.feedback import regenerate
+
+        workdir = args.workdir.resolve()
+        rows = regenerate(workdir, args.out)
+        count = "1 graded submission" if len(rows) == 1 else f"{len(rows)} graded submissions"
+        print(f"Rewrote the feedback of {count} in {workdir / 'feedback'} "
+              f"and the grades in {args.out or workdir / 'grades.csv'}.")
     elif args.command == "demo":
         from autograder.demo import run_demo
 
-        run_demo(args.workdir.resolve(), args.jobs)
+        return 0 if run_demo(args.workdir.resolve(), args.jobs, args.full) else 1
     elif args.command == "data":
         from autograder import data as shipped
 

@@ -125,14 +125,15 @@ FAULTS = (
 )
 
 
+def write_fault(fault: Fault, lab: Lab, blank: str, folder: Path) -> str:
+    """Write ``fault`` in ``blank`` as a submission ``folder/<student>/<lab>/<file>``; the student id."""
+    name, data = fault.build(lab, blank)
+    path = folder / fault.student_id(lab) / lab.id / name
+    path.parent.mkdir(parents=True, exist_ok=True)
+    path.write_bytes(data)
+    return fault.student_id(lab)
+
+
 def write_faults(lab: Lab, blank: str, folder: Path) -> list[str]:
     """Write every fault as a submission ``folder/<student>/<lab>/<file>``; the student ids."""
-    students = []
-    for fault in FAULTS:
-        name, data = fault.build(lab, blank)
-        path = folder / fault.student_id(lab) / lab.id / name
-        path.parent.mkdir(parents=True, exist_ok=True)
-        path.write_bytes(data)
-        students.append(fault.student_id(lab))
-    return students
-
+    return [write_fault(fault, lab, blank, folder) for fault in FAULTS]

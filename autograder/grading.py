@@ -13,7 +13,9 @@ import csv
 import multiprocessing
 import re
 import shutil
+import sys
 import tempfile
+import textwrap
 import warnings
 from concurrent.futures import ProcessPoolExecutor, as_completed
 from dataclasses import dataclass, field
@@ -27,9 +29,10 @@ from nbgrader.coursedir import CourseDirectory
 from nbgrader.utils import capture_log
 from sqlalchemy.exc import SAWarning
 from traitlets.config import Config
+from tqdm import tqdm
 from traitlets.config.loader import PyFileConfigLoader
 
-from autograder import cells, late, versions
+from autograder import cells, default_jobs, late, versions
 from autograder.execute import GradingExecute
 from autograder.flag_cheating import FLAG
 from autograder.labs import ROOT, Lab
@@ -157,27 +160,32 @@ def _grade_student(workdir: Path, lab_id: str, student: str) -> str:
     return "".join(log)
 
 
-def autograde(by_lab: dict[Lab, list[str]], workdir: Path, jobs: int = 1) -> dict[str, str]:
-    """``nbgrader autograde`` and feedback for these students' submissions of each lab in ``workdir``.
+def autograde(by_lab: dict[str, list[str]], workdir: Path, jobs: int | None = None) -> dict[str, str]:
+    """``nbgrader autograde`` and feedback for the submissions in ``workdir``: lab id -> students.
 
-    With ``jobs > 1``, one pool of that many processes takes the submissions of every lab one at a
-    time, so that a process that finishes early takes the next submission, whatever its lab, and
-    each process starts nbgrader once. They all write to the one gradebook (SQLite waits for its
-    lock; a database server handles it natively). nbgrader goes on past a submission it cannot
-    grade; that is not raised here, so that one bad file does not stop a class: the caller finds
-    the submissions missing from the gradebook. Returns nbgrader's log of each lab.
+    With ``jobs > 1`` (default: one per core) the submissions are graded that many at a time in
+    separate processes, which all write to the one gradebook (SQLite waits for its lock; a database
+    server handles it natively). A progress bar (tqdm, on stderr) counts the graded submissions.
+    nbgrader goes on past a submission it cannot grade; that is not raised here, so that one bad
+    file does not stop a class: the caller finds the submissions missing from the gradebook.
+    Returns nbgrader's log of each lab.
     """
-    tasks = [(lab.id, student) for lab, students in by_lab.items() for student in students]
-    logs: dict[str, list[str]] = {lab.id: [] for lab in by_lab}
-    if jobs <= 1 or len(tasks) <= 1:
-        for lab_id, student in tasks:
-            logs[lab_id].append(_grade_student(workdir, lab_id, student))
-    else:
-        with ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn")) as pool:
-            futures = {pool.submit(_grade_student, workdir, lab_id, student): lab_id for lab_id, student in tasks}
-            for future in as_completed(futures):
-                logs[futures[future]].append(future.result())
-    return {lab_id: "".join(log) for lab_id, log in logs.items()}
+    jobs = jobs or default_jobs()
+    tasks = [(lab_id, student) for lab_id, students in by_lab.items() for student in students]
+    logs: dict[tuple[str, str], str] = {}
+    with tqdm(total=len(tasks), desc="Grading", unit="submission", file=sys.stderr, dynamic_ncols=True) as bar:
+        if jobs <= 1 or len(tasks) <= 1:
+            for lab_id, student in tasks:
+                logs[lab_id, student] = _grade_student(workdir, lab_id, student)
+                bar.update()
+        else:
+            with ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn")) as pool:
+                futures = {pool.submit(_grade_student, workdir, lab_id, student): (lab_id, student)
+                           for lab_id, student in tasks}
+                for future in as_completed(futures):
+                    logs[futures[future]] = future.result()
+                    bar.update()
+    return {lab_id: "".join(logs[lab_id, student] for student in students) for lab_id, students in by_lab.items()}
 
 
 def all_graded_labs(workdir: Path) -> list[Lab]:
@@ -303,23 +311,59 @@ def write_csv(rows: list[GradeRow], path: Path) -> None:
                              f"{sum(row.max_cells.values()):g}", " | ".join(row.flags), " | ".join(notes)])
 
 
-def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None) -> None:
-    """Print the autograded score of each submission and the cells where it lost points."""
-    width = max([len(r.student) for r in rows] + [7])
-    print(f"{'student':<{width}}  {'lab':<16}{'autograded':>12}  lost points in")
+TABLE_WIDTH = 100
+"""The widest the summary table gets, in characters (narrower if the terminal is)."""
+
+
+def _lost_lines(row: GradeRow) -> list[str]:
+    """Each lost cell once, with why it lost its points; cells that lost them for the same reason share a line."""
+    by_reason: dict[str, list[str]] = {}
+    for cell in row.lost:
+        by_reason.setdefault(row.reasons.get(cell, "no reason was recorded"), []).append(cell)
+    return [f"{', '.join(lost)}: {reason}" for reason, lost in by_reason.items()]
+
+
+def format_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None, width: int | None = None) -> str:
+    """The summary table: one line per submission (student, lab, autograded score, what happened),
+    then the grader's notes and each lost cell with its reason, wrapped to ``width`` columns
+    (default: the terminal's, at most TABLE_WIDTH); a line cut short ends in an ellipsis."""
+    width = width or min(shutil.get_terminal_size((TABLE_WIDTH, 24)).columns, TABLE_WIDTH)
+    names = [r.student for r in rows] + [s for students in (failures or {}).values() for s in students]
+    student_w = min(max([len(n) for n in names] + [7]), 40)
+    lab_w = max([len(r.lab) for r in rows] + [len(lab) for lab in failures or {}] + [3])
+    lines = [f"{'student':<{student_w}}  {'lab':<{lab_w}}  {'score':>9}  result", "-" * width]
+    indent = " " * 4
+
+    def line(student: str, lab: str, score: str, result: str) -> list[str]:
+        if len(student) > student_w:  # a long name on a line of its own
+            return [student, f"{'':<{student_w}}  {lab:<{lab_w}}  {score:>9}  {result}"]
+        return [f"{student:<{student_w}}  {lab:<{lab_w}}  {score:>9}  {result}"]
+
     for row in rows:
-        score = f"{row.auto_score:g}/{row.auto_max:g}"
-        flagged = "FLAGGED FOR REVIEW; " if row.flags else ""
-        print(f"{row.student:<{width}}  {row.lab:<16}{score:>12}  {flagged}{', '.join(row.lost) or '-'}")
-        for line in [*row.notes, *(f"{cell}: {why}" for cell, why in row.reasons.items())]:
-            print(f"{'':<{width}}  {'':<16}{'':>12}    {line[:150]}")
+        if row.flags:
+            result = "flagged for review"
+        elif not row.lost:
+            result = "full marks"
+        else:
+            result = f"lost {len(row.lost)} of {len(row.autograded)} cells"
+        lines += line(row.student, row.lab, f"{row.auto_score:g}/{row.auto_max:g}", result)
+        for text in [*row.notes, *_lost_lines(row)]:
+            lines += textwrap.wrap(" ".join(text.split()), width, initial_indent=indent, subsequent_indent=indent + "  ",
+                                   max_lines=3, placeholder=" ...", break_on_hyphens=False)
     for lab_id, students in (failures or {}).items():
         for student in students:
-            print(f"{student:<{width}}  {lab_id:<16}{'NOT GRADED':>12}  nbgrader could not grade this file; see its log")
-    print("Written answers (derivations) are graded by hand in formgrader and are not counted above.")
+            lines += line(student, lab_id, "-", "not graded: see the log")
+    lines.append("-" * width)
+    lines += textwrap.wrap("Scores count the autograded cells only: written answers are graded by hand in formgrader.", width)
+    return "\n".join(lines)
 
 
-def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int = 1) -> list[GradeRow]:
+def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None) -> None:
+    """Print ``format_table``."""
+    print(format_table(rows, failures))
+
+
+def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int | None = None) -> list[GradeRow]:
     """Autograde ``submissions/<student>/<lab>/<lab>.ipynb`` in the course ``workdir``.
 
     Refuses to start unless the grading kernel can import ``solutions``. Grades only the
@@ -332,12 +376,14 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     workdir.mkdir(parents=True, exist_ok=True)
     known = {p.parent.name for p in (ROOT / "source").glob("*/*.ipynb")}
     for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
-        print(f"skipped {folder}: there is no lab called {folder.name}")
+        print(f"Skipped {folder}: there is no lab called {folder.name}.")
     labs = [Lab(lab_id) for lab_id in sorted(known & {p.name for p in submissions.glob("*/*") if p.is_dir()})]
+    count = "1 lab" if len(labs) == 1 else f"{len(labs)} labs"
+    print(f"Setting up the course folder {workdir} for {count} (nbgrader generate_assignment).")
     generate_release(labs, workdir)
     late.set_due_dates(labs, course_config(workdir))
     by_lab = import_submissions(submissions, workdir, labs)
-    logs = autograde({lab: by_lab[lab.id] for lab in labs}, workdir, jobs)
+    logs = autograde(by_lab, workdir, jobs)
     rows = read_grades(workdir, all_graded_labs(workdir))
     graded = {(row.student, row.lab) for row in rows}
     failures = {lab.id: [s for s in by_lab[lab.id] if (s, lab.id) not in graded] for lab in labs}
@@ -345,7 +391,16 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
         if students:
             log_path = workdir / f"autograde-{lab_id}.log"
             log_path.write_text(logs[lab_id])
-            print(f"{len(students)} submission(s) of {lab_id} could not be graded; nbgrader's log is in {log_path}")
+            count = "1 submission" if len(students) == 1 else f"{len(students)} submissions"
+            print(f"{count} of {lab_id} could not be graded; nbgrader's log is in {log_path}.")
+    for lab in labs:
+        pages = [s for s in by_lab[lab.id] if (s, lab.id) in graded
+                 and not (workdir / "feedback" / s / lab.id / lab.notebook_name.replace(".ipynb", ".html")).exists()]
+        if pages:
+            log_path = workdir / f"autograde-{lab.id}.log"
+            log_path.write_text(logs[lab.id])
+            count = "1 graded submission" if len(pages) == 1 else f"{len(pages)} graded submissions"
+            print(f"No feedback page was written for {count} of {lab.id}; nbgrader's log is in {log_path}.")
     write_csv(rows, out_csv or workdir / "grades.csv")
     versions.record(out_csv or workdir / "grades.csv")
     print_table(rows, failures)

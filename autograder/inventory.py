@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import textwrap
 from dataclasses import dataclass
 
 from autograder import cells, claims
@@ -17,6 +18,10 @@ CHECK_HELPERS = {"check_array", "check_close", "check_pair", "check_symmetric"}
 class Inventory:
     lab: str
     blanks: int
+    blank_points: dict[str, float]
+    """Each blank's name -> the points of its hidden test, in the notebook's order."""
+    blank_mistakes: dict[str, int]
+    """Each blank's name -> how many catalogued mistakes it has."""
     autograded_points: float
     written_answers: int
     written_points: float
@@ -73,6 +78,8 @@ def inventory(lab: Lab) -> Inventory:
     return Inventory(
         lab=lab.id,
         blanks=len(blanks),
+        blank_points={name: points[f"test_{name}"] for name in blanks},
+        blank_mistakes={name: sum(m.blank == name for m in catalogue(lab)) for name in blanks},
         autograded_points=sum(points[f"test_{name}"] for name in blanks),
         written_answers=len(written),
         written_points=sum(points[cells.grade_id(c)] for c in written),
@@ -85,14 +92,27 @@ def inventory(lab: Lab) -> Inventory:
 
 
 def print_inventory(labs: list[Lab]) -> None:
-    header = ("lab", "blanks", "auto points", "written answers", "visible checks", "hidden tests", "hidden asserts", "mistakes", "claims")
-    print("".join(f"{h:>16}" if k else f"{h:<16}" for k, h in enumerate(header)))
+    """Print a summary line per lab, then each lab's blanks by name and the claims it checks."""
+    header = ("lab", "blanks", "points", "written", "visible", "hidden", "hidden", "mistakes", "claims")
+    second = ("", "", "(auto)", "answers (pt)", "checks", "tests", "asserts", "", "")
+    widths = (18, 7, 8, 13, 8, 7, 8, 9, 7)
+
+    def line(values) -> str:
+        return "".join(f"{v:<{w}}" if k == 0 else f"{v:>{w}}" for k, (v, w) in enumerate(zip(values, widths)))
+
+    print(line(header))
+    print(line(second))
     inventories = [inventory(lab) for lab in labs]
     for i in inventories:
-        row = (i.lab, i.blanks, f"{i.autograded_points:g}", f"{i.written_answers} ({i.written_points:g} pt)",
-               i.visible_checks, i.hidden_tests, i.hidden_assertions, i.mistakes, len(i.claims))
-        print("".join(f"{v:>16}" if k else f"{v:<16}" for k, v in enumerate(row)))
+        print(line((i.lab, i.blanks, f"{i.autograded_points:g}", f"{i.written_answers} ({i.written_points:g})",
+                    i.visible_checks, i.hidden_tests, i.hidden_assertions, i.mistakes, len(i.claims))))
     for i in inventories:
-        print(f"\nClaims that {i.lab} states, each recomputed by a check (autograder/claims/):")
+        print(f"\nThe blanks of {i.lab}, in the notebook's order (points of the hidden test, catalogued mistakes):")
+        name_w = max(len(name) for name in i.blank_points)
+        for name, points in i.blank_points.items():
+            mistakes = i.blank_mistakes[name]
+            print(f"  {name:<{name_w}}  {points:>4g} pt  {mistakes} {'mistake' if mistakes == 1 else 'mistakes'}")
+        print(f"Claims that {i.lab} states, each recomputed by a check (autograder/claims/):")
         for cid, summary in i.claims.items():
-            print(f"  {cid}: {summary}")
+            print(textwrap.fill(f"{cid}: {summary}", 100, initial_indent="  ", subsequent_indent="      ",
+                                break_on_hyphens=False))

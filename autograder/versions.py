@@ -17,9 +17,12 @@ from datetime import datetime, timezone
 from importlib import metadata
 from pathlib import Path
 
+from packaging.requirements import Requirement
+
 from autograder.labs import ROOT
 
 LOCK = ROOT / "environment.lock"
+ENVIRONMENT = ROOT / "environment.txt"
 PACKAGES = ("numpy", "scipy", "matplotlib", "nbgrader", "nbclient", "nbconvert", "ipykernel", "SQLAlchemy")
 """The packages named in every record, whether or not they differ from the lock."""
 
@@ -46,11 +49,56 @@ def read_lock(path: Path) -> dict[str, str]:
     return pins
 
 
+def requirements(path: Path = ENVIRONMENT) -> list[Requirement]:
+    """The requirements of ``environment.txt`` (the kit itself, ``-e .``, aside)."""
+    lines = (line.split("#")[0].strip() for line in path.read_text().splitlines())
+    return [Requirement(line) for line in lines if line and not line.startswith("-")]
+
+
+def _dependencies(name: str, extras: frozenset[str]) -> list[Requirement]:
+    """What the installed distribution ``name`` (with ``extras``) requires on this platform."""
+    try:
+        required = metadata.requires(name) or []
+    except metadata.PackageNotFoundError:
+        return []
+    found = []
+    for line in required:
+        requirement = Requirement(line)
+        if requirement.marker is None or any(requirement.marker.evaluate({"extra": e}) for e in extras | {""}):
+            found.append(requirement)
+    return found
+
+
+def needed(path: Path = ENVIRONMENT) -> set[str]:
+    """The canonical names of every package that ``environment.txt`` (and the kit's own
+    requirements) installs on this platform: their closure over the installed packages' metadata."""
+    todo = [(r.name, frozenset(r.extras)) for r in requirements(path)]
+    todo += [(r.name, frozenset(r.extras)) for r in _dependencies("estimation-lab-kit", frozenset())]
+    found: set[str] = set()
+    seen: set[tuple[str, frozenset[str]]] = set()
+    while todo:
+        name, extras = todo.pop()
+        if (_canonical(name), extras) in seen:
+            continue
+        seen.add((_canonical(name), extras))
+        found.add(_canonical(name))
+        todo += [(r.name, frozenset(r.extras)) for r in _dependencies(name, extras)]
+    return found
+
+
 def differences_from_lock(path: Path) -> dict[str, dict[str, str | None]]:
-    """The locked packages whose installed version differs: name -> {"locked", "installed"}."""
+    """The locked packages whose installed version differs: name -> {"locked", "installed"}.
+
+    A locked package that is not installed counts only if environment.txt installs it on this
+    platform: a lock written where a maintainer's extra tool was installed (jupytext, once), or on
+    another platform, must not make every record of an environment installed as README says differ.
+    """
     differ = {}
+    wanted = needed() if ENVIRONMENT.exists() else None
     for name, locked in read_lock(path).items():
         installed = _installed(name)
+        if installed is None and wanted is not None and name not in wanted:
+            continue
         if installed != locked:
             differ[name] = {"locked": locked, "installed": installed}
     return differ
@@ -91,6 +139,7 @@ def record(grades_csv: Path) -> Path:
     record = environment()
     path.write_text(json.dumps(record, indent=2) + "\n")
     if record["differs_from_lock"]:
-        differ = ", ".join(f"{name} {v['installed']} (locked {v['locked']})" for name, v in record["differs_from_lock"].items())
+        differ = ", ".join(f"{name} {v['installed']} (locked {v['locked']})" if v["installed"] else
+                           f"{name} not installed (locked {v['locked']})" for name, v in record["differs_from_lock"].items())
         print(f"Graded in an environment that differs from {LOCK.name}: {differ}. See {path}.")
     return path

@@ -20,6 +20,8 @@ import matplotlib.pyplot as plt
 import numpy as np
 from matplotlib.figure import Figure
 
+from course.tables import cell, number
+
 DEG = np.pi / 180.0
 T_RADAR = 5.0
 """The lecture's measurement interval, s."""
@@ -406,7 +408,7 @@ def print_table(table: dict, runs: int) -> None:
             lecture = LECTURE_TABLE[q].get(name)
             cells.append(f"{row[q]:.4g}" + (f" ({lecture:.4g})" if lecture is not None else " (-)"))
         factor = row["position"] / table["pf"]["position"]
-        print(f"{LABELS[name]:<10}{cells[0]:>24}{cells[1]:>26}{cells[2]:>24}{factor:>12.2f}{row['lost_runs']:>6}"
+        print(f"{LABELS[name]:<10}{cells[0]:>24}{cells[1]:>26}{cells[2]:>24}{cell(factor, 12)}{row['lost_runs']:>6}"
               f"{row['diverged_runs']:>10}")
     print(f"lost: position error above {LOST_KM:g} km at the last return; diverged: velocity error above "
           f"{DIVERGED_KMS:g} km/s at some return")
@@ -414,7 +416,7 @@ def print_table(table: dict, runs: int) -> None:
 
 def _or_dash(value: float) -> str:
     """A number to 4 significant figures, or '-' when it is undefined (every run was dropped)."""
-    return "-" if np.isnan(value) else f"{value:.4g}"
+    return "-" if np.isnan(value) else number(value, ".4g", 12)
 
 
 def print_robust_table(table: dict) -> None:
@@ -425,9 +427,9 @@ def print_robust_table(table: dict) -> None:
     print(f"{'':<10}{'[m]':>11}{'[m/s]':>11}{'[m]':>13}{'[m/s]':>13}{'[m/s]':>13}{'RMSE [m]':>13}")
     for name in FILTERS:
         row = table[name]
-        print(f"{LABELS[name]:<10}{row['median']['position']:>11.4g}{row['median']['velocity']:>11.4g}"
-              f"{row['excluding_lost']['position']:>13.4g}{row['excluding_lost']['velocity']:>13.4g}"
-              f"{_or_dash(row['excluding_diverged']['velocity']):>13}{row['time_averaged_rmse']['position']:>13.4g}"
+        print(f"{LABELS[name]:<10}{cell(row['median']['position'], 11, '.4g')}{cell(row['median']['velocity'], 11, '.4g')}"
+              f"{cell(row['excluding_lost']['position'], 13, '.4g')}{cell(row['excluding_lost']['velocity'], 13, '.4g')}"
+              f"{_or_dash(row['excluding_diverged']['velocity']):>13}{cell(row['time_averaged_rmse']['position'], 13, '.4g')}"
               f"{row['lost_runs']:>6}{row['diverged_runs']:>10}")
 
 

@@ -21,6 +21,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import NDArray
 
+from course.tables import cell, number
+
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
 
@@ -490,10 +492,11 @@ def format_report(data: RadarData, history: FilterHistory) -> str:
     ]
     for i, name in enumerate(STATE_NAMES):
         rmse = float(np.sqrt(np.mean((history.mean[i] - data.x_true[i]) ** 2)))
-        interval = f"[{history.lo90[i, -1]:.0f}, {history.hi90[i, -1]:.0f}]"
+        interval = f"[{number(history.lo90[i, -1], '.0f', 9)}, {number(history.hi90[i, -1], '.0f', 9)}]"
         rows.append(
-            f"{name:<8}{data.x_true[i, -1]:>11.0f}{history.mean[i, -1]:>11.0f}{history.median[i, -1]:>11.0f}"
-            f"{interval:>24}{rmse:>14.1f}{cover['50'][i]:>8.0%}{cover['90'][i]:>8.0%}"
+            f"{name:<8}{cell(data.x_true[i, -1], 11, '.0f')}{cell(history.mean[i, -1], 11, '.0f')}"
+            f"{cell(history.median[i, -1], 11, '.0f')}{interval:>24}{cell(rmse, 14, '.1f')}"
+            f"{cell(cover['50'][i], 8, '.0%')}{cell(cover['90'][i], 8, '.0%')}"
         )
     rmse_radar = float(np.sqrt(np.mean((data.b - data.x_true[0]) ** 2)))
     rows.append(f"(the raw radar readings have an altitude RMSE of {rmse_radar:.1f} m)")

@@ -16,6 +16,8 @@ import numpy as np
 import scipy.stats
 from matplotlib.figure import Figure
 
+from course.tables import cell
+
 MINUTES_PER_HOUR = 60.0
 SIGMA_Z = 15.0
 """Standard deviation of the change in velocity over one minute, mph."""
@@ -128,8 +130,8 @@ def print_rmse_table(data: TrainData, x_a: np.ndarray) -> None:
     """Print the RMSE of the raw GPS fixes and of the filter's estimates."""
     gps, kf = rmse(data.gps, data.truth), rmse(x_a, data.truth)
     print(f"{'RMSE over the hour':<20}{'position [mi]':>15}{'velocity [mph]':>16}")
-    print(f"{'GPS only':<20}{gps[0]:>15.2f}{gps[1]:>16.2f}")
-    print(f"{'Kalman filter':<20}{kf[0]:>15.2f}{kf[1]:>16.2f}")
+    print(f"{'GPS only':<20}{cell(gps[0], 15)}{cell(gps[1], 16)}")
+    print(f"{'Kalman filter':<20}{cell(kf[0], 15)}{cell(kf[1], 16)}")
 
 
 def _clipped(ax, minute: np.ndarray, values: np.ndarray, limit: float, **style) -> None:
@@ -246,7 +248,7 @@ def print_model_comparison(data: TrainData, estimates: dict[str, np.ndarray]) ->
     print(f"{'RMSE over the hour':<34}{'position [mi]':>15}{'velocity [mph]':>16}")
     for name, estimate in {"GPS only": data.gps, **estimates}.items():
         error = rmse(estimate, data.truth)
-        print(f"{name:<34}{error[0]:>15.3f}{error[1]:>16.3f}")
+        print(f"{name:<34}{cell(error[0], 15, '.3f')}{cell(error[1], 16, '.3f')}")
 
 
 @dataclass(frozen=True)

@@ -127,10 +127,18 @@ def test_course_implements_no_blank():
 
 
 def test_student_environment_cannot_import_the_hidden_packages(tmp_path):
-    # Outside the course root and without the grader's PYTHONPATH, as in a student's environment.
+    """The student bundle installed as students install it (its `-e .`, in a fresh environment),
+    probed outside the bundle without the grader's PYTHONPATH: `course` imports, the hidden
+    packages do not (the instructor's own environment installs them, for the source notebooks)."""
+    bundle = write_bundle(tmp_path / "bundle")
     env = {k: v for k, v in os.environ.items() if k != "PYTHONPATH"}
+    venv = tmp_path / "venv"
+    subprocess.run([sys.executable, "-m", "venv", "--without-pip", str(venv)], check=True)
+    python = venv / "bin" / "python"
+    subprocess.run([sys.executable, "-m", "pip", "--python", str(python), "install", "-q", "--no-deps", "-e", str(bundle)],
+                   env=env, check=True, capture_output=True)
     probe = "import importlib.util as u; print([u.find_spec(m) is None for m in ('solutions', 'autograder', 'course')])"
-    out = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=env, capture_output=True, text=True, check=True)
+    out = subprocess.run([str(python), "-c", probe], cwd=tmp_path, env=env, capture_output=True, text=True, check=True)
     assert out.stdout.strip() == "[True, True, False]", "solutions and autograder hidden; course installed"
 
 

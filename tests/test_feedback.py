@@ -1,0 +1,110 @@
+"""The feedback pages a student reads: written answers nobody has graded yet say "not graded yet"
+(not "0 / 2"), `python -m autograder feedback` rewrites the pages after hand grading, a test cell
+that earns its marks under a failed visible check says why, and long messages wrap.
+
+One train-kf submission is graded: the solved notebook with the handout's sign error in kupdate.
+Its run_filter check fails (it calls that kupdate), while run_filter earns full marks, since the
+hidden tests grade it with the reference's kupdate.
+"""
+
+from __future__ import annotations
+
+import html
+import re
+
+import nbformat
+import pytest
+
+from autograder import cells, grading, submissions
+from autograder.__main__ import main
+from autograder.labs import get_lab
+from autograder.mistakes import catalogue
+from gradebook_sql import formgrader_gives
+
+LAB = get_lab("train-kf")
+[MISTAKE] = [m for m in catalogue(LAB) if (m.blank, m.slug) == ("kupdate", "innovation-sign")]
+STUDENT = "s001"
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    """The submission graded: (its grade row, the course folder)."""
+    class_dir, workdir = tmp_path_factory.mktemp("class"), tmp_path_factory.mktemp("course")
+    submissions.write(submissions.with_mistake(LAB, MISTAKE), class_dir, STUDENT, LAB)
+    [row] = grading.grade(class_dir, workdir, jobs=1)
+    return row, workdir
+
+
+def page(workdir) -> str:
+    return (workdir / "feedback" / STUDENT / LAB.id / LAB.notebook_name.replace(".ipynb", ".html")).read_text()
+
+
+def panel_heading(text: str, grade_id: str) -> str:
+    """The heading of the panel of the cell ``grade_id``: its label and its score."""
+    after = text.split(f'<a name="{grade_id}"></a>', 1)[1]
+    return re.sub(r"\s+", " ", html.unescape(re.sub(r"<[^>]*>", " ", after.split("</div>", 1)[0]))).strip()
+
+
+def written(row) -> list[str]:
+    return [cell for cell in row.cells if cell not in row.autograded]
+
+
+def test_the_submission_is_graded_as_the_story_says(graded):
+    row, workdir = graded
+    assert row.lost == ["test_kupdate"]
+    autograded = nbformat.read(workdir / "autograded" / STUDENT / LAB.id / LAB.notebook_name, as_version=4)
+    [check] = [c for c in autograded.cells if cells.meta(c).get("grade_id") == "check_run_filter"]
+    assert any(o.output_type == "error" for o in check.outputs), "the run_filter check fails with the wrong kupdate"
+
+
+def test_written_answers_not_graded_yet_say_so(graded):
+    row, workdir = graded
+    text = page(workdir)
+    assert len(written(row)) >= 2
+    for cell in written(row):
+        heading = panel_heading(text, cell)
+        assert "not graded yet" in heading and "Score" not in heading, heading
+    toc = re.findall(r"<li>.*?</li>", text, re.S)
+    written_lines = [re.sub(r"<[^>]*>|\s+", " ", li) for li in toc if "Written response" in li]
+    assert len(written_lines) == len(written(row)) and all("not graded yet" in li for li in written_lines), written_lines
+    points = sum(row.max_cells[c] for c in written(row))
+    assert f"written answers worth {points:.1f} points are not graded yet" in text
+    assert panel_heading(text, "test_kupdate").startswith("Grade cell: test_kupdate Score: 0.0 /")
+
+
+def test_the_feedback_command_rewrites_the_pages_after_hand_grading(graded, capsys):
+    row, workdir = graded
+    first, *rest = written(row)
+    hand = row.max_cells[first] - 0.5
+    formgrader_gives(grading.course_config(workdir).CourseDirectory.db_url, LAB.id, STUDENT, {first: hand})
+    assert "not graded yet" in panel_heading(page(workdir), first)  # nothing changes by itself
+    assert main(["feedback", "--workdir", str(workdir)]) == 0
+    assert "Rewrote the feedback of 1 graded submission in" in capsys.readouterr().out
+    text = page(workdir)
+    assert f"Score: {hand:.1f} / {row.max_cells[first]:.1f}" in panel_heading(text, first)
+    assert all("not graded yet" in panel_heading(text, cell) for cell in rest)
+    with open(workdir / "grades.csv") as handle:
+        header, values = [line.rstrip("\n").split(",") for line in handle][:2]
+    assert float(dict(zip(header, values))[first]) == hand
+
+
+def test_a_full_marks_cell_under_a_failed_check_says_why(graded):
+    row, workdir = graded
+    text = page(workdir)
+    assert row.cells["test_run_filter"] == row.max_cells["test_run_filter"] > 0
+    notes = {re.search(r"The visible check of (\w+) above failed", html.unescape(n)).group(1): html.unescape(n)
+             for n in re.findall(r'<div class="panel-footer kit-note">(.*?)</div>', text, re.S)}
+    assert "run_filter" in notes, "no note at run_filter"
+    assert "kupdate" not in notes, "kupdate lost its marks: its own check failing needs no note"
+    assert "your kupdate, which loses its marks" in notes["run_filter"]
+    # the note sits in run_filter's test cell, right after its heading
+    cell = text.split('<a name="test_run_filter"></a>', 1)[1].split('<a name="', 1)[0]
+    assert "The visible check of run_filter above failed" in html.unescape(cell)
+
+
+def test_long_messages_wrap(graded):
+    _, workdir = graded
+    style = " ".join(re.findall(r"<style[^>]*>(.*?)</style>", page(workdir), re.S))
+    rule = re.search(r"div\.output_area pre[^{]*\{([^}]*)\}", style)
+    assert rule, "no rule for the output's <pre>"
+    assert "white-space: pre-wrap" in rule.group(1) and "overflow-wrap: break-word" in rule.group(1)
