@@ -40,7 +40,7 @@ RUN_CV = ocean.constant_velocity_filter(ref.kalman_step, ref.transition_matrix, 
 def build_time() -> None:
     with tempfile.TemporaryDirectory() as tmp:
         start = time.perf_counter()
-        path = castaway_bob_flow.write_flow(tmp)
+        path = castaway_bob_flow.write_flow(tmp)[0]
         seconds = time.perf_counter() - start
         same = path.read_bytes() == ocean.DATA_FILE.read_bytes()
     print(f"flow build: {seconds:.0f} s (PhiFlow, {castaway_bob_flow.SPIN_UP_STEPS} + "

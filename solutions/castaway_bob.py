@@ -158,10 +158,11 @@ def ellipse_area(P: np.ndarray, n_sigma: float = 2.0) -> np.ndarray:
 
 
 def write_data(directory: str | Path) -> list[Path]:
-    """Build the shipped flow (castaway_bob_flow.npz) from its seed into ``directory`` (needs PhiFlow)."""
+    """Build the shipped flow (castaway_bob_flow.npz, and the solver checkpoints that let tests rebuild parts
+    of it) from its seed into ``directory`` (needs PhiFlow)."""
     from solutions import castaway_bob_flow
 
-    return [castaway_bob_flow.write_flow(directory)]
+    return castaway_bob_flow.write_flow(directory)
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -16,6 +16,7 @@ lecture's table from R runs.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import itertools
 import json
 import sys
@@ -27,6 +28,7 @@ import scipy.special
 
 from course import air_traffic, cut
 from course.air_traffic import symmetric_sqrt, systematic_resample, wrap_angle
+from solutions.shipped_npz import write_npz
 
 DATA_SEED = 20261122
 """Seed of the shipped Monte Carlo table (course/data/nonlinear_filters_air_traffic.json)."""
@@ -177,16 +179,19 @@ def point_sets() -> dict[str, tuple[np.ndarray, np.ndarray]]:
 
 def monte_carlo(runs: int, seed: int, T: float = air_traffic.T_RADAR, particles: int = PARTICLES,
                 filters: tuple[str, ...] = air_traffic.FILTERS, legs: tuple[tuple[float, float], ...] = air_traffic.LEGS,
-                turn_noise: float = air_traffic.L2) -> dict[str, np.ndarray]:
+                turn_noise: float = air_traffic.L2, steps: int | None = None) -> dict[str, np.ndarray]:
     """Errors (runs, K, 3) of each filter over ``runs`` runs from ``seed``.
 
     Every filter in a run sees the same initial mean and radar data; the particle filter draws its
     particles and noise from a stream of its own. ``legs`` (the flight plan) and ``turn_noise`` (the
-    filters' L2) change the set-up for experiments.
+    filters' L2) change the set-up for experiments. With ``steps``, the filters stop after the first
+    ``steps`` radar times (K = steps): the errors are then the first ``steps`` of the whole runs', bit for bit.
     """
     sc = air_traffic.scenario(T, legs, turn_noise)
     scenario_rng, particle_rng = (np.random.default_rng(s) for s in np.random.SeedSequence(seed).spawn(2))
     m0, y = air_traffic.simulate_runs(sc, runs, scenario_rng)
+    if steps is not None:
+        sc, y = dataclasses.replace(sc, times=sc.times[:steps], truth=sc.truth[:steps]), y[:, :steps]
     sets = point_sets()
     estimates = {}
     for name in filters:
@@ -218,17 +223,45 @@ def _rounded(value):
     return value
 
 
-def shipped_results(runs: int = DATA_RUNS, seed: int = DATA_SEED, sweep_runs: int = SWEEP_RUNS,
-                    particles: int = PARTICLES) -> dict:
-    """Everything the notebook loads: the T = 5 s table, RMSE_k curves, the CKF's and UKF's position RMSE_k on
-    the flight without turns (seed + 1 + len(SWEEP_T)), and the sweep over T (seeds seed + 1, ...)."""
-    err = monte_carlo(runs, seed, particles=particles)
-    straight = monte_carlo(runs, seed + 1 + len(SWEEP_T), filters=("ckf", "ukf"), legs=air_traffic.STRAIGHT_LEGS)
+@dataclasses.dataclass(frozen=True)
+class Batch:
+    """One Monte Carlo batch of the shipped results: ``runs`` runs from ``seed`` at radar interval T [s]."""
+
+    name: str
+    runs: int
+    seed: int
+    T: float = air_traffic.T_RADAR
+    filters: tuple[str, ...] = air_traffic.FILTERS
+    legs: tuple[tuple[float, float], ...] = air_traffic.LEGS
+
+    def errors(self, filters: tuple[str, ...] | None = None, particles: int = PARTICLES,
+               steps: int | None = None) -> dict[str, np.ndarray]:
+        """monte_carlo of this batch, for ``filters`` (default all of the batch's)."""
+        return monte_carlo(self.runs, self.seed, T=self.T, particles=particles, legs=self.legs,
+                           filters=self.filters if filters is None else filters, steps=steps)
+
+
+def batches(runs: int = DATA_RUNS, seed: int = DATA_SEED, sweep_runs: int = SWEEP_RUNS) -> tuple[Batch, ...]:
+    """The batches of the shipped results: the T = 5 s table (``seed``), the sweep over T (seeds seed + 1, ...),
+    and the CKF and UKF on the flight without turns (seed + 1 + len(SWEEP_T))."""
+    return (
+        Batch("table", runs, seed),
+        *(Batch(f"sweep_T{T:g}", sweep_runs, seed + 1 + i, T=T) for i, T in enumerate(SWEEP_T)),
+        Batch("straight", runs, seed + 1 + len(SWEEP_T), filters=("ckf", "ukf"), legs=air_traffic.STRAIGHT_LEGS),
+    )
+
+
+def results_from_errors(errors: dict[str, dict[str, np.ndarray]], runs: int = DATA_RUNS, seed: int = DATA_SEED,
+                        sweep_runs: int = SWEEP_RUNS, particles: int = PARTICLES) -> dict:
+    """Everything the notebook loads, from the errors (runs, K, 3) of each filter of each batch (by name): the
+    T = 5 s table, RMSE_k curves, the CKF's and UKF's position RMSE_k on the flight without turns, and the
+    sweep over T with its lost and diverged fractions."""
+    err, straight = errors["table"], errors["straight"]
     sweep = {name: [] for name in air_traffic.FILTERS}
     sweep_lost = {name: [] for name in air_traffic.FILTERS}
     sweep_diverged = {name: [] for name in air_traffic.FILTERS}
-    for i, T in enumerate(SWEEP_T):
-        for name, e in monte_carlo(sweep_runs, seed + 1 + i, T=T, particles=particles).items():
+    for T in SWEEP_T:
+        for name, e in errors[f"sweep_T{T:g}"].items():
             sweep[name].append(air_traffic.lecture_metric(e).tolist())
             sweep_lost[name].append(float(np.mean(air_traffic.lost_runs(e))))
             sweep_diverged[name].append(float(np.mean(air_traffic.diverged_runs(e))))
@@ -243,11 +276,24 @@ def shipped_results(runs: int = DATA_RUNS, seed: int = DATA_SEED, sweep_runs: in
     })
 
 
+def results_text(results: dict) -> str:
+    """The shipped JSON text of ``results``."""
+    return json.dumps(results, indent=1) + "\n"
+
+
+PF_ERRORS_FILE = "nonlinear_filters_pf_errors.records.npz"
+"""The particle filter's errors (runs, K, 3) in every batch (by name), float64: what the shipped results
+are computed from, shipped so that tests can check the results without rerunning the particle filter."""
+
+
 def write_data(directory: Path) -> list[Path]:
-    """Build the shipped Monte Carlo results from DATA_SEED into ``directory``."""
+    """Build the shipped Monte Carlo results from DATA_SEED, and the particle filter's errors, into ``directory``."""
+    errors = {batch.name: batch.errors() for batch in batches()}
     path = Path(directory) / air_traffic.DATA_FILE.name
-    path.write_text(json.dumps(shipped_results(), indent=1) + "\n")
-    return [path]
+    path.write_text(results_text(results_from_errors(errors)))
+    records = Path(directory) / PF_ERRORS_FILE
+    write_npz(records, {name: by_filter["pf"] for name, by_filter in errors.items() if "pf" in by_filter})
+    return [path, records]
 
 
 def main(argv: list[str] | None = None) -> int:

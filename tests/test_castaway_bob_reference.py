@@ -18,10 +18,10 @@ from scipy.interpolate import RegularGridInterpolator
 
 import solutions.castaway_bob as ref
 from autograder import data
-from autograder.labs import get_lab
 from course import ocean
 from course.checks import random_spd
 from random_draws import random_draws
+from shipped_data import same_bits
 from solutions import castaway_bob_flow
 
 
@@ -444,7 +444,7 @@ def test_the_file_writer_is_a_function_of_the_arrays(tmp_path):
 @random_draws(false_fail=0.0, fixed_seed=True,
               why="reproducibility: one seed's exact output, computed twice, and another seed's differs")
 def test_the_solver_is_reproducible_from_its_seed():
-    # The full build is compared byte for byte with the shipped file below; here a short run shows
+    # The shipped files are compared with rebuilt parts of the run below; here a short run shows
     # that the seed fixes the result bit for bit.
     # Three solver steps (each about 1 s): the seeded kick, advection, diffusion and the pressure solve
     # warm-started from the previous step's pressure all take part; the kick already differs at the
@@ -456,12 +456,51 @@ def test_the_solver_is_reproducible_from_its_seed():
     assert not np.array_equal(first["velocity"], other["velocity"])
 
 
-@random_draws(false_fail=0.0, fixed_seed=True, why="a rebuild of the shipped file from its seed, compared byte for byte")
-def test_shipped_flow_is_rebuilt_bit_for_bit():
-    # The whole PhiFlow run (400 solver steps, about 4 minutes on one core). No cheaper proof of
-    # equality exists: the shipped file keeps coarsened float32 snapshots, from which the solver
-    # cannot restart, and what this test guards against is a change in PhiFlow's or NumPy's numerics.
-    assert data.stale_files([get_lab("castaway-bob")]) == []
+CHECKPOINTS = data.RECORDS_DIR / castaway_bob_flow.CHECKPOINT_FILE_NAME
+
+
+@random_draws(false_fail=0.0, fixed_seed=True,
+              why="a rebuild of the first 34 solver steps from the seed, compared bit for bit with the shipped state")
+def test_shipped_checkpoint_after_the_cross_current_is_rebuilt_from_the_seed(tmp_path):
+    """The first KICK_STEPS (34) solver steps are rerun from the seed; the state they end in (both velocity
+    components and the pressure) must equal the shipped checkpoint bit for bit, and the checkpoint file
+    written from it and the shipped state at step 300 must be the shipped file, byte for byte.
+
+    Covers the start of the build: the seed and the cross current it draws (every step that has it), the
+    initial and sponge fields, the island, advection, diffusion and the warm-started pressure solve, in
+    the installed PhiFlow and NumPy (a change in any of them, or in a constant they use, changes the
+    state). The next test starts from the checkpoint at the first kept snapshot (step 300); steps 34 to
+    300 are rerun only by the full rebuild, `python -m autograder data --check` (136 s), which maintainers
+    run after changing the lab or its environment.
+    """
+    _, states = castaway_bob_flow.run_solver(
+        stop=castaway_bob_flow.KICK_STEPS, checkpoint_steps=(castaway_bob_flow.KICK_STEPS,))
+    shipped = castaway_bob_flow.shipped_checkpoint(castaway_bob_flow.KICK_STEPS, CHECKPOINTS)
+    for part in castaway_bob_flow.STATE_PARTS:
+        assert same_bits(states[castaway_bob_flow.KICK_STEPS][part], shipped[part]), f"{part} differs from a rebuild"
+    states[castaway_bob_flow.SPIN_UP_STEPS] = castaway_bob_flow.shipped_checkpoint(castaway_bob_flow.SPIN_UP_STEPS, CHECKPOINTS)
+    castaway_bob_flow.write_npz(tmp_path / "checkpoints.npz", castaway_bob_flow.checkpoint_arrays(states))
+    assert (tmp_path / "checkpoints.npz").read_bytes() == CHECKPOINTS.read_bytes(), "the checkpoint file has other contents"
+
+
+@random_draws(false_fail=0.0, fixed_seed=True,
+              why="a rebuild of the kept 5 h from the shipped checkpoint, compared byte for byte with the shipped files")
+def test_shipped_flow_is_rebuilt_bit_for_bit_from_its_checkpoint(tmp_path):
+    """The 100 kept solver steps are rerun from the shipped state at the first kept snapshot (step
+    SPIN_UP_STEPS = 300); the flow file written from them must equal the shipped file byte for byte.
+
+    Covers every byte students load (all 51 snapshots, the grid, the times and the metadata), so any edit
+    of the flow file fails, and the solver's steps, the snapshot spacing, the coarsening and the units of
+    the kept window (a change there changes the snapshots). Together with the previous test, a change of
+    the seed, the solver, a constant or PhiFlow's or NumPy's numerics fails in 134 of the 400 steps (about
+    50 s instead of 136 s). What only the full rebuild (`python -m autograder data --check`) adds: that
+    the shipped state at step 300 is where steps 34 to 300 lead, i.e. a hand edit of that state, or a change
+    that would act only in those steps.
+    """
+    start = castaway_bob_flow.shipped_checkpoint(castaway_bob_flow.SPIN_UP_STEPS, CHECKPOINTS)
+    snapshots, _ = castaway_bob_flow.run_solver(start=start)
+    castaway_bob_flow.write_npz(tmp_path / "flow.npz", castaway_bob_flow.flow_arrays(castaway_bob_flow.kept_flow(snapshots)))
+    assert (tmp_path / "flow.npz").read_bytes() == ocean.DATA_FILE.read_bytes(), "the flow file differs from a rebuild"
 
 
 # ------------------------------------------------------------------------------------------------
