@@ -27,10 +27,17 @@ failure for another reason, a warning or a wrong type, is left alone) and exactl
 matches; several matches give no diagnosis rather than a guess. Stochastic blanks are diagnosed
 the same way: the recorded generator states make the student's and the mistakes' draws the same
 whenever they draw in the reference's order, and a student who draws otherwise is simply not
-diagnosed. Results that cannot be compared (a matplotlib Axes) give no diagnosis.
+diagnosed. A plot blank is compared by what its Axes show (the data of its lines and filled
+regions, and whether it has a legend), not by colours or labels. Results that cannot be compared
+give no diagnosis.
 
 The diagnosis never changes a score: it edits the message of the exception the test raised, and
-re-raises it. It gives up silently after ``BUDGET_S`` seconds, or on any error of its own.
+re-raises it. It gives up silently when it runs out of time (``BUDGET_S``, and ``CELL_SHARE`` of the
+grading cell's time limit for the test and the diagnosis together), or on any error of its own. A
+diagnosis that runs out of time is checked only between calls: one call of the reference or of the
+student's function can overrun it. The cost falls only on failing submissions: one more run of the
+check on the reference (reentry-pf's pf_step, failing early, also computes the posterior
+ensemble the check would have computed later, about 6 s), and the calls replayed.
 """
 
 from __future__ import annotations
@@ -42,6 +49,7 @@ import functools
 import importlib
 import inspect
 import io
+import os
 import sys
 import time
 import types
@@ -59,9 +67,13 @@ for a student who writes the same mistake with other, equivalent, operations."""
 ATOL = 1e-9
 """Absolute tolerance, relative to the largest entry of the compared array (and 1e-12 at least)."""
 BUDGET_S = 12.0
-"""Seconds the diagnosis may take before it gives up (a graded cell is stopped after 30 s)."""
+"""Seconds the diagnosis may take at most before it gives up."""
+CELL_SHARE = 0.6
+"""The hidden test and its diagnosis together stay within this share of the grading cell's time limit
+(``GRADING_CELL_TIMEOUT``, 30 s by default, see nbgrader_config.py), so that a diagnosis never turns
+a failure with a message into a stopped cell."""
 
-LEAD = "Diagnosis: on every hidden case, your {blank} gives the same results as a mistake students often make."
+LEAD = "Diagnosis: on every hidden case, your {blank} gives the same results as a common mistake."
 """The sentence before the mistake's hint in the message."""
 
 
@@ -81,10 +93,11 @@ def diagnosed(check: Callable) -> Callable:
 
     @functools.wraps(check)
     def diagnosing_check(func: Callable, *args, **kwargs):
+        start = time.monotonic()
         try:
             return check(func, *args, **kwargs)
         except Exception as error:
-            mistake = diagnose(module, blank, func, check, args, kwargs)
+            mistake = diagnose(module, blank, func, check, args, kwargs, _budget(time.monotonic() - start))
             if mistake is not None:
                 _add_to_message(error, f"{LEAD.format(blank=blank)} {mistake.hint}")
             raise
@@ -103,6 +116,12 @@ def diagnose(module: str, blank: str, func: Callable, check: Callable, args: tup
             return _diagnose(module, blank, func, check, args, kwargs or {}, deadline)
     except Exception:  # noqa: BLE001 (out of time, an unsupported result, a crash: no diagnosis, same score)
         return None
+
+
+def _budget(elapsed_s: float) -> float:
+    """Seconds left for a diagnosis after a hidden test that took ``elapsed_s``."""
+    cell_limit = float(os.environ.get("GRADING_CELL_TIMEOUT", "30"))
+    return min(BUDGET_S, CELL_SHARE * cell_limit - elapsed_s)
 
 
 def mistake_function(reference: types.ModuleType, mistake: Mistake) -> Callable:
@@ -136,7 +155,7 @@ def _record(check, function, blank, args, kwargs, deadline) -> list[tuple[tuple,
     def recorder(*call_args, **call_kwargs):
         if time.monotonic() > deadline:
             raise _OutOfTime
-        snapshot = copy.deepcopy((call_args, call_kwargs))
+        snapshot = _copy((call_args, call_kwargs))
         result = function(*call_args, **call_kwargs)
         calls.append((snapshot, _leaves((result, _written(call_args, call_kwargs)))))
         return result
@@ -151,7 +170,7 @@ def _outcome(function, call_args, deadline):
     type of the exception it raises."""
     if time.monotonic() > deadline:
         raise _OutOfTime
-    positional, keywords = copy.deepcopy(call_args)
+    positional, keywords = _copy(call_args)
     try:
         result = function(*positional, **keywords)
     except Exception as error:  # noqa: BLE001 (a crash is an outcome: the mistake may crash the same way)
@@ -166,8 +185,27 @@ def _matches(function, calls, results, deadline) -> bool:
 
 
 def _written(positional: tuple, keywords: dict) -> list:
-    """The arguments a call may legitimately write into: dicts (``info``) and random generators."""
-    return [a for a in (*positional, *keywords.values()) if isinstance(a, (dict, np.random.Generator))]
+    """The arguments a call may legitimately write into: dicts (``info``), random generators and
+    the Axes a plot blank draws on."""
+    return [a for a in (*positional, *keywords.values()) if isinstance(a, (dict, np.random.Generator)) or _is_axes(a)]
+
+
+def _copy(call_args: tuple) -> tuple:
+    """A deep copy of recorded arguments, with every Axes among them replaced by a fresh empty one
+    (a plot blank's test hands it an empty Axes; Axes do not copy)."""
+    memo: dict = {}
+    for value in (*call_args[0], *call_args[1].values()):
+        if _is_axes(value):
+            if value.has_data() or value.get_legend() is not None:
+                raise _Unsupported("an Axes that already holds a plot")
+            from matplotlib.figure import Figure
+            memo[id(value)] = Figure().subplots()
+    return copy.deepcopy(call_args, memo)
+
+
+def _is_axes(value) -> bool:
+    axes = sys.modules.get("matplotlib.axes")
+    return axes is not None and isinstance(value, axes.Axes)
 
 
 def _leaves(value) -> list:
@@ -187,6 +225,13 @@ def _leaves(value) -> list:
     if isinstance(value, dict):
         keys = sorted(value, key=repr)
         return [("dict", tuple(map(repr, keys)))] + [leaf for key in keys for leaf in _leaves(value[key])]
+    if _is_axes(value):
+        # what a plot shows, not how it is styled: a student's colours and labels are their own
+        lines = [line.get_xydata() for line in value.get_lines()]
+        regions = [np.concatenate([path.vertices for path in c.get_paths()] or [np.empty((0, 2))])
+                   for c in value.collections]
+        return [("axes", len(lines), len(regions), value.get_legend() is not None)] + [
+            leaf for data in lines + regions for leaf in _leaves(np.asarray(data, dtype=float))]
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         fields = [field.name for field in dataclasses.fields(value)]
         return [("object", type(value).__qualname__, tuple(fields))] + [
@@ -225,8 +270,9 @@ def _quiet():
 
 
 def _add_to_message(error: BaseException, text: str) -> None:
-    """Append ``text`` to the message that the traceback shows for ``error``."""
+    """Append ``text`` to the message that the traceback shows for ``error``, on the same line: the
+    grades table and the notes column show a failure's message as one line."""
     if len(error.args) == 1 and isinstance(error.args[0], str) and type(error).__str__ is BaseException.__str__:
-        error.args = (f"{error.args[0]}\n{text}",)
+        error.args = (f"{error.args[0].rstrip()} {text}",)
     else:
         error.add_note(text)

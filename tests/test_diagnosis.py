@@ -7,25 +7,24 @@ nbgrader, on the function each catalogued mistake defines (the notebook's model 
 mistake's edit). The grading round trip shows the same messages in the feedback.
 """
 
-import functools
 import importlib
 import inspect
+import re
 import sys
 import types
 
 import numpy as np
 import pytest
 
-from autograder import cells
+from autograder import cells, diagnosis
 from autograder.diagnosis import LEAD, diagnose, diagnosed, mistake_function
 from autograder.labs import all_labs
 from autograder.mistakes import Mistake, catalogue
 from over_labs import LABS, over_labs
 
-MINIMUM_RATE = 132 / 136
-"""Measured: 132 of the 136 catalogued mistakes are named. The four that are not are
-reentry-srekf's plot_ballistic_coefficient mistakes: a plot blank returns a matplotlib Axes, which
-the diagnosis does not compare."""
+MINIMUM_RATE = 1.0
+"""Measured: all 136 catalogued mistakes of the five labs are named by their own hint. Lower it only
+with a reason: a mistake the diagnosis cannot tell from another on the hidden cases."""
 
 
 def _hidden(lab):
@@ -59,7 +58,6 @@ def _named(lab, blank: str, function) -> list[str]:
     return [m.slug for m in catalogue(lab) if m.blank == blank and m.hint in message]
 
 
-@functools.cache
 def _diagnoses() -> tuple[tuple[str, str, tuple[str, ...]], ...]:
     """(lab id, mistake slug, slugs named in its message) for every catalogued mistake of every lab."""
     rows = []
@@ -71,9 +69,12 @@ def _diagnoses() -> tuple[tuple[str, str, tuple[str, ...]], ...]:
     return tuple(rows)
 
 
-def test_the_catalogue_is_diagnosed_by_name_and_never_falsely():
+def test_the_catalogue_is_diagnosed_by_name_and_never_falsely(monkeypatch):
     """Over every lab's catalogue: no message names a mistake other than the one made, and at least
-    MINIMUM_RATE of the mistakes are named."""
+    MINIMUM_RATE of the mistakes are named. What is measured is the diagnosis, not the machine's
+    speed: its time limits are lifted (in grading, a diagnosis that runs out of time is left out)."""
+    monkeypatch.setattr(diagnosis, "BUDGET_S", 600.0)
+    monkeypatch.setattr(diagnosis, "CELL_SHARE", 1e6)
     rows = _diagnoses()
     false = [(lab, made, named) for lab, made, named in rows if any(made != f"{made.split('/')[0]}/{n}" for n in named)]
     right = [(lab, made) for lab, made, named in rows if named == (made.split("/")[1],)]
@@ -109,21 +110,23 @@ def test_every_hidden_test_is_diagnosed_and_every_mistake_has_a_hint(lab):
     for mistake in mistakes:
         hint = mistake.hint
         assert hint[:1].isupper() and hint.endswith(".") and "  " not in hint, f"{mistake.slug}: {hint!r}"
+        assert not re.search(r"\d(\.?\d){3}", hint), f"{mistake.slug}: a hint quotes no computed number: {hint!r}"
         others = [m.slug for m in mistakes if m.blank == mistake.blank and m is not mistake and hint in m.hint]
         assert others == [], f"the hint of {mistake.slug} is part of the hint of {others}"
         assert callable(mistake_function(lab.solutions(), mistake))
 
 
-def test_a_diagnosed_message_keeps_the_hidden_tests_message_and_adds_one_sentence_pair():
-    """The message a student reads: the hidden test's own sentence, then the lead and the hint."""
+def test_a_diagnosed_message_keeps_the_hidden_tests_message_and_adds_the_hint():
+    """The message a student reads: the hidden test's own sentence, then the lead and the hint, on
+    one line."""
     lab = next(lab for lab in LABS if lab.id == "train-kf")
     mistake = next(m for m in catalogue(lab) if m.slug == "innovation-sign")
     wrong = _define(lab, mistake.apply(_answers(lab)["kupdate"]), "kupdate")
     with pytest.raises(AssertionError) as caught:
         _hidden(lab).check_kupdate(wrong)
-    first, lead = str(caught.value).split("\n")[0], LEAD.format(blank="kupdate")
-    assert first.startswith("x_a on a random case") and "is not right" in first, first
-    assert str(caught.value).endswith(f"\n{lead} {mistake.hint}")
+    message, lead = str(caught.value), LEAD.format(blank="kupdate")
+    assert message.startswith("x_a on a random case") and "is not right" in message, message
+    assert message.endswith(f". {lead} {mistake.hint}") and "\n" not in message, message
 
 
 @pytest.mark.parametrize("scale, named", [(3.0, True), (3.0 * (1 + 1e-9), True), (3.0 * (1 + 1e-4), False)])
