@@ -129,21 +129,20 @@ def test_a_diagnosed_message_keeps_the_hidden_tests_message_and_adds_the_hint():
     assert message.endswith(f". {lead} {mistake.hint}") and "\n" not in message, message
 
 
-@pytest.mark.parametrize("scale, named", [(3.0, True), (3.0 * (1 + 1e-9), True), (3.0 * (1 + 1e-4), False)])
-def test_a_match_is_within_the_tight_tolerance_only(scale, named, monkeypatch):
-    """A toy lab with one blank, twice(x) = 2 x, and one mistake, 3 x: a student whose results equal
-    the mistake's to rounding is named, one whose results differ by 1e-4 relative is not."""
+def _toy_lab(monkeypatch, mistakes: tuple[Mistake, ...]):
+    """A toy lab "toy" with one blank, twice(x) = 2 x, the given mistakes, and its hidden test."""
     reference = types.ModuleType("solutions.toy")
     reference.__file__ = __file__
     reference.np = np
-    mistakes = types.ModuleType("autograder.mistakes.toy")
-    mistakes.MISTAKES = (Mistake("twice", "three", "x * 3", "2.0 * x", "3.0 * x", hint="Your twice triples."),)
+    catalogue_module = types.ModuleType("autograder.mistakes.toy")
+    catalogue_module.MISTAKES = mistakes
     hidden = types.ModuleType("autograder.hidden_tests.toy")
     hidden.BLANKS = ("twice",)
-    for module in (reference, mistakes, hidden):
+    for module in (reference, catalogue_module, hidden):
         monkeypatch.setitem(sys.modules, module.__name__, module)
-    exec("def twice(x):\n    return 2.0 * x\n", vars(reference))
-    monkeypatch.setattr(inspect, "getsource", lambda function: "def twice(x):\n    return 2.0 * x\n")
+    source = "def twice(x):\n    return 2.0 * x\n"
+    exec(source, vars(reference))
+    monkeypatch.setattr(inspect, "getsource", lambda function: source)
 
     def check_twice(func) -> None:
         rng = np.random.default_rng(7)
@@ -153,6 +152,17 @@ def test_a_match_is_within_the_tight_tolerance_only(scale, named, monkeypatch):
                 raise AssertionError("twice is not right.")
 
     check_twice.__module__ = hidden.__name__
+    return check_twice
+
+
+THREE = Mistake("twice", "three", "x * 3", "2.0 * x", "3.0 * x", hint="Your twice triples.")
+
+
+@pytest.mark.parametrize("scale, named", [(3.0, True), (3.0 * (1 + 1e-9), True), (3.0 * (1 + 1e-4), False)])
+def test_a_match_is_within_the_tight_tolerance_only(scale, named, monkeypatch):
+    """With one mistake (3 x for 2 x): a student whose results equal the mistake's to rounding is
+    named, one whose results differ by 1e-4 relative is not."""
+    check_twice = _toy_lab(monkeypatch, (THREE,))
 
     def twice(x):
         return scale * x
@@ -162,3 +172,13 @@ def test_a_match_is_within_the_tight_tolerance_only(scale, named, monkeypatch):
         diagnosed(check_twice)(twice)
     assert str(caught.value).startswith("twice is not right.")
     assert ("Your twice triples." in str(caught.value)) is named
+
+
+def test_two_mistakes_that_match_give_no_diagnosis(monkeypatch):
+    """Two catalogued mistakes with the same results on the hidden cases: the diagnosis names
+    neither rather than guess."""
+    same = Mistake("twice", "three-again", "3 x, written otherwise", "2.0 * x", "x * 3.0", hint="Your twice is 3 x.")
+    check_twice = _toy_lab(monkeypatch, (THREE, same))
+    assert diagnose("toy", "twice", lambda x: 3.0 * x, check_twice) is None
+    check_twice = _toy_lab(monkeypatch, (THREE,))
+    assert diagnose("toy", "twice", lambda x: 3.0 * x, check_twice) is THREE
