@@ -84,7 +84,7 @@ MISTAKES = (
             hint="Your run_rank4 behaves as if the current were never passed to the step."),
     Mistake("track_rmse", "per-axis", "averages over both coordinates: the RMSE per axis, 1/sqrt(2) too small",
             "np.sqrt(np.mean(np.sum(error**2, axis=-1)))", "np.sqrt(np.mean(error**2))",
-            hint="Your track_rmse behaves as if it averaged over the two coordinates too: the error of a fix is its distance, summed over both axes before the mean."),
+            hint="Your track_rmse behaves as if it averaged over the two coordinates too: add the squared errors of both axes at each time, then take the mean over time."),
     Mistake("track_rmse", "mean-distance", "the mean distance, not the root mean square",
             "np.sqrt(np.mean(np.sum(error**2, axis=-1)))", "np.mean(np.sqrt(np.sum(error**2, axis=-1)))",
             hint="Your track_rmse behaves like the mean distance: take the root of the mean of the squared distances."),

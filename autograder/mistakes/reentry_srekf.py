@@ -68,7 +68,7 @@ MISTAKES = (
             hint="Your conditional behaves as if the columns were ordered [S_A, S_B], which conditions the wrong way round: the conditioning block B comes first."),
     Mistake("conditional", "no-transpose", "R1^-1 where (31) has R1^-T",
             'trans="T"', 'trans="N"',
-            hint="Your conditional behaves as if it solved with R1 where (31) has R1^-T."),
+            hint="Your conditional behaves as if it applied R1^-1 where (31) has R1^-T."),
     Mistake("conditional", "innovation-sign", "mu_B - x_B where (31) has x_B - mu_B",
             "x_b - mu[idx_b]", "mu[idx_b] - x_b",
             hint="Your conditional behaves as if the difference had the wrong sign, mu_B - x_B where (31) has x_B - mu_B."),
