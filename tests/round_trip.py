@@ -45,7 +45,7 @@ HALVES = _halves(LABS)
 __all__ = ["graded", "pytest_generate_tests", "test_blank_release_scores_zero", "test_solved_notebook_scores_full_marks",
            "test_each_mistake_loses_its_blank_and_only_its_blank", "test_grades_csv_matches_the_gradebook",
            "test_feedback_shows_messages_but_not_hidden_tests", "test_regrading_gives_every_cell_again",
-           "test_no_honest_submission_is_flagged"]
+           "test_no_honest_submission_is_flagged", "test_feedback_names_the_mistake_it_diagnoses"]
 
 
 def pytest_generate_tests(metafunc):
@@ -132,3 +132,16 @@ def test_regrading_gives_every_cell_again(graded, request, tmp_path) -> None:
 def test_no_honest_submission_is_flagged(graded) -> None:
     flagged = {key: row.flags for key, row in graded[0].items() if row.flags}
     assert flagged == {}, "the integrity checks flagged honest work (the solved notebooks and every catalogued mistake)"
+
+
+def test_feedback_names_the_mistake_it_diagnoses(graded, lab: Lab) -> None:
+    """In grading (in the kernel, under the integrity monitor), the reason a mistake's cell lost its
+    points gives that mistake's hint and no other mistake's (autograder/diagnosis.py). All of them
+    are named on an idle machine; a diagnosis that runs out of time is left out, so at least half."""
+    named = 0
+    for mistake in catalogue(lab):
+        reason = graded[0][(mistake.student_id(lab), lab.id)].reasons[f"test_{mistake.blank}"]
+        others = [m.slug for m in catalogue(lab) if m.blank == mistake.blank and m is not mistake and m.hint in reason]
+        assert others == [], f"{mistake.student_id(lab)} is diagnosed as {others}: {reason}"
+        named += mistake.hint in reason
+    assert named >= len(catalogue(lab)) / 2, f"only {named} of {len(catalogue(lab))} mistakes named in the feedback"

@@ -182,7 +182,8 @@ def _recording(function, inputs: list, outputs: list):
 
 
 def _floats(value, out: list[float]) -> None:
-    """Every float inside a returned value (arrays, tuples, lists, dicts, dataclass-like objects)."""
+    """Every float inside a returned value (arrays, tuples, lists, dicts, dataclass-like objects other
+    than matplotlib's)."""
     if isinstance(value, (float, int, np.number, np.ndarray)) and not isinstance(value, bool):
         array = np.asarray(value)
         if array.dtype.kind in "fc":
@@ -193,8 +194,8 @@ def _floats(value, out: list[float]) -> None:
     elif isinstance(value, dict):  # keyword arguments too
         for item in value.values():
             _floats(item, out)
-    elif hasattr(value, "__dict__") and not callable(value):
-        for item in vars(value).values():
+    elif hasattr(value, "__dict__") and not callable(value) and not type(value).__module__.startswith("matplotlib"):
+        for item in vars(value).values():  # not an Axes (the diagnosis hands one to the reference): it is cyclic
             _floats(item, out)
 
 

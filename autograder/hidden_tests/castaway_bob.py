@@ -9,6 +9,7 @@ from typing import Callable
 import numpy as np
 
 import solutions.castaway_bob as ref
+from autograder.diagnosis import diagnosed
 from autograder.hidden import isolate
 from course import ocean
 from course.checks import check_array, check_close, check_pair, random_spd
@@ -29,6 +30,7 @@ SIZES = ((1, 1), (2, 2), (4, 2), (5, 3), (6, 1))
 """(n, m): state and observation dimensions of the random matrix cases."""
 
 
+@diagnosed
 def check_transition_matrix(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(5101)
@@ -38,12 +40,14 @@ def check_transition_matrix(func: Callable) -> None:
         check_close(A, ref.transition_matrix(dt, alpha), label, show_expected=False)
 
 
+@diagnosed
 def check_observation_matrix(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     H = check_array(func(), "observation_matrix()", (2, 4), "H maps the state [x, y, wx, wy] to a GPS fix [x, y].")
     check_close(H, ref.observation_matrix(), "observation_matrix()", show_expected=False)
 
 
+@diagnosed
 def check_trailing_mean(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(5102)
@@ -59,6 +63,7 @@ def _matrix_cases(rng: np.random.Generator):
         yield n, m, random_spd(rng, n), rng.standard_normal((m, n)), random_spd(rng, m)
 
 
+@diagnosed
 def check_kalman_gain(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     for n, m, P, H, R in _matrix_cases(np.random.default_rng(5103)):
@@ -68,6 +73,7 @@ def check_kalman_gain(func: Callable) -> None:
         check_close(K, ref.kalman_gain(P, H, R), label, show_expected=False)
 
 
+@diagnosed
 def check_joseph_covariance(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(5104)
@@ -80,6 +86,7 @@ def check_joseph_covariance(func: Callable) -> None:
                     hint="Equation (13) must hold for any gain K, not only the optimal one.")
 
 
+@diagnosed
 def check_kalman_step(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(5105)
@@ -104,6 +111,7 @@ def _random_fixes(rng: np.random.Generator, n: int, speed: float) -> np.ndarray:
     return drift + rng.normal(0.0, 20.0, (n, 2)).cumsum(axis=0) + rng.normal(0.0, 50.0, (n, 2))
 
 
+@diagnosed
 def check_run_rank2(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(5106)
@@ -133,6 +141,7 @@ def _random_current(rng: np.random.Generator) -> Callable[[np.ndarray, float], n
     return current
 
 
+@diagnosed
 def check_run_rank4(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(5107)
@@ -162,6 +171,7 @@ def check_run_rank4(func: Callable) -> None:
                 "the covariances of a drift in the ocean", show_expected=False, rtol=1e-6, atol=1e-9)
 
 
+@diagnosed
 def check_track_rmse(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(5109)
@@ -174,6 +184,7 @@ def check_track_rmse(func: Callable) -> None:
                     ref.track_rmse(estimates, truth), label, show_expected=False)
 
 
+@diagnosed
 def check_ellipse_area(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(5110)

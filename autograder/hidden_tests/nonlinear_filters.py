@@ -18,6 +18,7 @@ import numpy as np
 from scipy import stats
 
 import solutions.nonlinear_filters as ref
+from autograder.diagnosis import diagnosed
 from autograder.hidden import isolate
 from course import cut
 from course.checks import check_array, check_close, check_pair, random_spd
@@ -43,12 +44,14 @@ def _check_rule(result, reference: tuple[np.ndarray, np.ndarray], label: str) ->
     check_close(w, wr, f"the weights from {label} (matched to the points)", show_expected=False)
 
 
+@diagnosed
 def check_cubature_points(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     for n in range(1, 7):
         _check_rule(func(n), ref.cubature_points(n), f"cubature_points({n})")
 
 
+@diagnosed
 def check_unscented_points(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     _check_rule(func(4), ref.unscented_points(4), "unscented_points(4) (kappa left at its default)")
@@ -56,12 +59,14 @@ def check_unscented_points(func: Callable) -> None:
         _check_rule(func(n, kappa), ref.unscented_points(n, kappa), f"unscented_points({n}, kappa={kappa})")
 
 
+@diagnosed
 def check_cut4_points(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     for n in range(3, 7):
         _check_rule(func(n), ref.cut4_points(n), f"cut4_points({n})")
 
 
+@diagnosed
 def check_moment_error(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(1501)
@@ -107,6 +112,7 @@ def _check_mean_cov(result, reference, n: int, label: str, hint: str = "") -> No
                 hint, rtol=1e-7, atol=1e-9, show_expected=False)
 
 
+@diagnosed
 def check_sigma_point_predict(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(1502)
@@ -128,6 +134,7 @@ def _bearing_case(rng: np.random.Generator) -> tuple:
     return m, P, y, h, np.diag([25.0, 0.02**2])
 
 
+@diagnosed
 def check_sigma_point_update(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(1503)
@@ -146,6 +153,7 @@ def check_sigma_point_update(func: Callable) -> None:
                         ref.sigma_point_update(m, P, y, h, R, Z, w, (1,)), 3, label)
 
 
+@diagnosed
 def check_ekf_update(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(1504)
@@ -308,6 +316,7 @@ def _check_pf_noise(func: Callable, seeds: tuple[int, int] = (1508, 4)) -> None:
             )
 
 
+@diagnosed
 def check_bootstrap_pf_step(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     _check_pf_weights(func)

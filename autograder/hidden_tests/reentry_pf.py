@@ -27,6 +27,7 @@ import numpy as np
 from scipy import stats
 
 import solutions.reentry_pf as ref
+from autograder.diagnosis import diagnosed
 from autograder.hidden import isolate
 from course import falling_object
 from course.checks import check_array, check_close, check_pair
@@ -51,6 +52,7 @@ def _random_states(rng: np.random.Generator, count: int) -> np.ndarray:
     return np.vstack([rng.uniform(0.0, 80_000.0, count), rng.uniform(100.0, 4000.0, count), rng.uniform(5_000.0, 40_000.0, count)])
 
 
+@diagnosed
 def check_tracking_dynamics(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(4001)
@@ -80,6 +82,7 @@ def simulate_radar_cases(seed: int = 4002) -> list[tuple[np.ndarray, np.ndarray,
     return cases
 
 
+@diagnosed
 def check_simulate_radar(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     tolerance_hint = ("The truth should be accurate to well under 1 m: set solve_ivp's rtol and atol "
@@ -101,6 +104,7 @@ def check_simulate_radar(func: Callable) -> None:
                     rtol=1e-9, atol=1e-6, show_expected=False)
 
 
+@diagnosed
 def check_initial_cloud(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(4003)
@@ -133,6 +137,7 @@ def credibility_cases(seed: int = 4005) -> list[tuple[np.ndarray, np.ndarray, fl
     return cases
 
 
+@diagnosed
 def check_credibility_interval(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     for samples, weights, p in credibility_cases():
@@ -162,6 +167,7 @@ RUN_HINTS = {
 }
 
 
+@diagnosed
 def check_run_particle_filter(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(4006)
@@ -562,6 +568,7 @@ def statistical_checks(pf_step: PfStep, seed: int) -> None:
     check_posterior(pf_step, seed)
 
 
+@diagnosed
 def check_pf_step(func: Callable, seed: int = PF_STEP_SEED) -> None:
     """The statistical test of pf_step, with the reference tracking_dynamics."""
     # the statistical checks turn warnings into failures with a hint about log-weights

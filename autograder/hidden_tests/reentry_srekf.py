@@ -13,6 +13,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import solutions.reentry_srekf as ref
+from autograder.diagnosis import diagnosed
 from autograder.hidden import isolate
 from course.checks import check_array, check_close, check_pair
 from course.starship import check_band_plot, check_square_root
@@ -71,26 +72,31 @@ def _check_state_function(func: Callable, name: str, reference: Callable, shape:
                     show_expected=False)
 
 
+@diagnosed
 def check_ballistic_dynamics(func: Callable) -> None:
     _check_state_function(func, "ballistic_dynamics", ref.ballistic_dynamics, (3,), 3301,
                           "f = [v, d - g, 0] with the drag d of equation (10).")
 
 
+@diagnosed
 def check_ballistic_jacobian(func: Callable) -> None:
     _check_state_function(func, "ballistic_jacobian", ref.ballistic_jacobian, (3, 3), 3302,
                           "Row i holds the derivatives of f_i with respect to h, v and c.")
 
 
+@diagnosed
 def check_radar_predict(func: Callable) -> None:
     _check_state_function(func, "radar_predict", ref.radar_predict, (1,), 3303,
                           "The range of equation (13), as an array of shape (1,).")
 
 
+@diagnosed
 def check_radar_jacobian(func: Callable) -> None:
     _check_state_function(func, "radar_jacobian", ref.radar_jacobian, (1, 3), 3304,
                           "The derivatives of the range with respect to h, v and c, shape (1, 3).")
 
 
+@diagnosed
 def check_marginal(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(3305)
@@ -107,6 +113,7 @@ def check_marginal(func: Callable) -> None:
                               show_expected=False)
 
 
+@diagnosed
 def check_conditional(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(3306)
@@ -148,6 +155,7 @@ def _update_cases(rng: np.random.Generator) -> list[tuple[str, np.ndarray, np.nd
     return cases
 
 
+@diagnosed
 def check_sqrt_time_update(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(3308)
@@ -177,6 +185,7 @@ def check_sqrt_time_update(func: Callable) -> None:
                               rtol=1e-8, show_expected=False)
 
 
+@diagnosed
 def check_sqrt_measurement_update(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(3309)
@@ -208,6 +217,7 @@ def check_sqrt_measurement_update(func: Callable) -> None:
                               rtol=1e-8, show_expected=False)
 
 
+@diagnosed
 def check_plot_ballistic_coefficient(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(3307)

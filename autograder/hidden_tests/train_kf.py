@@ -8,6 +8,7 @@ from typing import Callable
 import numpy as np
 
 import solutions.train_kf as ref
+from autograder.diagnosis import diagnosed
 from autograder.hidden import isolate
 from course.checks import check_array, check_close, check_pair, random_spd
 
@@ -29,14 +30,17 @@ def _check_gain(func: Callable, name: str, reference: Callable, seed: int) -> No
         check_close(K, reference(B, H, R), f"{name} on a random case with n = {n}, m = {m}", show_expected=False)
 
 
+@diagnosed
 def check_gain_information_form(func: Callable) -> None:
     _check_gain(func, "gain_information_form", ref.gain_information_form, seed=1101)
 
 
+@diagnosed
 def check_gain_covariance_form(func: Callable) -> None:
     _check_gain(func, "gain_covariance_form", ref.gain_covariance_form, seed=1102)
 
 
+@diagnosed
 def check_process_noise(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(1103)
@@ -46,6 +50,7 @@ def check_process_noise(func: Callable) -> None:
         check_close(Q, ref.process_noise(sigma, dt_min), label, show_expected=False)
 
 
+@diagnosed
 def check_predict(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(1104)
@@ -59,6 +64,7 @@ def check_predict(func: Callable) -> None:
                     show_expected=False)
 
 
+@diagnosed
 def check_kupdate(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(1105)
@@ -73,6 +79,7 @@ def check_kupdate(func: Callable) -> None:
         check_close(check_array(B_a, f"B_a with n = {n}", (n, n)), want_B, f"B_a on {case}", show_expected=False)
 
 
+@diagnosed
 def check_run_filter(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(1106)
@@ -89,6 +96,7 @@ def check_run_filter(func: Callable) -> None:
                     f"the covariances for {case}", show_expected=False)
 
 
+@diagnosed
 def check_nees(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = np.random.default_rng(1107)

@@ -5,6 +5,8 @@ A mistake is an edit of one blank's model answer: the reference code with ``find
 that blank's points and no other blank's. tests/test_hidden_tests.py requires that the blank's
 hidden test fails it the way ``raises`` says: by default with the hidden test's own AssertionError
 (a wrong answer); a mistake that makes the student's function crash names the exception it raises.
+When a student's function behaves like a mistake on every hidden case, the hidden test's message
+gives the mistake's ``hint`` (autograder/diagnosis.py).
 """
 
 from __future__ import annotations
@@ -30,6 +32,10 @@ class Mistake:
     raises: type[Exception] = AssertionError
     """How the hidden test fails it: AssertionError, the hidden test's verdict on a wrong answer
     (the default); another exception: the student's function itself raises it (a crash)."""
+    hint: str = ""
+    """What the student reads in the failing hidden test's message when their function behaves like
+    this mistake on every hidden case (autograder/diagnosis.py): whole sentences to the student,
+    describing the mistake in words, with no number the reference computes."""
 
     def student_id(self, lab: Lab) -> str:
         return f"{lab.id}_{self.blank}_{self.slug}"
