@@ -26,7 +26,8 @@ class NotWrittenYet(Exception):
 
 def require(*functions: Callable) -> None:
     """Stop a cell early, with a clear message, if a blank it needs is not written yet."""
-    _cell["uses"].extend(getattr(f, "__name__", "") for f in functions)
+    if _cell["checks"] is not None or _hooks_installed():
+        _cell["uses"].extend(getattr(f, "__name__", "") for f in functions)
     missing = [f.__name__ for f in functions if NOT_WRITTEN in getattr(getattr(f, "__code__", None), "co_consts", ())]
     if missing:
         names = [f"{name}()" for name in missing]
@@ -214,12 +215,11 @@ def _not_passing(names: list[str]) -> list[str]:
     return [name for name in dict.fromkeys(names) if not _passes(name)]
 
 
-def _uses_message(names: list[str], what: str = "This check") -> str:
-    verb, its = ("does", "its") if len(names) == 1 else ("do", "their")
-    listed = _listed([f"your {name}" for name in names]) if len(names) == 1 else "your " + _listed(names)
-    return (f"{what} uses {listed}, which {verb} not pass {its} visible checks yet; fix "
-            f"{'that' if len(names) == 1 else 'those'} first, run {its} check "
-            f"{'cell' if len(names) == 1 else 'cells'}, then run this cell again.")
+def _upstream(names: list[str]) -> dict[str, str]:
+    """The words that agree with a list of blanks: "your kupdate, which does ... its", or "... do ... their"."""
+    one = len(names) == 1
+    return {"your": "your " + _listed(names), "does": "does" if one else "do", "its": "its" if one else "their",
+            "that": "that" if one else "those", "cell": "cell" if one else "cells"}
 
 
 def validate(function: Callable) -> None:
@@ -357,23 +357,20 @@ def _before_cell(info: Any) -> None:
 def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_offset: int | None = None) -> list[str]:
     """IPython's handler for an exception that escapes a cell: the default traceback, or a better message."""
     checked, required = _cell["checks"], list(_cell["uses"])
-    blanks = list(dict.fromkeys(([checked] if checked else []) + required + (_calls(checked) if checked else [])))
-    message = explain(value, tb, blanks)
+    # the blanks this cell uses: those it requires and, in a blank's check cell, the blanks that blank calls
+    called = _calls(checked) if checked else []
+    message = explain(value, tb, list(dict.fromkeys(([checked] if checked else []) + required + called)))
+    said = message or f"{etype.__name__}: {value}"
+    upstream = [] if isinstance(value, NotWrittenYet) else _not_passing([n for n in required + called if n != checked])
+    if upstream:
+        w = _upstream(upstream)
+        message = _wrap(f"This {'check' if checked else 'cell'} uses {w['your']}, which {w['does']} not pass "
+                        f"{w['its']} visible checks yet; fix {w['that']} first, run {w['its']} check {w['cell']}, "
+                        f"then run this cell again.") + f"\n\n(The {f'check of {checked}' if checked else 'cell'} said:\n{said})"
     if checked is not None and not isinstance(value, NotWrittenYet):
-        # the blanks this check uses: those it requires, and the blanks its function calls
-        called = _calls(checked)
-        upstream = _not_passing([name for name in required + called if name != checked])
-        said = message or f"{etype.__name__}: {value}"
-        if upstream:
-            message = _wrap(_uses_message(upstream)) + f"\n\n(The check of {checked} said:\n{said})"
         _passed.pop(checked, None)
-        if upstream:
-            why = (f"Its check uses your {_listed(upstream)}, which {'does' if len(upstream) == 1 else 'do'} not "
-                   f"pass {'its' if len(upstream) == 1 else 'their'} own visible checks yet: fix "
-                   f"{'that' if len(upstream) == 1 else 'those'} first.")
-        else:
-            why = f"Its check cell says:\n{said}"
-        _failed[checked] = (_current(checked), why)
+        _failed[checked] = (_current(checked), f"Its check uses {w['your']}, which {w['does']} not pass {w['its']} own "
+                            f"visible checks yet: fix {w['that']} first." if upstream else f"Its check cell says:\n{said}")
     if message is None:
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []
@@ -394,6 +391,10 @@ def _calls(name: str) -> list[str]:
                 found.append(called)
                 todo.append(called)
     return found
+
+
+def _hooks_installed() -> bool:
+    return bool(getattr(_shell(), "_course_checks_installed", False))
 
 
 def _install() -> None:

@@ -121,3 +121,39 @@ def test_an_exception_inside_a_blank_names_the_call_its_inputs_and_a_likely_caus
         np.linalg.solve(np.zeros((2, 2)), np.ones(2))
     except np.linalg.LinAlgError as error:
         assert explain(error, error.__traceback__, ["gain_information_form"]) is None
+
+
+def test_in_a_kernel_a_check_explains_the_error_and_blames_the_blank_that_fails_its_own_checks(tmp_path):
+    """A student's kernel: a sign error in one blank raises LinAlgError inside it; its check says which
+    call raised it, with the inputs and the likely cause; the check of a blank that calls it blames it;
+    Validate's validate() names both; an error outside any blank keeps IPython's own traceback."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    cells_source = [
+        "%xmode Minimal\nimport numpy as np\nfrom course.checks import check_close, passed, require, validate",
+        "def gain(B, H, R):\n    RinvH = np.linalg.solve(R, H)\n    return np.linalg.solve(np.linalg.inv(B) - H.T @ RinvH, RinvH.T)",
+        'require(gain)\nK = gain(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))\npassed("gain")',
+        "def update(B, H, R):\n    return gain(B, H, R) @ H",
+        'require(update)\ncheck_close(update(np.eye(2), np.eye(2), np.eye(2)), 0.5 * np.eye(2), "U")\npassed("update")',
+        "validate(update)",
+        "validate(gain)",
+        "1 / 0",
+    ]
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
+    NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
+                   resources={"metadata": {"path": str(tmp_path)}}).execute()
+    errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
+    text = ["\n".join(e.traceback) if e else "" for e in errors]
+    assert errors[0] is None and errors[1] is None and errors[3] is None
+    check_gain = " ".join(text[2].split())
+    assert check_gain.startswith("LinAlgError in your gain: Singular matrix"), check_gain
+    assert "`K = gain(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))` of this cell" in check_gain
+    assert "B = array of shape (2, 2), [[4., 0.], [0., 9.]]" in check_gain
+    assert "sign error or a missing term" in check_gain
+    check_update = " ".join(text[4].split())
+    assert check_update.startswith("This check uses your gain, which does not pass its visible checks yet; fix that first"), check_update
+    assert "(The check of update said: LinAlgError in your update: Singular matrix" in check_update
+    assert errors[5].ename == "AssertionError" and "update does not pass its visible checks yet. Its check uses your gain" in " ".join(text[5].split())
+    assert "gain does not pass its visible checks yet. Its check cell says: LinAlgError in your gain" in " ".join(text[6].split())
+    assert errors[7].ename == "ZeroDivisionError" and "in your" not in text[7]
