@@ -1,7 +1,16 @@
-"""The student bundle: the solution-free tree that students get, checked for leaks."""
+"""The student bundle: the solution-free tree that students get, checked for leaks.
+
+Students install only what the labs need (``requirements.txt``, the student lines of the
+instructors' ``environment.txt``), get a ``pyproject.toml`` without the instructors' tool
+settings, and start JupyterLab with the bundle's own Jupyter configuration (``jupyter_config/``),
+which keeps nbgrader's Validate and turns off its instructor tools: formgrader, Create Assignment,
+and the assignment and course lists, which need an exchange directory that students do not have.
+"""
 
 from __future__ import annotations
 
+import json
+import re
 import shutil
 from pathlib import Path
 
@@ -9,7 +18,28 @@ from autograder.labs import ROOT
 from autograder.leaks import find_leaks
 
 STUDENT_README = ROOT / "docs" / "student-readme.md"
-COPIED = ("release", "course", "environment.txt", "LICENSE")
+COPIED = ("release", "course", "LICENSE")
+
+STUDENT_PACKAGES = ("numpy", "scipy", "matplotlib", "jupyterlab", "ipykernel", "nbgrader")
+"""What the labs need: the numerics, JupyterLab, and nbgrader for its Validate button."""
+
+REQUIREMENTS = "requirements.txt"
+JUPYTER_CONFIG = "jupyter_config"
+"""The bundle's Jupyter configuration directory: start JupyterLab with JUPYTER_CONFIG_DIR set to it."""
+
+INSTRUCTOR_LAB_PLUGINS = (
+    "@jupyter/nbgrader:formgrader",
+    "@jupyter/nbgrader:create-assignment",
+    "@jupyter/nbgrader:assignment-list",
+    "@jupyter/nbgrader:course-list",
+    "@jupyter/nbgrader:menu",
+)
+INSTRUCTOR_SERVER_EXTENSIONS = (
+    "nbgrader.server_extensions.formgrader",
+    "nbgrader.server_extensions.assignment_list",
+    "nbgrader.server_extensions.course_list",
+)
+VALIDATE_SERVER_EXTENSION = "nbgrader.server_extensions.validate_assignment"
 INSTRUCTOR_PACKAGES = (
     "# Here, in the instructor's environment (`-e .` in environment.txt), the hidden packages are installed\n"
     "# beside the student-facing package `course`, so that the source notebooks run by hand. The student\n"
@@ -17,12 +47,51 @@ INSTRUCTOR_PACKAGES = (
     'include = ["course", "course.*", "autograder", "autograder.*", "solutions", "solutions.*"]\n'
 )
 """What pyproject.toml installs in the course root (the instructor's environment)."""
-STUDENT_PACKAGES = '# The student-facing package `course`.\ninclude = ["course", "course.*"]\n'
+STUDENT_PACKAGE_FIND = '# The student-facing package `course`.\ninclude = ["course", "course.*"]\n'
 """What the student bundle's pyproject.toml installs instead."""
 
 
 class LeakFound(RuntimeError):
     """Something that students must not see is in a tree meant for them."""
+
+
+def student_requirements(environment: str) -> str:
+    """The lines of ``environment.txt`` that students need, with the same version ranges."""
+    wanted = []
+    for line in environment.splitlines():
+        name = re.match(r"[A-Za-z0-9_.\-]+", line.strip())
+        if name and name.group(0).lower() in STUDENT_PACKAGES:
+            wanted.append(line.strip())
+    missing = set(STUDENT_PACKAGES) - {re.match(r"[A-Za-z0-9_.\-]+", line).group(0).lower() for line in wanted}
+    if missing:
+        raise ValueError(f"environment.txt has no line for {', '.join(sorted(missing))}, which students need.")
+    return (
+        "# What the labs need (the student lines of the instructors' environment.txt, same versions):\n"
+        "#   python3 -m venv .venv && .venv/bin/pip install -r requirements.txt     (Python 3.11, from this folder)\n"
+        + "\n".join(wanted)
+        + "\n# the labs' support package `course` (this folder's pyproject.toml)\n-e .\n"
+    )
+
+
+def student_pyproject(pyproject: str) -> str:
+    """The course's pyproject.toml as students install it: the package ``course`` only, and without the
+    instructors' tool settings (pytest runs tests/ and source/)."""
+    if pyproject.count(INSTRUCTOR_PACKAGES) != 1:
+        raise ValueError("pyproject.toml no longer lists its packages as autograder/bundle.py expects: update INSTRUCTOR_PACKAGES.")
+    pyproject = pyproject.replace(INSTRUCTOR_PACKAGES, STUDENT_PACKAGE_FIND)
+    return re.sub(r"\n\[tool\.pytest\.ini_options\]\n.*?(?=\n\[(?!\[)|\Z)", "\n", pyproject, flags=re.DOTALL).rstrip() + "\n"
+
+
+def write_jupyter_config(folder: Path) -> None:
+    """Jupyter configuration that keeps Validate and turns the instructor tools off."""
+    (folder / "labconfig").mkdir(parents=True)
+    (folder / "labconfig" / "page_config.json").write_text(
+        json.dumps({"disabledExtensions": {plugin: True for plugin in INSTRUCTOR_LAB_PLUGINS}}, indent=2) + "\n"
+    )
+    extensions = {name: False for name in INSTRUCTOR_SERVER_EXTENSIONS} | {VALIDATE_SERVER_EXTENSION: True}
+    (folder / "jupyter_server_config.json").write_text(
+        json.dumps({"ServerApp": {"jpserver_extensions": extensions}}, indent=2) + "\n"
+    )
 
 
 def write_bundle(out: Path) -> Path:
@@ -36,18 +105,12 @@ def write_bundle(out: Path) -> Path:
             shutil.copytree(source, out / name, ignore=shutil.ignore_patterns("__pycache__", "*.egg-info", ".ipynb_checkpoints"))
         else:
             shutil.copy2(source, out / name)
+    (out / REQUIREMENTS).write_text(student_requirements((ROOT / "environment.txt").read_text()))
+    (out / "pyproject.toml").write_text(student_pyproject((ROOT / "pyproject.toml").read_text()))
+    write_jupyter_config(out / JUPYTER_CONFIG)
     shutil.copy2(STUDENT_README, out / "README.md")
-    (out / "pyproject.toml").write_text(student_pyproject())
     raise_on_leaks(out)
     return out
-
-
-def student_pyproject() -> str:
-    """The course root's pyproject.toml with the packages that students install: ``course`` only."""
-    text = (ROOT / "pyproject.toml").read_text()
-    if text.count(INSTRUCTOR_PACKAGES) != 1:
-        raise ValueError("pyproject.toml no longer lists its packages as autograder/bundle.py expects: update INSTRUCTOR_PACKAGES.")
-    return text.replace(INSTRUCTOR_PACKAGES, STUDENT_PACKAGES)
 
 
 def raise_on_leaks(tree: Path) -> None:

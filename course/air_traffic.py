@@ -383,7 +383,7 @@ class ShippedResults:
 
 
 def load(path: Path = DATA_FILE) -> ShippedResults:
-    """Load the shipped Monte Carlo results (built by the instructor's ``python -m autograder data``)."""
+    """Load the shipped Monte Carlo results (built by the instructors from seeded runs of the reference filters)."""
     raw = json.loads(Path(path).read_text())
     return ShippedResults(
         runs=raw["runs"], seed=raw["seed"], particles=raw["particles"], table=raw["filters"],

@@ -7,6 +7,11 @@ compute a blank's answer.
 
 from __future__ import annotations
 
+import os
+import re
+import sys
+import textwrap
+import traceback
 from typing import Any, Callable
 
 import numpy as np
@@ -21,6 +26,8 @@ class NotWrittenYet(Exception):
 
 def require(*functions: Callable) -> None:
     """Stop a cell early, with a clear message, if a blank it needs is not written yet."""
+    if _cell["checks"] is not None or _hooks_installed():
+        _cell["uses"].extend(getattr(f, "__name__", "") for f in functions)
     missing = [f.__name__ for f in functions if NOT_WRITTEN in getattr(getattr(f, "__code__", None), "co_consts", ())]
     if missing:
         names = [f"{name}()" for name in missing]
@@ -87,7 +94,35 @@ def check_close(
         detail = f"expected\n{np.array2string(expected, precision=6)}\nbut got\n{np.array2string(actual, precision=6)}"
     else:
         detail = f"the largest difference from the reference is {error:.3g}"
-    raise AssertionError(f"{name} is not right: {detail}. {hint}".strip())
+    raise AssertionError(f"{name} {'are' if is_plural(name) else 'is'} not right: {detail}. {hint}".strip())
+
+
+_DETERMINERS = {"the", "your", "its", "their", "both", "all", "these", "those"}
+_SINGULAR_ENDINGS = ("ss", "us", "is", "ics")
+
+
+def is_plural(name: str) -> bool:
+    """Whether a check's name such as "the estimates of a constant" is a plural noun phrase.
+
+    The head is the first word after a determiner; it is plural if it is a lower-case English
+    plural ("estimates", "variances"), and singular for symbols and acronyms ("x_a", "NEES").
+    """
+    words = name.replace(",", " ").split()
+    while words and words[0].lower() in _DETERMINERS:
+        words = words[1:]
+    head = words[0] if words else ""
+    return head.isalpha() and head.islower() and head.endswith("s") and not head.endswith(_SINGULAR_ENDINGS)
+
+
+def count(n: int, noun: str, plural: str | None = None) -> str:
+    """"1 fix", "2 fixes": a number with its noun in agreement (the last word is made plural)."""
+    if n == 1:
+        return f"{n} {noun}"
+    if plural is None:
+        *first, last = noun.split(" ")
+        last = last + ("es" if last.endswith(("s", "x", "ch", "sh")) else "s")
+        plural = " ".join([*first, last])
+    return f"{n} {plural}"
 
 
 def check_symmetric(matrix: Any, name: str, hint: str = "") -> None:
@@ -109,5 +144,266 @@ def random_spd(rng: np.random.Generator, n: int) -> np.ndarray:
 
 
 def passed(name: str) -> None:
-    """Report that a blank passed its visible checks."""
+    """Report that a blank passed its visible checks (``validate`` remembers it for this definition)."""
+    function = sys._getframe(1).f_globals.get(name)
+    if function is not None:
+        _passed[name] = function
+        _failed.pop(name, None)
     print(f"{name}: all visible checks passed. Hidden tests on random cases run when you are graded.")
+
+
+# ---------------------------------------------------------------------------------------------
+# What a student sees when a check fails, and what Validate checks.
+#
+# In a student's kernel (JupyterLab, or nbgrader's Validate) importing this module installs two
+# IPython hooks: one notes which cell is running (a blank's visible checks end with
+# passed("<name>")), and one rewrites an exception that escapes a cell, so that it says which
+# call of your function raised it, with which inputs, and what such an error usually means; and,
+# when the cell checks a blank that calls other blanks that do not pass their own checks yet, it
+# says so first. In nbgrader's autograder (NBGRADER_EXECUTION=autograde) nothing is installed and
+# ``validate`` does nothing: points come only from the hidden tests.
+# ---------------------------------------------------------------------------------------------
+
+GRADING = "autograde"
+"""The value of NBGRADER_EXECUTION while nbgrader autogrades (nbgrader sets it for the kernel)."""
+
+_passed: dict[str, Callable] = {}
+"""Blank name -> the function object that last passed its visible checks."""
+_failed: dict[str, tuple[Callable, str]] = {}
+"""Blank name -> the function that last failed its visible checks, and what they said."""
+_cell: dict[str, Any] = {"checks": None, "uses": []}
+"""The running cell: the blank whose checks it runs (or None), and the blanks it requires."""
+
+_CHECK_CELL = re.compile(r"""^\s*passed\(\s*["'](\w+)["']\s*\)""", re.MULTILINE)
+
+LINE_WIDTH = 80
+"""Messages are wrapped to this width: nbgrader's Validate cuts longer lines."""
+
+
+def _grading() -> bool:
+    return os.environ.get("NBGRADER_EXECUTION") == GRADING
+
+
+def _listed(names: list[str]) -> str:
+    """'a', 'a and b', 'a, b and c'."""
+    return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
+
+
+def _wrap(text: str, first_line_taken: int = 0) -> str:
+    """``text`` wrapped to LINE_WIDTH, paragraph by paragraph (the first line shares its width with a prefix)."""
+    paragraphs = []
+    for i, paragraph in enumerate(text.split("\n")):
+        indent = " " * first_line_taken if i == 0 else ""
+        paragraphs.append(textwrap.fill(paragraph, LINE_WIDTH, initial_indent=indent, break_long_words=False,
+                                        break_on_hyphens=False)[len(indent):])
+    return "\n".join(paragraphs)
+
+
+def _current(name: str) -> Callable | None:
+    shell = _shell()
+    namespace = shell.user_ns if shell is not None else {}
+    return namespace.get(name)
+
+
+def _passes(name: str) -> bool:
+    """Whether the blank ``name``, as it is defined now, passed its visible checks."""
+    function = _current(name)
+    return function is not None and _passed.get(name) is function
+
+
+def _not_passing(names: list[str]) -> list[str]:
+    return [name for name in dict.fromkeys(names) if not _passes(name)]
+
+
+def _upstream(names: list[str]) -> dict[str, str]:
+    """The words that agree with a list of blanks: "your kupdate, which does ... its", or "... do ... their"."""
+    one = len(names) == 1
+    return {"your": "your " + _listed(names), "does": "does" if one else "do", "its": "its" if one else "their",
+            "that": "that" if one else "those", "cell": "cell" if one else "cells"}
+
+
+def validate(function: Callable) -> None:
+    """Stop unless ``function`` is written and passes its visible checks (what Validate checks).
+
+    The graded cell below each blank runs this before its hidden tests. It fails while the blank
+    still holds its stub, or while its visible checks (the cell above) fail or have not been run
+    since it was last defined. When nbgrader autogrades, it does nothing: the hidden tests alone
+    give the points, so a visible check that fails because of another blank costs nothing.
+    """
+    if _grading():
+        return
+    require(function)
+    name = function.__name__
+    if _passed.get(name) is function:
+        return
+    failed = _failed.get(name)
+    if failed is not None and failed[0] is function:
+        message = f"{name} does not pass its visible checks yet. {failed[1]}"
+    else:
+        message = (f"{name} has not passed its visible checks since you last defined it: run the check "
+                   f"cell below {name} and fix what its message says.")
+    raise AssertionError(_wrap(message, len("AssertionError: ")))
+
+
+# What an exception raised inside a student's function usually means, by type and message.
+_MEANINGS: list[tuple[str, str, str]] = [
+    ("LinAlgError", "singular", "A matrix that you solve with or invert is singular. In a filter that usually means "
+     "a sign error or a missing term: a sum such as H B H^T + R or B^-1 + H^T R^-1 H that lost a term, "
+     "or subtracts one instead of adding it."),
+    ("LinAlgError", "positive definite", "A Cholesky factorisation got a matrix that is not symmetric positive "
+     "definite. That usually means a sign error or a missing term in a covariance, or a covariance that is "
+     "not symmetric (compute it as A @ B @ A.T, or symmetrise it)."),
+    ("LinAlgError", "", "A linear-algebra routine failed on the matrix it was given: check that the matrix is the "
+     "one the equation names, square and well conditioned (a sign error or a missing term can break it)."),
+    ("ValueError", "matmul", "Two arrays in a matrix product (@) have shapes that do not fit. Check the "
+     "transposes, the order of the factors, and whether a vector should have shape (n,) or (n, 1)."),
+    ("ValueError", "broadcast", "Two arrays have shapes that cannot be combined element by element. Compare "
+     "the shapes of the inputs below with the ones your code builds, and check whether you meant a matrix "
+     "product (@) rather than *."),
+    ("ValueError", "aligned", "Two arrays in a product have shapes that do not fit. Check the transposes and "
+     "the order of the factors."),
+    ("ValueError", "", "A function got a value it cannot work with: compare the shapes and values below "
+     "with what the function expects."),
+    ("IndexError", "", "An index is out of range. Check the range of your loop, and which axis holds time "
+     "and which holds the state."),
+    ("TypeError", "", "A function got arguments it does not accept, or a value of the wrong type. Check "
+     "the arguments of each call, and that you call functions and index arrays, not the other way round."),
+    ("NameError", "", "A name is not defined: a typo, or a variable that exists only in another cell. A "
+     "blank should use only its arguments, the other blanks and what the set-up cell imports."),
+    ("UnboundLocalError", "", "A variable is used before it gets a value, for example one set only inside "
+     "an if or a loop that did not run."),
+    ("ZeroDivisionError", "", "A division by zero: check the denominators, and whether a length or a "
+     "count can be zero here."),
+    ("AttributeError", "", "A value does not have the attribute or method that the code uses: check its "
+     "type (an array, a tuple, a number?)."),
+    ("RecursionError", "", "The function calls itself without end: did you call the blank itself where "
+     "you meant another function?"),
+    ("NotImplementedError", "", "A blank that this one calls is not written yet: write it first."),
+]
+
+
+def _meaning(error: BaseException) -> str:
+    kind, text = type(error).__name__, str(error).lower()
+    for name, fragment, meaning in _MEANINGS:
+        if kind == name and fragment in text:
+            return meaning
+    return "Read the error above and look at the line of your function that raised it."
+
+
+def _describe(value: Any) -> str:
+    """A short description of an argument: shape and, when small, the values."""
+    if isinstance(value, np.ndarray):
+        if value.size <= 9 and value.dtype.kind in "biuf":
+            values = np.array2string(value, precision=4, suppress_small=True, separator=", ").replace("\n", "")
+            return f"array of shape {value.shape}, {' '.join(values.split())}"
+        return f"array of shape {value.shape}"
+    if isinstance(value, (int, float, np.integer, np.floating, bool, str)) or value is None:
+        text = repr(value)
+        return text if len(text) <= 40 else text[:37] + "..."
+    if isinstance(value, (tuple, list)):
+        return f"{type(value).__name__} of {len(value)} items"
+    if isinstance(value, np.random.Generator):
+        return "a random generator"
+    if callable(value):
+        return f"the function {getattr(value, '__name__', type(value).__name__)}"
+    return type(value).__name__
+
+
+def explain(error: BaseException, tb: Any, blanks: list[str]) -> str | None:
+    """A message for an exception raised inside one of ``blanks``; None if none of them raised it."""
+    if isinstance(error, (AssertionError, NotWrittenYet)):
+        return None
+    calls = list(zip((frame for frame, _ in traceback.walk_tb(tb)), traceback.extract_tb(tb)))
+    inside = [i for i, (frame, _) in enumerate(calls)
+              if frame.f_code.co_name in blanks and frame.f_globals.get("__name__") == "__main__"]
+    if not inside:
+        return None
+    outer, inner = calls[inside[0]][0], calls[inside[-1]][0]
+    caller = (calls[inside[0] - 1][1].line or "").strip() if inside[0] > 0 else ""
+    raising = (calls[inside[-1]][1].line or "").strip()
+    code = outer.f_code
+    arguments = code.co_varnames[: code.co_argcount + code.co_kwonlyargcount]
+    inputs = "\n".join(f"  {name} = {_describe(outer.f_locals.get(name))}" for name in arguments)
+    name = code.co_name
+    at = f"at the line `{raising}` of {inner.f_code.co_name}" if raising else f"in {inner.f_code.co_name}"
+    during = ""
+    if caller and inside[0] > 0:
+        frame = calls[inside[0] - 1][0]
+        place = ("this cell" if frame.f_code.co_name == "<module>" and frame.f_globals.get("__name__") == "__main__"
+                 else f"{frame.f_code.co_name} ({frame.f_globals.get('__name__')})")
+        during = f", during the line `{caller}` of {place}"
+    return "\n".join([
+        _wrap(f"{type(error).__name__} in your {name}: {error}"),
+        _wrap(f"It was raised {at}{during}. {name} got these inputs:"),
+        inputs,
+        _wrap(_meaning(error)),
+    ])
+
+
+def _shell() -> Any:
+    try:
+        from IPython import get_ipython
+    except ImportError:  # not in IPython: no hooks, no namespace
+        return None
+    return get_ipython()
+
+
+def _before_cell(info: Any) -> None:
+    found = _CHECK_CELL.search(getattr(info, "raw_cell", "") or "")
+    _cell["checks"] = found.group(1) if found else None
+    _cell["uses"] = []
+
+
+def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_offset: int | None = None) -> list[str]:
+    """IPython's handler for an exception that escapes a cell: the default traceback, or a better message."""
+    checked, required = _cell["checks"], list(_cell["uses"])
+    # the blanks this cell uses: those it requires and, in a blank's check cell, the blanks that blank calls
+    called = _calls(checked) if checked else []
+    message = explain(value, tb, list(dict.fromkeys(([checked] if checked else []) + required + called)))
+    said = message or f"{etype.__name__}: {value}"
+    upstream = [] if isinstance(value, NotWrittenYet) else _not_passing([n for n in required + called if n != checked])
+    if upstream:
+        w = _upstream(upstream)
+        message = _wrap(f"This {'check' if checked else 'cell'} uses {w['your']}, which {w['does']} not pass "
+                        f"{w['its']} visible checks yet; fix {w['that']} first, run {w['its']} check {w['cell']}, "
+                        f"then run this cell again.") + f"\n\n(The {f'check of {checked}' if checked else 'cell'} said:\n{said})"
+    if checked is not None and not isinstance(value, NotWrittenYet):
+        _passed.pop(checked, None)
+        _failed[checked] = (_current(checked), f"Its check uses {w['your']}, which {w['does']} not pass {w['its']} own "
+                            f"visible checks yet: fix {w['that']} first." if upstream else f"Its check cell says:\n{said}")
+    if message is None:
+        shell.showtraceback((etype, value, tb), running_compiled_code=True)
+        return []
+    stb = message.splitlines()
+    shell._showtraceback(etype, value, stb)
+    return stb
+
+
+def _calls(name: str) -> list[str]:
+    """The blanks (functions with a visible-check record) that ``name`` calls, directly or through others."""
+    known = set(_passed) | set(_failed)
+    found: list[str] = []
+    todo = [name]
+    while todo:
+        function = _current(todo.pop())
+        for called in getattr(getattr(function, "__code__", None), "co_names", ()):
+            if called in known and called != name and called not in found:
+                found.append(called)
+                todo.append(called)
+    return found
+
+
+def _hooks_installed() -> bool:
+    return bool(getattr(_shell(), "_course_checks_installed", False))
+
+
+def _install() -> None:
+    shell = _shell()
+    if shell is None or _grading() or getattr(shell, "_course_checks_installed", False):
+        return
+    shell.events.register("pre_run_cell", _before_cell)
+    shell.set_custom_exc((Exception,), _explain_failure)
+    shell._course_checks_installed = True
+
+
+_install()

@@ -6,7 +6,7 @@ minutes. Positions are (x, y) with x pointing downstream and the island at the o
 The flow is a vortex street behind an island of diameter 1 km in a 0.5 m/s current, computed
 by a 2-D incompressible Navier-Stokes solver at Reynolds number 150 and shipped as velocity
 snapshots every 6 minutes on a 200 m grid (``data/castaway_bob_flow.npz``; the instructors rebuild
-it from a seed with ``python -m autograder data``). ``load()`` returns it as a ``Flow``, a function
+it from a seed, bit for bit). ``load()`` returns it as a ``Flow``, a function
 u(p, t) that interpolates the snapshots linearly in x, y and t with SciPy.
 
 Bob (handout equations (1)-(4), with the issue's reading): his state is [x, y, wx, wy], where

@@ -30,7 +30,7 @@ import nbformat
 import pytest
 from nbclient import NotebookClient
 from nbformat import NotebookNode
-from nbgrader.utils import determine_grade
+from nbgrader.utils import determine_grade, setenv
 
 from autograder import cells, cheats, integrity, submissions
 from autograder.integrity import INTEGRITY_SETUP, PROBE_NAME, RUNTIME_PROBE, Finding, runtime_findings
@@ -309,7 +309,9 @@ def runs(course: Path) -> dict[str, Run]:
             continue
         jobs[f"overwrite/{cheat.name}"] = (trimmed(restored, TRAIN), TRAIN, course)
     before = (course / "gradebook.db").read_bytes()
-    results = execute_all(jobs)
+    # as `nbgrader autograde` runs its kernels: course.checks then installs no hooks and validate() does nothing
+    with setenv(NBGRADER_EXECUTION="autograde"):
+        results = execute_all(jobs)
     results["gradebook-bytes"] = (before, (course / "gradebook.db").read_bytes())  # type: ignore[assignment]
     results.update(broken)  # type: ignore[arg-type]
     return results

@@ -78,7 +78,10 @@ def test_each_blank_has_visible_checks_then_a_hidden_test_cell(lab):
             f"from autograder.hidden_tests.{lab.module} import check_{name}",
             f"check_{name}({name})",
         ], f"test_{name}: the hidden region only calls check_{name}"
-        assert all(line.startswith("#") for line in visible.strip().splitlines()), f"test_{name}: comments only"
+        *comments, validate = visible.strip().splitlines()
+        assert all(line.startswith("#") for line in comments) and validate == f"validate({name})", (
+            f"test_{name}: comments, then validate({name}) (what Validate checks), then the hidden region"
+        )
         assert callable(getattr(hidden, f"check_{name}")), f"autograder.hidden_tests.{lab.module}.check_{name}"
 
 

@@ -69,7 +69,7 @@ def test_the_release_run_before_writing_anything_stops_only_where_a_blank_is_nee
 def test_student_bundle_has_no_leaks_and_installs_nothing_hidden(tmp_path):
     bundle = write_bundle(tmp_path / "bundle")
     assert sorted(p.name for p in bundle.iterdir()) == sorted(
-        ["release", "course", "environment.txt", "pyproject.toml", "LICENSE", "README.md"]
+        ["release", "course", "requirements.txt", "pyproject.toml", "LICENSE", "README.md", "jupyter_config"]
     )
     assert leaks.find_leaks(bundle) == []
     assert not (bundle / "solutions").exists() and not (bundle / "autograder").exists()
@@ -148,3 +148,47 @@ def test_every_shipped_data_file_is_loaded_by_the_course():
     sources = "\n".join(path.read_text() for path in (ROOT / "course").glob("*.py"))
     unused = [path.name for path in data.DATA_DIR.iterdir() if path.name not in sources]
     assert unused == []
+
+
+def test_student_bundle_installs_only_what_the_labs_need_and_hides_the_instructor_tools(tmp_path):
+    """The bundle's requirements.txt, pyproject.toml and Jupyter configuration (jupyter_config/), as
+    a student's JupyterLab reads them: Validate on, formgrader and the exchange-based lists off."""
+    import json
+    import os
+    import subprocess
+    import sys
+    import tomllib
+
+    bundle = write_bundle(tmp_path / "bundle")
+    requirements = (bundle / "requirements.txt").read_text()
+    names = {line.split(">")[0].split("=")[0].split("<")[0] for line in requirements.splitlines() if line and line[0].isalpha()}
+    assert names == {"numpy", "scipy", "matplotlib", "jupyterlab", "ipykernel", "nbgrader"}, names
+    assert "-e ." in requirements.splitlines()
+    pyproject = tomllib.loads((bundle / "pyproject.toml").read_text())
+    assert "pytest" not in pyproject.get("tool", {}) and pyproject["project"]["name"] == "estimation-lab-kit"
+    for path in (bundle / "course").rglob("*.py"):
+        assert "python -m autograder" not in path.read_text(), path
+    env = {**os.environ, "JUPYTER_CONFIG_DIR": str(bundle / "jupyter_config")}
+    probe = (
+        "from jupyter_server.serverapp import ServerApp\n"
+        "app = ServerApp()\n"
+        "app.initialize(argv=['--ServerApp.port=0', '--ServerApp.open_browser=False'])\n"
+        "import json\n"
+        "print(json.dumps({n: e.enabled for n, e in app.extension_manager.extensions.items() if 'nbgrader' in n}))\n"
+    )
+    run = subprocess.run([sys.executable, "-c", probe], cwd=bundle, env=env, capture_output=True, text=True, timeout=300)
+    assert run.returncode == 0, run.stderr
+    enabled = json.loads(run.stdout.strip().splitlines()[-1])
+    assert enabled == {
+        "nbgrader.server_extensions.formgrader": False,
+        "nbgrader.server_extensions.assignment_list": False,
+        "nbgrader.server_extensions.course_list": False,
+        "nbgrader.server_extensions.validate_assignment": True,
+    }, enabled
+    listed = subprocess.run([sys.executable, "-m", "jupyter", "labextension", "list"], cwd=bundle, env=env,
+                            capture_output=True, text=True, timeout=300)
+    disabled = listed.stdout + listed.stderr
+    disabled = disabled[disabled.index("Disabled extensions:"):].split()
+    for plugin in ("formgrader", "create-assignment", "assignment-list", "course-list", "menu"):
+        assert f"@jupyter/nbgrader:{plugin}" in disabled, disabled
+    assert "@jupyter/nbgrader:validate-assignment" not in disabled

@@ -40,10 +40,10 @@ def test_a_source_notebook_runs_top_to_bottom_without_pythonpath():
 def test_the_instructor_installs_the_hidden_packages_and_the_bundle_does_not(tmp_path):
     here = tomllib.loads((ROOT / "pyproject.toml").read_text())["tool"]["setuptools"]["packages"]["find"]["include"]
     assert {"course", "autograder", "solutions"} <= set(here)
-    student = tomllib.loads(student_pyproject())["tool"]["setuptools"]["packages"]["find"]["include"]
+    student = tomllib.loads(student_pyproject((ROOT / "pyproject.toml").read_text()))["tool"]["setuptools"]["packages"]["find"]["include"]
     assert student == ["course", "course.*"]
     bundle = write_bundle(tmp_path / "bundle")
-    assert (bundle / "pyproject.toml").read_text() == student_pyproject()
+    assert (bundle / "pyproject.toml").read_text() == student_pyproject((ROOT / "pyproject.toml").read_text())
     assert find_leaks(bundle) == []
     assert sys.executable  # the test runs in the instructor's environment, where both import:
     import autograder

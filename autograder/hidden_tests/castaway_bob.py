@@ -12,7 +12,7 @@ import solutions.castaway_bob as ref
 from autograder.diagnosis import diagnosed
 from autograder.hidden import isolate
 from course import ocean
-from course.checks import check_array, check_close, check_pair, random_spd
+from course.checks import check_array, check_close, check_pair, count, random_spd
 
 BLANKS = (
     "transition_matrix",
@@ -53,7 +53,7 @@ def check_trailing_mean(func: Callable) -> None:
     rng = np.random.default_rng(5102)
     for n, order in ((1, 3), (2, 3), (7, 1), (9, 2), (40, 3), (25, 5), (6, 10)):
         y = rng.normal(0.0, 50.0, (n, 2)) + 1000.0 * rng.standard_normal(2)
-        label = f"trailing_mean(y, order={order}) on {n} random fixes"
+        label = f"trailing_mean(y, order={order}) on {count(n, 'random fix')}"
         estimates = check_array(func(y.copy(), order=order), label, (n, 2), "There is one estimate per fix.")
         check_close(estimates, ref.trailing_mean(y, order=order), label, show_expected=False)
 
@@ -117,7 +117,7 @@ def check_run_rank2(func: Callable) -> None:
     rng = np.random.default_rng(5106)
     for n, sigma_walk, sigma_gps in ((1, 30.0, 50.0), (2, 10.0, 50.0), (15, 45.0, 20.0), (80, 25.0, 70.0)):
         y = _random_fixes(rng, n, rng.uniform(0.0, 0.6))
-        label = f"run_rank2 on {n} random fixes with sigma_walk = {sigma_walk}, sigma_gps = {sigma_gps}"
+        label = f"run_rank2 on {count(n, 'random fix')} with sigma_walk = {sigma_walk}, sigma_gps = {sigma_gps}"
         xs, Ps = check_pair(func(y.copy(), sigma_walk=sigma_walk, sigma_gps=sigma_gps), label, "estimates", "covariances")
         want_x, want_P = ref.run_rank2(y, sigma_walk=sigma_walk, sigma_gps=sigma_gps)
         check_close(check_array(xs, f"the estimates of {label}", (n, 2)), want_x, f"the estimates of {label}",
@@ -151,7 +151,7 @@ def check_run_rank4(func: Callable) -> None:
         current = _random_current(rng)
         t = rng.uniform(0.0, 3000.0) + dt * np.arange(n)
         y = _random_fixes(rng, n, 0.4)
-        label = (f"run_rank4 on {n} fixes in a random current (alpha = {alpha}, sigma_F = {sigma_F}, "
+        label = (f"run_rank4 on {count(n, 'fix')} in a random current (alpha = {alpha}, sigma_F = {sigma_F}, "
                  f"sigma_gps = {sigma_gps}, dt = {dt})")
         result = func(y.copy(), current, t.copy(), alpha=alpha, sigma_F=sigma_F, sigma_gps=sigma_gps, dt=dt)
         xs, Ps = check_pair(result, label, "estimates", "covariances")
@@ -178,7 +178,7 @@ def check_track_rmse(func: Callable) -> None:
     for n in (1, 2, 10, 120):
         truth = rng.uniform(-5e3, 5e3, (n, 2))
         estimates = truth + rng.normal(0.0, 40.0, (n, 2)) * rng.uniform(0.2, 3.0, (n, 1))
-        label = f"track_rmse on {n} random estimates"
+        label = f"track_rmse on {count(n, 'random estimate')}"
         value = func(estimates.copy(), truth.copy())
         check_close(check_array(value, label, (), "track_rmse returns one number, in metres."),
                     ref.track_rmse(estimates, truth), label, show_expected=False)

@@ -1,0 +1,159 @@
+"""The messages of the visible checks read as sentences, for the solved notebook and for every
+catalogued mistake; and an exception raised inside a student's function is explained."""
+
+from __future__ import annotations
+
+import re
+import sys
+import traceback
+
+import matplotlib
+import numpy as np
+import pytest
+
+from autograder import cells
+from autograder.labs import Lab
+from autograder.mistakes import catalogue
+from course.checks import count, explain, is_plural
+from over_labs import over_labs
+
+# "1 fixes", "1 random estimates": a count of one with a plural noun.
+ONE_WITH_PLURAL = re.compile(r"(?<![\d.,\-])\b1 (?:random )?([a-z]+s)\b")
+NOT_PLURAL = {"is", "was", "has", "does", "minus", "plus", "less", "class", "mass"}
+# "2 fix", "60 time": a count above one with a singular noun the labs count.
+MANY_WITH_SINGULAR = re.compile(
+    r"(?<![\d.,\-])\b(?:[02-9]|\d{2,}) (?:random )?(fix|estimate|time|point|particle|step|reading|hour|run|drift|sample)\b(?!\w)"
+)
+# "the estimates ... is not right", "x_a ... are not right"
+VERDICT = re.compile(r"^(?:\w+: )?(.*?) (is|are) not right", re.MULTILINE)
+
+
+def grammar_problems(message: str) -> list[str]:
+    """What this test can check of a message's grammar: counts and the agreement of its verdict."""
+    problems = [f"'1 {m.group(1)}'" for m in ONE_WITH_PLURAL.finditer(message) if m.group(1) not in NOT_PLURAL]
+    problems += [f"'{m.group(0)}'" for m in MANY_WITH_SINGULAR.finditer(message)]
+    for subject, verb in VERDICT.findall(message):
+        if (verb == "are") != is_plural(subject):
+            problems.append(f"'{subject} {verb} not right'")
+    return problems
+
+
+def test_the_grammar_checks_catch_what_they_claim_to():
+    assert grammar_problems("trailing_mean(y, order=3) on 1 random fixes is not right") == ["'1 fixes'"]
+    assert grammar_problems("the estimates of a constant from fixes [2, 2] is not right: expected")
+    assert grammar_problems("x_a on 2 time is not right")
+    assert grammar_problems("x_a for the fix y = [12 mi, 70 mph] is not right: expected [11. 69.]") == []
+    assert grammar_problems("the variances after one and two fixes are not right") == []
+    assert count(1, "random fix") == "1 random fix" and count(3, "random fix") == "3 random fixes"
+    assert count(2, "estimate") == "2 estimates" and is_plural("the estimates") and not is_plural("NEES of e")
+
+
+def _run(code: str, namespace: dict) -> BaseException | None:
+    lines = [line for line in code.splitlines() if not line.lstrip().startswith("%")]
+    try:
+        exec(compile("\n".join(lines), "<cell>", "exec"), namespace)
+    except Exception as error:  # the message is what this test reads
+        return error
+    return None
+
+
+def _message(error: BaseException, blank: str) -> str:
+    return explain(error, error.__traceback__, [blank]) or f"{type(error).__name__}: {error}"
+
+
+@over_labs
+def test_visible_check_messages_of_every_mistake_read_as_sentences(lab: Lab, monkeypatch, tmp_path):
+    """Runs the solved notebook's cells (not the graded ones) in this process and, before each
+    blank's visible checks, each catalogued mistake of that blank with them."""
+    matplotlib.use("Agg")
+    monkeypatch.chdir(lab.source_notebook.parent)
+    nb = cells.read(lab.source_notebook)
+    mistakes = catalogue(lab)
+    answers = {cells.grade_id(c): c.source for c in nb.cells if cells.is_code_answer(c)}
+    namespace: dict = {"__name__": "__main__"}
+    rendered: dict[str, str] = {}
+    import matplotlib.pyplot as plt
+
+    for cell in nb.cells:
+        if cell.cell_type != "code" or cells.meta(cell).get("grade"):
+            continue
+        gid = cells.meta(cell).get("grade_id", "")
+        if gid.startswith("check_"):
+            blank = gid[len("check_"):]
+            for mistake in (m for m in mistakes if m.blank == blank):
+                _run(mistake.apply(answers[blank]), namespace)
+                error = _run(cell.source, namespace)
+                _run(answers[blank], namespace)
+                if error is not None:
+                    rendered[f"{blank}/{mistake.slug}"] = _message(error, blank)
+        error = _run(cell.source, namespace)
+        assert error is None, f"{gid or cell.id} fails on the solved notebook: {error}"
+        plt.close("all")
+    # most mistakes fail their visible checks; those that do must say so in sentences
+    assert len(rendered) >= len(mistakes) // 2, sorted(rendered)
+    problems = {key: grammar_problems(message) for key, message in rendered.items()}
+    assert not {k: p for k, p in problems.items() if p}, {k: (p, rendered[k]) for k, p in problems.items() if p}
+
+
+def test_an_exception_inside_a_blank_names_the_call_its_inputs_and_a_likely_cause():
+    def gain_information_form(B, H, R):
+        B_inv = np.linalg.inv(B)
+        RinvH = np.linalg.solve(R, H)
+        return np.linalg.solve(B_inv - H.T @ RinvH, RinvH.T)  # the sign error
+
+    gain_information_form.__globals__["__name__"]  # defined in this module, not __main__
+    namespace = {"__name__": "__main__", "np": np}
+    exec(compile(
+        "def gain_information_form(B, H, R):\n"
+        "    RinvH = np.linalg.solve(R, H)\n"
+        "    return np.linalg.solve(np.linalg.inv(B) - H.T @ RinvH, RinvH.T)\n", "<cell-1>", "exec"), namespace)
+    with pytest.raises(np.linalg.LinAlgError) as raised:
+        exec(compile("K = gain_information_form(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))",
+                     "<cell-2>", "exec"), namespace)
+    message = explain(raised.value, raised.value.__traceback__, ["gain_information_form"])
+    assert message is not None
+    assert message.startswith("LinAlgError in your gain_information_form: Singular matrix")
+    assert "B = array of shape (2, 2), [[4., 0.], [0., 9.]]" in message
+    assert "R = array of shape (2, 2), [[4., 0.], [0., 1.]]" in message
+    assert "sign error or a missing term" in message
+    # an error outside the student's functions is left alone
+    try:
+        np.linalg.solve(np.zeros((2, 2)), np.ones(2))
+    except np.linalg.LinAlgError as error:
+        assert explain(error, error.__traceback__, ["gain_information_form"]) is None
+
+
+def test_in_a_kernel_a_check_explains_the_error_and_blames_the_blank_that_fails_its_own_checks(tmp_path):
+    """A student's kernel: a sign error in one blank raises LinAlgError inside it; its check says which
+    call raised it, with the inputs and the likely cause; the check of a blank that calls it blames it;
+    Validate's validate() names both; an error outside any blank keeps IPython's own traceback."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    cells_source = [
+        "%xmode Minimal\nimport numpy as np\nfrom course.checks import check_close, passed, require, validate",
+        "def gain(B, H, R):\n    RinvH = np.linalg.solve(R, H)\n    return np.linalg.solve(np.linalg.inv(B) - H.T @ RinvH, RinvH.T)",
+        'require(gain)\nK = gain(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))\npassed("gain")',
+        "def update(B, H, R):\n    return gain(B, H, R) @ H",
+        'require(update)\ncheck_close(update(np.eye(2), np.eye(2), np.eye(2)), 0.5 * np.eye(2), "U")\npassed("update")',
+        "validate(update)",
+        "validate(gain)",
+        "1 / 0",
+    ]
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
+    NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
+                   resources={"metadata": {"path": str(tmp_path)}}).execute()
+    errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
+    text = ["\n".join(e.traceback) if e else "" for e in errors]
+    assert errors[0] is None and errors[1] is None and errors[3] is None
+    check_gain = " ".join(text[2].split())
+    assert check_gain.startswith("LinAlgError in your gain: Singular matrix"), check_gain
+    assert "`K = gain(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))` of this cell" in check_gain
+    assert "B = array of shape (2, 2), [[4., 0.], [0., 9.]]" in check_gain
+    assert "sign error or a missing term" in check_gain
+    check_update = " ".join(text[4].split())
+    assert check_update.startswith("This check uses your gain, which does not pass its visible checks yet; fix that first"), check_update
+    assert "(The check of update said: LinAlgError in your update: Singular matrix" in check_update
+    assert errors[5].ename == "AssertionError" and "update does not pass its visible checks yet. Its check uses your gain" in " ".join(text[5].split())
+    assert "gain does not pass its visible checks yet. Its check cell says: LinAlgError in your gain" in " ".join(text[6].split())
+    assert errors[7].ename == "ZeroDivisionError" and "in your" not in text[7]
