@@ -44,6 +44,12 @@ def screenshots(tmp_path_factory: pytest.TempPathFactory) -> Path:
     return folder
 
 
+@pytest.fixture(autouse=True)
+def _screenshots_in_the_summary(record_property, screenshots: Path) -> None:
+    """Record the folder for the terminal summary (tests/conftest.py), which prints it under xdist too."""
+    record_property("screenshots", str(screenshots))
+
+
 @pytest.fixture(scope="module")
 def jupyterlab(tmp_path_factory: pytest.TempPathFactory) -> Iterator[JupyterLab]:
     with running_jupyterlab(tmp_path_factory.mktemp("student-jupyterlab")) as server:
@@ -59,6 +65,8 @@ def page(jupyterlab: JupyterLab, screenshots: Path) -> Iterator[Page]:
         with step(page, screenshots, "01-notebook-opened"):
             page.goto(jupyterlab.lab_url(NOTEBOOK))
             expect(page.locator(".jp-NotebookPanel")).to_be_visible()
+            # JupyterLab attaches the cells in batches while the page is idle; wait for them all.
+            expect(all_cells(page)).to_have_count(len(release_notebook().cells))
             expect(kernel_status(page)).to_have_text(re.compile("Idle"))
         with step(page, screenshots, "02-run-all-not-written-yet"):
             page.get_by_role("menuitem", name="Run", exact=True).click()
@@ -89,8 +97,12 @@ def index_of(grade_id: str) -> int:
     return index
 
 
+def all_cells(page: Page) -> Locator:
+    return page.locator(".jp-NotebookPanel .jp-Notebook .jp-Cell")
+
+
 def cell(page: Page, index: int) -> Locator:
-    return page.locator(".jp-NotebookPanel .jp-Notebook .jp-Cell").nth(index)
+    return all_cells(page).nth(index)
 
 
 def kernel_status(page: Page) -> Locator:
@@ -130,7 +142,7 @@ def write_blank_and_run(page: Page, code: str) -> Locator:
 
 def test_run_all_stops_at_the_first_blank_with_not_written_yet(page: Page) -> None:
     """Run All runs the set-up cells, then stops at the first check with NotWrittenYet."""
-    outputs = page.locator(".jp-NotebookPanel .jp-Notebook .jp-Cell").evaluate_all(
+    outputs = all_cells(page).evaluate_all(
         "cells => cells.map(c => c.querySelector('.jp-OutputArea')?.textContent ?? '')")
     assert len(outputs) == len(release_notebook().cells)
     stopped = [i for i, text in enumerate(outputs) if "NotWrittenYet" in text]
@@ -160,9 +172,11 @@ def test_a_catalogued_mistake_fails_the_visible_check_with_a_message(page: Page,
     assert "diag(4, 9)" in output, f"The check's message does not say which case failed: {output}"
 
 
-def test_validate_fails_and_names_the_blank(page: Page, jupyterlab: JupyterLab, screenshots: Path) -> None:
-    """Validate (which saves first) fails on a notebook whose blanks are unwritten or wrong, and
-    names gain_information_form. Waits for ux-students: today it says "Success!"."""
+def test_validate_fails_and_names_each_blank_to_fix(page: Page, jupyterlab: JupyterLab, screenshots: Path) -> None:
+    """With the mistake in gain_information_form and every other blank unwritten, Validate (which
+    saves first) reports failure and names every blank. Waits for ux-students: today it fails on
+    the unwritten written answers only ("You did not provide a response") and names no blank."""
+    write_blank_and_run(page, mistaken_answer())
     with step(page, screenshots, "05-validate-dialog"):
         page.locator(".jp-NotebookPanel-toolbar").get_by_role("button", name="Validate").click()
         dialog = page.locator(".jp-Dialog")
@@ -173,9 +187,12 @@ def test_validate_fails_and_names_the_blank(page: Page, jupyterlab: JupyterLab, 
         text = body.text_content()
     dialog.get_by_role("button", name="Ok").click()
     expect(dialog).to_have_count(0)
-    assert "Success" not in text, f"Validate passed a notebook with unwritten blanks:\n{text}"
+    [saved] = [c for c in cells.read(jupyterlab.bundle / NOTEBOOK).cells if cells.meta(c).get("grade_id") == BLANK]
+    assert saved.source == mistaken_answer(), "Validate did not save the notebook as typed before validating"
+    assert "Success" not in text, f"Validate passed a notebook whose blanks are wrong or unwritten:\n{text}"
     assert re.search(r"fail", text, re.IGNORECASE), f"Validate's dialog does not say that it failed:\n{text}"
-    assert BLANK in text, f"Validate's dialog does not name {BLANK}:\n{text}"
+    unnamed = [name for name in cells.blank_names(cells.read(LAB.source_notebook)) if name not in text]
+    assert not unnamed, f"Validate's dialog does not name the blanks {unnamed}:\n{text}"
 
 
 def test_no_instructor_tool_is_shown(page: Page, screenshots: Path) -> None:
