@@ -111,6 +111,8 @@ def kernel_status(page: Page) -> Locator:
 
 
 def model_answer() -> str:
+    """The blank's model answer in the source notebook (the code of solutions/train_kf.py: a test
+    compares their syntax trees)."""
     return cells.model_answers(cells.read(LAB.source_notebook))[BLANK]
 
 
@@ -120,8 +122,8 @@ def mistaken_answer() -> str:
 
 
 def write_blank_and_run(page: Page, code: str) -> Locator:
-    """Replace the blank's code with ``code`` as a student types it, run the blank and its check
-    cell (Shift+Enter twice), and return the check cell once the kernel is idle again."""
+    """Replace the blank's code with ``code`` as a student pastes it, run the blank and its check
+    cell (Shift+Enter twice), and return the check cell once it has run."""
     answer, check = cell(page, index_of(BLANK)), cell(page, index_of(f"check_{BLANK}"))
     expect(answer).to_contain_text(f"def {BLANK}(")
     ran_before = check.locator(".jp-InputPrompt").inner_text()
@@ -174,8 +176,9 @@ def test_a_catalogued_mistake_fails_the_visible_check_with_a_message(page: Page,
 
 def test_validate_fails_and_names_each_blank_to_fix(page: Page, jupyterlab: JupyterLab, screenshots: Path) -> None:
     """With the mistake in gain_information_form and every other blank unwritten, Validate (which
-    saves first) reports failure and names every blank. Waits for ux-students: today it fails on
-    the unwritten written answers only ("You did not provide a response") and names no blank."""
+    saves first) reports failure and names every blank (issue 14). Before that change, Validate
+    fails on the unwritten written answers only ("You did not provide a response") and names no
+    blank."""
     write_blank_and_run(page, mistaken_answer())
     with step(page, screenshots, "05-validate-dialog"):
         page.locator(".jp-NotebookPanel-toolbar").get_by_role("button", name="Validate").click()
@@ -197,7 +200,7 @@ def test_validate_fails_and_names_each_blank_to_fix(page: Page, jupyterlab: Jupy
 
 def test_no_instructor_tool_is_shown(page: Page, screenshots: Path) -> None:
     """Neither the menus nor the sidebars offer Formgrader, Create Assignment or Assignment List;
-    Validate stays. Waits for ux-students's Jupyter config in the bundle."""
+    Validate stays. Needs the bundle's Jupyter config that hides nbgrader's instructor tools (issue 14)."""
     with step(page, screenshots, "06-no-instructor-tools"):
         expect(page.locator(".jp-NotebookPanel-toolbar").get_by_role("button", name="Validate")).to_be_visible()
         menubar = page.locator("#jp-MainMenu")
