@@ -21,3 +21,12 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
         raise pytest.UsageError(f"{metafunc.definition.nodeid} takes `seed` but states no false-fail "
                                 "probability: decorate it with @random_draws(...) (tests/random_draws.py)")
     metafunc.parametrize("seed", SEEDS, ids=[f"seed{s}" for s in SEEDS], scope=marker.kwargs["scope"])
+
+
+def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
+    """Say where the browser test saved its screenshots (tests/test_student_browser.py records the
+    folder as the property ``screenshots``), also when it ran in an xdist worker and passed."""
+    folders = sorted({value for reports in terminalreporter.stats.values() for report in reports
+                      for name, value in getattr(report, "user_properties", ()) if name == "screenshots"})
+    for folder in folders:
+        terminalreporter.write_line(f"Screenshots of the browser test: {folder}")
