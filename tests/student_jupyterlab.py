@@ -4,10 +4,12 @@
 ``python -m autograder bundle`` (as an instructor does), starts ``jupyter lab`` in the bundle's
 root (as the bundle's README tells students) on a free loopback port with a random token, waits
 until the server answers its own HTTP API, yields its address, and stops it on exit. Everything
-per-user that Jupyter reads or writes (config, data, runtime, settings, workspaces, IPython) goes
-to folders under ``folder``, so that the developer's home changes nothing and nothing is left there.
-The kernel imports the bundle's ``course`` package: PYTHONPATH is the bundle alone, so it cannot
-import ``solutions`` or ``autograder`` from the course root.
+per-user that Jupyter reads or writes (data, runtime, settings, workspaces, IPython) goes to
+folders under ``folder``, so that the developer's home changes nothing and nothing is left there;
+its configuration is the bundle's own ``jupyter_config``. The kernel imports the bundle's
+``course`` package (PYTHONPATH is the bundle). It runs in the test's environment, the
+instructor's, which also installs ``solutions`` and ``autograder``: test_release checks that the
+bundle installed as students install it does not.
 
 ``chromium()`` launches Debian's ``chromium`` (``apt-get install chromium``; ``.ci/run`` installs
 it) through Playwright: Playwright's own browser download is not available, so it is pointed at
@@ -33,6 +35,7 @@ from pathlib import Path
 
 from playwright.sync_api import Browser, sync_playwright
 
+from autograder.bundle import JUPYTER_CONFIG
 from autograder.labs import ROOT
 
 START_TIMEOUT = 120.0  # seconds for JupyterLab to answer its HTTP API (a loaded 2-core CI machine)
@@ -88,10 +91,10 @@ def _free_port() -> int:
 
 def _student_environment(bundle: Path, home: Path) -> dict[str, str]:
     """The environment of ``jupyter lab``: the test's own, with Jupyter's per-user folders under
-    ``home`` and only the bundle on PYTHONPATH."""
+    ``home``, the bundle's own Jupyter configuration (as its README tells students to start
+    JupyterLab: ``JUPYTER_CONFIG_DIR=jupyter_config``), and only the bundle on PYTHONPATH."""
     env = dict(os.environ)
     folders = {
-        "JUPYTER_CONFIG_DIR": "config",
         "JUPYTER_DATA_DIR": "data",
         "JUPYTER_RUNTIME_DIR": "runtime",
         "JUPYTERLAB_SETTINGS_DIR": "lab-settings",
@@ -101,6 +104,7 @@ def _student_environment(bundle: Path, home: Path) -> dict[str, str]:
     for variable, name in folders.items():
         (home / name).mkdir(parents=True, exist_ok=True)
         env[variable] = str(home / name)
+    env["JUPYTER_CONFIG_DIR"] = str(bundle / JUPYTER_CONFIG)
     env["PYTHONPATH"] = str(bundle)
     # A student is asked once whether JupyterLab may fetch news; the toast would cover the cells
     # in the screenshots, so this user answers "never" in their own settings.
