@@ -21,6 +21,7 @@ from autograder.diagnosis import LEAD, diagnose, diagnosed, mistake_function
 from autograder.labs import all_labs
 from autograder.mistakes import Mistake, catalogue
 from over_labs import LABS, over_labs
+from random_draws import random_draws
 
 MINIMUM_RATE = 1.0
 """Measured: all 136 catalogued mistakes of the five labs are named by their own hint. Lower it only
@@ -129,8 +130,9 @@ def test_a_diagnosed_message_keeps_the_hidden_tests_message_and_adds_the_hint():
     assert message.endswith(f". {lead} {mistake.hint}") and "\n" not in message, message
 
 
-def _toy_lab(monkeypatch, mistakes: tuple[Mistake, ...]):
-    """A toy lab "toy" with one blank, twice(x) = 2 x, the given mistakes, and its hidden test."""
+def _toy_lab(monkeypatch, mistakes: tuple[Mistake, ...], seed: int):
+    """A toy lab "toy" with one blank, twice(x) = 2 x, the given mistakes, and its hidden test on
+    random x drawn from ``seed``."""
     reference = types.ModuleType("solutions.toy")
     reference.__file__ = __file__
     reference.np = np
@@ -145,7 +147,7 @@ def _toy_lab(monkeypatch, mistakes: tuple[Mistake, ...]):
     monkeypatch.setattr(inspect, "getsource", lambda function: source)
 
     def check_twice(func) -> None:
-        rng = np.random.default_rng(7)
+        rng = np.random.default_rng(seed)
         for n in (1, 4):
             x = rng.standard_normal(n)
             if not np.allclose(func(x.copy()), reference.twice(x)):
@@ -159,10 +161,11 @@ THREE = Mistake("twice", "three", "x * 3", "2.0 * x", "3.0 * x", hint="Your twic
 
 
 @pytest.mark.parametrize("scale, named", [(3.0, True), (3.0 * (1 + 1e-9), True), (3.0 * (1 + 1e-4), False)])
-def test_a_match_is_within_the_tight_tolerance_only(scale, named, monkeypatch):
+@random_draws(false_fail=0.0, why="an identity: a relative difference of 1e-9 or 1e-4 is the same for every x")
+def test_a_match_is_within_the_tight_tolerance_only(scale, named, monkeypatch, seed):
     """With one mistake (3 x for 2 x): a student whose results equal the mistake's to rounding is
     named, one whose results differ by 1e-4 relative is not."""
-    check_twice = _toy_lab(monkeypatch, (THREE,))
+    check_twice = _toy_lab(monkeypatch, (THREE,), seed)
 
     def twice(x):
         return scale * x
@@ -174,11 +177,12 @@ def test_a_match_is_within_the_tight_tolerance_only(scale, named, monkeypatch):
     assert ("Your twice triples." in str(caught.value)) is named
 
 
-def test_two_mistakes_that_match_give_no_diagnosis(monkeypatch):
+@random_draws(false_fail=0.0, why="an identity: 3 x and x * 3 agree, and differ from 2 x, for every x")
+def test_two_mistakes_that_match_give_no_diagnosis(monkeypatch, seed):
     """Two catalogued mistakes with the same results on the hidden cases: the diagnosis names
     neither rather than guess."""
     same = Mistake("twice", "three-again", "3 x, written otherwise", "2.0 * x", "x * 3.0", hint="Your twice is 3 x.")
-    check_twice = _toy_lab(monkeypatch, (THREE, same))
+    check_twice = _toy_lab(monkeypatch, (THREE, same), seed)
     assert diagnose("toy", "twice", lambda x: 3.0 * x, check_twice) is None
-    check_twice = _toy_lab(monkeypatch, (THREE,))
+    check_twice = _toy_lab(monkeypatch, (THREE,), seed)
     assert diagnose("toy", "twice", lambda x: 3.0 * x, check_twice) is THREE
