@@ -30,7 +30,7 @@ import solutions.reentry_pf as ref
 from autograder.diagnosis import diagnosed
 from autograder.hidden import isolate
 from course import falling_object
-from course.checks import check_array, check_close, check_pair
+from course.checks import check_array, check_close, check_pair, count
 from course.falling_object import DT, INNOVATION_STD, SIGMA, FilterHistory
 
 BLANKS = (
@@ -89,7 +89,7 @@ def check_simulate_radar(func: Callable) -> None:
                       "(the default rtol = 1e-3 is off by about 20 m).")
     for x0, t, sigma, seed in simulate_radar_cases():
         n = t.shape[0]
-        case = f"a random start, {n} times from t = {t[0]:.2f} s, sigma = {sigma:.0f} m"
+        case = f"a random start, {count(n, 'time')} from t = {t[0]:.2f} s, sigma = {sigma:.0f} m"
         x_true, b = check_pair(func(x0.copy(), t.copy(), sigma, np.random.default_rng(seed)),
                                "simulate_radar(x0, t, sigma, rng)", "x_true", "b")
         x_true = check_array(x_true, f"x_true for {case}", (3, n), "One column per time t_j; rows h, v, beta.")

@@ -10,7 +10,7 @@ import numpy as np
 import solutions.train_kf as ref
 from autograder.diagnosis import diagnosed
 from autograder.hidden import isolate
-from course.checks import check_array, check_close, check_pair, random_spd
+from course.checks import check_array, check_close, check_pair, count, random_spd
 
 BLANKS = ("gain_information_form", "gain_covariance_form", "process_noise", "predict", "kupdate", "run_filter", "nees")
 SIZES = ((1, 1), (2, 2), (3, 1), (4, 2), (5, 3))
@@ -89,7 +89,7 @@ def check_run_filter(func: Callable) -> None:
         H, y = rng.standard_normal((m, n)), rng.standard_normal((T, m))
         xs, Bs = check_pair(func(y.copy(), x0.copy(), B0.copy(), A, Q, H, R), "run_filter(...)", "x_a", "B_a")
         want_x, want_B = ref.run_filter(y, x0, B0, A, Q, H, R)
-        case = f"{T} random observations with n = {n}, m = {m}"
+        case = f"{count(T, 'random observation')} with n = {n}, m = {m}"
         check_close(check_array(xs, f"the estimates for {case}", (T, n)), want_x, f"the estimates for {case}",
                     show_expected=False)
         check_close(check_array(Bs, f"the covariances for {case}", (T, n, n)), want_B,
@@ -105,5 +105,5 @@ def check_nees(func: Callable) -> None:
         covariances = np.stack([random_spd(rng, n) for _ in range(T)])
         value = check_array(func(errors.copy(), covariances.copy()), f"nees(errors, covariances) with T = {T}, n = {n}",
                             (T,), "One NEES value per time: errors (T, n) and covariances (T, n, n) give shape (T,).")
-        check_close(value, ref.nees(errors, covariances), f"the NEES of {T} random errors with n = {n}",
+        check_close(value, ref.nees(errors, covariances), f"the NEES of {count(T, 'random error')} with n = {n}",
                     show_expected=False)
