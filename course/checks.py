@@ -90,7 +90,10 @@ def check_close(
     if np.allclose(actual, expected, rtol=rtol, atol=atol):
         return
     error = np.max(np.abs(actual - expected))
-    if show_expected:
+    if show_expected and expected.ndim == 0:
+        # a number reads on one line ("expected 1 but got 16"), without NumPy's trailing point ("1.")
+        detail = f"expected {float(expected):.6g} but got {float(actual):.6g}"
+    elif show_expected:
         detail = f"expected\n{np.array2string(expected, precision=6)}\nbut got\n{np.array2string(actual, precision=6)}"
     else:
         detail = f"the largest difference from the reference is {error:.3g}"

@@ -39,6 +39,9 @@ def test_require_lets_written_functions_through_and_lists_every_missing_one():
 def test_check_close_shows_expected_values_only_when_asked():
     with pytest.raises(AssertionError, match=r"expected\n\[1\. 2\.\]\nbut got\n\[1\. 3\.\]\. Hint"):
         check_close([1.0, 3.0], [1.0, 2.0], "x", "Hint")
+    # a number on one line, as a sentence reads it (NumPy would print "1." and "16.", then ". Hint")
+    with pytest.raises(AssertionError, match=r"^x is not right: expected 1 but got 16\. Hint$"):
+        check_close(16.0, 1.0, "x", "Hint")
     with pytest.raises(AssertionError) as hidden:
         check_close([1.0, 3.0], [1.0, 2.0], "x", show_expected=False)
     assert "largest difference from the reference is 1" in str(hidden.value) and "2." not in str(hidden.value)
