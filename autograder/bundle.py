@@ -40,15 +40,6 @@ INSTRUCTOR_SERVER_EXTENSIONS = (
     "nbgrader.server_extensions.course_list",
 )
 VALIDATE_SERVER_EXTENSION = "nbgrader.server_extensions.validate_assignment"
-INSTRUCTOR_PACKAGES = (
-    "# Here, in the instructor's environment (`-e .` in environment.txt), the hidden packages are installed\n"
-    "# beside the student-facing package `course`, so that the source notebooks run by hand. The student\n"
-    "# bundle's copy of this file installs `course` only, and the bundle holds nothing else.\n"
-    'include = ["course", "course.*", "autograder", "autograder.*", "solutions", "solutions.*"]\n'
-)
-"""What pyproject.toml installs in the course root (the instructor's environment)."""
-STUDENT_PACKAGE_FIND = '# The student-facing package `course`.\ninclude = ["course", "course.*"]\n'
-"""What the student bundle's pyproject.toml installs instead."""
 
 
 class LeakFound(RuntimeError):
@@ -74,11 +65,7 @@ def student_requirements(environment: str) -> str:
 
 
 def student_pyproject(pyproject: str) -> str:
-    """The course's pyproject.toml as students install it: the package ``course`` only, and without the
-    instructors' tool settings (pytest runs tests/ and source/)."""
-    if pyproject.count(INSTRUCTOR_PACKAGES) != 1:
-        raise ValueError("pyproject.toml no longer lists its packages as autograder/bundle.py expects: update INSTRUCTOR_PACKAGES.")
-    pyproject = pyproject.replace(INSTRUCTOR_PACKAGES, STUDENT_PACKAGE_FIND)
+    """The course's pyproject.toml without the instructors' tool settings (pytest runs tests/ and source/)."""
     return re.sub(r"\n\[tool\.pytest\.ini_options\]\n.*?(?=\n\[(?!\[)|\Z)", "\n", pyproject, flags=re.DOTALL).rstrip() + "\n"
 
 

@@ -22,6 +22,7 @@ LAB = get_lab("train-kf")
 
 FIX = '''
 
+@diagnosed
 def check_predict(func):
     """The fixed test: B_f is tested in kupdate and run_filter, so predict is graded on x_f only."""
     func = isolate(func, ref, BLANKS)

@@ -30,7 +30,7 @@ def test_plain_nbgrader_autogrades_from_the_course_root(tmp_path):
     """`nbgrader generate_assignment` and `nbgrader autograde`, as an instructor types them, in a
     copy of the course root (so that the repository's own gradebook is left alone)."""
     lab = LABS[0]
-    for name in ("nbgrader_config.py", "source", "solutions", "autograder"):
+    for name in ("nbgrader_config.py", "source", "solutions", "autograder", "course"):
         copy = shutil.copytree if (ROOT / name).is_dir() else shutil.copy2
         copy(ROOT / name, tmp_path / name)
     nbgrader = [sys.executable, "-m", "nbgrader"]
