@@ -77,8 +77,9 @@ def main(argv: list[str] | None = None) -> int:
 
         workdir = args.workdir.resolve()
         rows = regenerate(workdir, args.out)
-        count = "1 graded submission" if len(rows) == 1 else f"{len(rows)} graded submissions"
-        print(f"Rewrote the feedback of {count} in {workdir / 'feedback'} "
+        from course.checks import count
+
+        print(f"Rewrote the feedback of {count(len(rows), 'graded submission')} in {workdir / 'feedback'} "
               f"and the grades in {args.out or workdir / 'grades.csv'}.")
     elif args.command == "demo":
         from autograder.demo import run_demo

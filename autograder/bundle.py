@@ -48,18 +48,18 @@ class LeakFound(RuntimeError):
 
 def student_requirements(environment: str) -> str:
     """The lines of ``environment.txt`` that students need, with the same version ranges."""
-    wanted = []
+    wanted = {}  # package name -> its line
     for line in environment.splitlines():
         name = re.match(r"[A-Za-z0-9_.\-]+", line.strip())
         if name and name.group(0).lower() in STUDENT_PACKAGES:
-            wanted.append(line.strip())
-    missing = set(STUDENT_PACKAGES) - {re.match(r"[A-Za-z0-9_.\-]+", line).group(0).lower() for line in wanted}
+            wanted[name.group(0).lower()] = line.strip()
+    missing = set(STUDENT_PACKAGES) - wanted.keys()
     if missing:
         raise ValueError(f"environment.txt has no line for {', '.join(sorted(missing))}, which students need.")
     return (
         "# What the labs need (the student lines of the instructors' environment.txt, same versions):\n"
         "#   python3 -m venv .venv && .venv/bin/pip install -r requirements.txt     (Python 3.11, from this folder)\n"
-        + "\n".join(wanted)
+        + "\n".join(wanted.values())
         + "\n# the labs' support package `course` (this folder's pyproject.toml)\n-e .\n"
     )
 

@@ -5,6 +5,8 @@ from __future__ import annotations
 import filecmp
 import shutil
 import tempfile
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
 
 from autograder.labs import ROOT, Lab, all_labs
@@ -28,26 +30,28 @@ def shipped_path(built: Path) -> Path:
     return (RECORDS_DIR if built.name.endswith(RECORD_SUFFIX) else DATA_DIR) / built.name
 
 
+@contextmanager
+def _fresh_build(labs: list[Lab] | None) -> Iterator[list[Path]]:
+    """The files a fresh build of the labs (every lab by default) writes into a temporary folder,
+    which lasts as long as the ``with`` block."""
+    with tempfile.TemporaryDirectory() as tmp:
+        yield [path for lab in labs or all_labs() for path in build(lab, Path(tmp))]
+
+
 def rebuild(labs: list[Lab] | None = None) -> list[Path]:
     """Rebuild the labs' shipped files in place (every lab by default); returns where they were written."""
     written = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for lab in labs or all_labs():
-            for path in build(lab, Path(tmp)):
-                target = shipped_path(path)
-                target.parent.mkdir(parents=True, exist_ok=True)
-                shutil.copyfile(path, target)
-                written.append(target)
+    with _fresh_build(labs) as built:
+        for path in built:
+            target = shipped_path(path)
+            target.parent.mkdir(parents=True, exist_ok=True)
+            shutil.copyfile(path, target)
+            written.append(target)
     return written
 
 
 def stale_files(labs: list[Lab] | None = None) -> list[str]:
     """Shipped files (data and records) that a fresh build does not reproduce byte for byte."""
-    stale = []
-    with tempfile.TemporaryDirectory() as tmp:
-        for lab in labs or all_labs():
-            for path in build(lab, Path(tmp)):
-                shipped = shipped_path(path)
-                if not shipped.exists() or not filecmp.cmp(path, shipped, shallow=False):
-                    stale.append(path.name)
-    return stale
+    with _fresh_build(labs) as built:
+        return [path.name for path in built
+                if not shipped_path(path).exists() or not filecmp.cmp(path, shipped_path(path), shallow=False)]

@@ -17,7 +17,8 @@ from pathlib import Path
 from autograder import cells, cheats, faults, grading, submissions
 from autograder.labs import ROOT, Lab, all_labs
 from autograder.mistakes import catalogue
-from autograder.synthetic_class import Outcome, cheat_outcome, fault_outcome
+from autograder.synthetic_class import MISTAKE, Outcome, cheat_outcome, fault_outcome, honest_outcome
+from course.checks import count
 
 DEMO_DIR = ROOT / "demo"
 QUICK_MISTAKES = 2
@@ -31,20 +32,20 @@ def _honest(lab: Lab, folder: Path, mistakes) -> list[Outcome]:
     submissions.write(submissions.solved(lab), folder, submissions.SOLVED, lab)
     submissions.write(cells.read(lab.release_notebook), folder, submissions.BLANK, lab)
     outcomes = [Outcome(submissions.BLANK, "blank", None, only=False, flagged=False),
-                Outcome(submissions.SOLVED, "solved", (), only=True, flagged=False)]
+                honest_outcome(submissions.SOLVED, None)]
     for mistake in mistakes:
         submissions.write(submissions.with_mistake(lab, mistake), folder, mistake.student_id(lab), lab)
-        outcomes.append(Outcome(mistake.student_id(lab), "mistake", (f"test_{mistake.blank}",), only=True, flagged=False))
+        outcomes.append(honest_outcome(mistake.student_id(lab), mistake.blank))
     return outcomes
 
 
-def quick_mistakes(lab: Lab, count: int = QUICK_MISTAKES) -> list:
-    """``count`` catalogued mistakes of ``lab``, each in a different blank, spread over the lab."""
+def quick_mistakes(lab: Lab, size: int = QUICK_MISTAKES) -> list:
+    """``size`` catalogued mistakes of ``lab``, each in a different blank, spread over the lab."""
     first = {}
     for mistake in catalogue(lab):
         first.setdefault(mistake.blank, mistake)
     blanks = list(first)
-    return [first[blanks[round(k * (len(blanks) - 1) / max(count - 1, 1))]] for k in range(min(count, len(blanks)))]
+    return [first[blanks[round(k * (len(blanks) - 1) / max(size - 1, 1))]] for k in range(min(size, len(blanks)))]
 
 
 def write_demo_class(labs: list[Lab], folder: Path, full: bool = False) -> dict[tuple[str, str], Outcome]:
@@ -57,7 +58,7 @@ def write_demo_class(labs: list[Lab], folder: Path, full: bool = False) -> dict[
         if not full:
             cheat = cheats.get(QUICK_CHEAT)
             submissions.write(cheat.notebook(lab), folder, cheat.name, lab)
-            [fault] = [f for f in faults.FAULTS if f.slug == QUICK_FAULT]
+            fault = faults.get(QUICK_FAULT)
             blank = cells.blank_names(cells.read(lab.source_notebook))[0]
             faults.write_fault(fault, lab, blank, folder)
             outcomes += [cheat_outcome(lab, cheat), fault_outcome(lab, fault, blank)]
@@ -75,10 +76,6 @@ def unexpected(rows: list[grading.GradeRow], expected: dict[tuple[str, str], Out
     return found
 
 
-def _plural(count: int, word: str) -> str:
-    return f"{count} {word}" if count == 1 else f"{count} {word}s"
-
-
 def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = False) -> bool:
     """Write the demo class to ``workdir/class``, grade it in a new ``workdir/course``
     with ``jobs`` processes (default: one per core), and print whether every row came out as
@@ -91,20 +88,20 @@ def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = Fal
     students = {student for student, _ in expected}
     kinds = ("blank, solved and every catalogued mistake" if full else
              f"blank, solved, {QUICK_MISTAKES} catalogued mistakes, one cheat and one careless fault")
-    print(textwrap.fill(f"Demo class: {_plural(len(expected), 'submission')} of {_plural(len(labs), 'lab')} from "
-                        f"{_plural(len(students), 'student')} in {class_dir} ({kinds} per lab).", grading.TABLE_WIDTH,
+    print(textwrap.fill(f"Demo class: {count(len(expected), 'submission')} of {count(len(labs), 'lab')} from "
+                        f"{count(len(students), 'student')} in {class_dir} ({kinds} per lab).", grading.TABLE_WIDTH,
                         break_on_hyphens=False, break_long_words=False))
     rows = grading.grade(class_dir, course, grades_csv, jobs)
     differ = unexpected(rows, expected)
     if differ:
-        print(f"Not as expected: {_plural(len(differ), 'difference')} between the grades and the catalogues:")
+        print(f"Not as expected: {count(len(differ), 'difference')} between the grades and the catalogues:")
         for line in differ:
             print(textwrap.fill(line, grading.TABLE_WIDTH, initial_indent="  - ", subsequent_indent="    "))
     else:
-        print(textwrap.fill(f"All {_plural(len(expected), 'row')} came out as expected: the blank scores 0, the solved "
+        print(textwrap.fill(f"All {count(len(expected), 'row')} came out as expected: the blank scores 0, the solved "
                             "notebook full marks, each mistake, cheat and fault loses what its catalogue says, and "
                             "only the cheats that the integrity checks catch are flagged.", grading.TABLE_WIDTH))
-    example = next((s for (s, lab), o in expected.items() if o.kind == "mistake"), submissions.SOLVED)
+    example = next((s for (s, lab), o in expected.items() if o.kind == MISTAKE), submissions.SOLVED)
     example_lab = next(lab for (s, lab) in expected if s == example)
     def shown(path: Path) -> Path:  # relative to the course root, where the commands run
         return path.relative_to(ROOT) if path.is_relative_to(ROOT) else path
@@ -112,7 +109,7 @@ def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = Fal
     root = shown(course)
     steps = [  # what to look at, and where (a path or a command, on a line of its own to copy)
         ("The grades, one row per submission:", [str(shown(grades_csv))]),
-        ("One student's feedback page:", [str(shown(course / "feedback" / example / example_lab / f"{example_lab}.html"))]),
+        ("One student's feedback page:", [str(shown(grading.feedback_page(course, example_lab, example)))]),
         (f"The written answers, to grade by hand: from {ROOT}, start JupyterLab on the demo's course and open "
          "Nbgrader > Formgrader > Manual Grading; then rewrite the feedback pages and the grades:",
          [f".venv/bin/jupyter lab --CourseDirectory.root={root}", f".venv/bin/python -m autograder feedback --workdir {root}"]),

@@ -46,7 +46,6 @@ import contextlib
 import copy
 import dataclasses
 import functools
-import importlib
 import inspect
 import io
 import os
@@ -59,7 +58,8 @@ from typing import Any, Callable
 import numpy as np
 
 from autograder.hidden import isolate
-from autograder.mistakes import Mistake
+from autograder.labs import Lab
+from autograder.mistakes import Mistake, catalogue
 
 RTOL = 1e-6
 """Relative tolerance of a match: far tighter than any two different mistakes differ, loose enough
@@ -88,8 +88,7 @@ class _Unsupported(Exception):
 def diagnosed(check: Callable) -> Callable:
     """Decorate the hidden test ``check_<blank>`` of ``autograder.hidden_tests.<module>`` so that its
     failures name the catalogued mistake the student's function behaves like, if exactly one does."""
-    module = check.__module__.rpartition(".")[2]
-    blank = check.__name__.removeprefix("check_")
+    blank = _blank(check)
 
     @functools.wraps(check)
     def diagnosing_check(func: Callable, *args, **kwargs):
@@ -97,7 +96,7 @@ def diagnosed(check: Callable) -> Callable:
         try:
             return check(func, *args, **kwargs)
         except Exception as error:
-            mistake = diagnose(module, blank, func, check, args, kwargs, _budget(time.monotonic() - start))
+            mistake = diagnose(func, check, args, kwargs, _budget(time.monotonic() - start))
             if mistake is not None:
                 _add_to_message(error, f"{LEAD.format(blank=blank)} {mistake.hint}")
             raise
@@ -106,14 +105,20 @@ def diagnosed(check: Callable) -> Callable:
     return diagnosing_check
 
 
-def diagnose(module: str, blank: str, func: Callable, check: Callable, args: tuple = (), kwargs: dict | None = None,
+def _blank(check: Callable) -> str:
+    """The blank that the hidden test ``check_<blank>`` grades."""
+    return check.__name__.removeprefix("check_")
+
+
+def diagnose(func: Callable, check: Callable, args: tuple = (), kwargs: dict | None = None,
              budget_s: float = BUDGET_S) -> Mistake | None:
-    """The one catalogued mistake of ``blank`` whose results equal ``func``'s on every case that
-    ``check`` (the undecorated hidden test, called with ``args`` and ``kwargs``) tries, or None."""
+    """The one catalogued mistake of the blank that ``check`` grades (``check_<blank>``, the
+    undecorated hidden test in ``autograder.hidden_tests.<module>``, called with ``args`` and
+    ``kwargs``) whose results equal ``func``'s on every case that ``check`` tries, or None."""
     deadline = time.monotonic() + budget_s
     try:
         with _quiet():
-            return _diagnose(module, blank, func, check, args, kwargs or {}, deadline)
+            return _diagnose(func, check, args, kwargs or {}, deadline)
     except Exception:  # noqa: BLE001 (out of time, an unsupported result, a crash: no diagnosis, same score)
         return None
 
@@ -133,10 +138,11 @@ def mistake_function(reference: types.ModuleType, mistake: Mistake) -> Callable:
     return namespace[mistake.blank]
 
 
-def _diagnose(module, blank, func, check, args, kwargs, deadline) -> Mistake | None:
-    reference = importlib.import_module(f"solutions.{module}")
-    hidden = sys.modules[check.__module__]
-    mistakes = [m for m in importlib.import_module(f"autograder.mistakes.{module}").MISTAKES if m.blank == blank]
+def _diagnose(func, check, args, kwargs, deadline) -> Mistake | None:
+    blank, hidden = _blank(check), sys.modules[check.__module__]
+    lab = Lab(check.__module__.rpartition(".")[2].replace("_", "-"))
+    reference = lab.solutions()
+    mistakes = [m for m in catalogue(lab) if m.blank == blank]
     if not mistakes:
         return None
     calls = _record(check, getattr(reference, blank), blank, args, kwargs, deadline)

@@ -13,7 +13,7 @@ from pathlib import Path
 from nbgrader.api import Gradebook
 from nbgrader.plugins import ExportPlugin
 
-from autograder import grading, versions
+from autograder import grading
 from autograder.labs import ROOT, Lab
 
 
@@ -28,6 +28,5 @@ class GradesExport(ExportPlugin):
         labs = [Lab(a.name) for a in gradebook.assignments
                 if (ROOT / "source" / a.name).is_dir() and (not wanted or a.name in wanted)]
         rows = grading.read_grades(workdir, labs, [str(s) for s in self.student] or None)
-        grading.write_csv(rows, dest)
-        versions.record(dest)
+        grading.write_grades(rows, dest)
         self.log.info("Exported %d grade rows to %s", len(rows), dest)

@@ -125,6 +125,12 @@ FAULTS = (
 )
 
 
+def get(slug: str) -> Fault:
+    """The catalogued fault called ``slug``."""
+    [fault] = [f for f in FAULTS if f.slug == slug]
+    return fault
+
+
 def write_fault(fault: Fault, lab: Lab, blank: str, folder: Path) -> str:
     """Write ``fault`` in ``blank`` as a submission ``folder/<student>/<lab>/<file>``; the student id."""
     name, data = fault.build(lab, blank)

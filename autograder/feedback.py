@@ -21,6 +21,7 @@ from nbformat import NotebookNode
 from nbgrader.preprocessors import GetGrades
 
 from autograder import cells
+from course.checks import listed
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 """The kit's nbconvert templates."""
@@ -48,7 +49,7 @@ def _failed(cell: NotebookNode) -> bool:
 def cross_blank_note(blank: str, others_lost: list[str]) -> str:
     """What a test cell with full marks says when the visible check of its blank failed."""
     if others_lost:
-        named = " and ".join(others_lost) if len(others_lost) <= 2 else ", ".join(others_lost[:-1]) + f" and {others_lost[-1]}"
+        named = listed(others_lost)
         verb = "loses its" if len(others_lost) == 1 else "lose their"
         cause = (f"That check also ran your {named}, which {verb} marks in this notebook, "
                  "so fix that first: this check should then pass too.")
@@ -94,15 +95,11 @@ def regenerate(workdir: Path, out_csv: Path | None = None) -> list:
     grading written answers in formgrader. Returns the grade rows."""
     from nbgrader.converters import GenerateFeedback
 
-    from autograder import grading, versions
+    from autograder import grading
 
     labs = grading.all_graded_labs(workdir)
     for lab in labs:
-        result = grading._run(GenerateFeedback, workdir, lab)
-        if not result["success"]:
-            raise grading.GradingError(f"nbgrader generate_feedback failed for {lab.id}:\n{result.get('log', '')}{result['error']}")
+        grading.run_checked(GenerateFeedback, workdir, lab)
     rows = grading.read_grades(workdir, labs)
-    out_csv = out_csv or workdir / "grades.csv"
-    grading.write_csv(rows, out_csv)
-    versions.record(out_csv)
+    grading.write_grades(rows, out_csv or workdir / "grades.csv")
     return rows

@@ -37,6 +37,7 @@ from autograder.execute import GradingExecute
 from autograder.flag_cheating import FLAG
 from autograder.labs import ROOT, Lab
 from autograder.restore_cells import add_grader_notes, forget_grader_notes, grader_notes
+from course.checks import count
 
 
 # nbgrader 0.9.6 builds gradebook objects that SQLAlchemy 2 no longer adds to the session through
@@ -76,12 +77,22 @@ def _run(app_class: type, workdir: Path, lab: Lab, student: str = "*") -> dict:
     return capture_log(app)
 
 
+def run_checked(app_class: type, workdir: Path, lab: Lab) -> None:
+    """Run one nbgrader converter on every student of a lab; raise GradingError, with its log, if it fails."""
+    result = _run(app_class, workdir, lab)
+    if not result["success"]:
+        raise GradingError(f"nbgrader {app_class.__name__} failed for {lab.id}:\n{result.get('log', '')}{result['error']}")
+
+
 def generate_release(labs: list[Lab], workdir: Path = ROOT) -> None:
     """``nbgrader generate_assignment`` for each lab: writes ``workdir/release/`` and the gradebook."""
     for lab in labs:
-        result = _run(GenerateAssignment, workdir, lab)
-        if not result["success"]:
-            raise GradingError(f"nbgrader generate_assignment failed for {lab.id}:\n{result.get('log', '')}{result['error']}")
+        run_checked(GenerateAssignment, workdir, lab)
+
+
+def feedback_page(workdir: Path, lab_id: str, student: str) -> Path:
+    """Where nbgrader writes a student's feedback page on a lab in the course ``workdir``."""
+    return workdir / "feedback" / student / lab_id / f"{lab_id}.html"
 
 
 def check_kernel_has_reference() -> None:
@@ -295,6 +306,12 @@ def _notes_and_reasons(autograded: Path) -> tuple[tuple[str, ...], dict[str, str
     return tuple(grader_notes(nb)), reasons
 
 
+def write_grades(rows: list[GradeRow], path: Path) -> None:
+    """grades.csv (``write_csv``) and the record of the grading environment beside it (``versions.record``)."""
+    write_csv(rows, path)
+    versions.record(path)
+
+
 def write_csv(rows: list[GradeRow], path: Path) -> None:
     """One row per student and lab, one column per graded cell (empty: not in this lab, or not
     graded by hand yet), the late penalty, the total so far (less the penalty), and the total possible."""
@@ -378,8 +395,7 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
         print(f"Skipped {folder}: there is no lab called {folder.name}.")
     labs = [Lab(lab_id) for lab_id in sorted(known & {p.name for p in submissions.glob("*/*") if p.is_dir()})]
-    count = "1 lab" if len(labs) == 1 else f"{len(labs)} labs"
-    print(f"Setting up the course folder {workdir} for {count} (nbgrader generate_assignment).")
+    print(f"Setting up the course folder {workdir} for {count(len(labs), 'lab')} (nbgrader generate_assignment).")
     generate_release(labs, workdir)
     late.set_due_dates(labs, course_config(workdir))
     by_lab = import_submissions(submissions, workdir, labs)
@@ -387,22 +403,18 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     rows = read_grades(workdir, all_graded_labs(workdir))
     graded = {(row.student, row.lab) for row in rows}
     failures = {lab.id: [s for s in by_lab[lab.id] if (s, lab.id) not in graded] for lab in labs}
-    for lab_id, students in failures.items():
-        if students:
-            log_path = workdir / f"autograde-{lab_id}.log"
-            log_path.write_text(logs[lab_id])
-            count = "1 submission" if len(students) == 1 else f"{len(students)} submissions"
-            print(f"{count} of {lab_id} could not be graded; nbgrader's log is in {log_path}.")
     for lab in labs:
-        pages = [s for s in by_lab[lab.id] if (s, lab.id) in graded
-                 and not (workdir / "feedback" / s / lab.id / lab.notebook_name.replace(".ipynb", ".html")).exists()]
-        if pages:
+        pages = [s for s in by_lab[lab.id] if (s, lab.id) in graded and not feedback_page(workdir, lab.id, s).exists()]
+        if failures[lab.id] or pages:
             log_path = workdir / f"autograde-{lab.id}.log"
             log_path.write_text(logs[lab.id])
-            count = "1 graded submission" if len(pages) == 1 else f"{len(pages)} graded submissions"
-            print(f"No feedback page was written for {count} of {lab.id}; nbgrader's log is in {log_path}.")
-    write_csv(rows, out_csv or workdir / "grades.csv")
-    versions.record(out_csv or workdir / "grades.csv")
+        if failures[lab.id]:
+            print(f"{count(len(failures[lab.id]), 'submission')} of {lab.id} could not be graded; "
+                  f"nbgrader's log is in {log_path}.")
+        if pages:
+            print(f"No feedback page was written for {count(len(pages), 'graded submission')} of {lab.id}; "
+                  f"nbgrader's log is in {log_path}.")
+    write_grades(rows, out_csv or workdir / "grades.csv")
     print_table(rows, failures)
     print(f"Grades: {out_csv or workdir / 'grades.csv'}. Feedback: {workdir / 'feedback'}.")
     return rows

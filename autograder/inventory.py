@@ -5,11 +5,13 @@ from __future__ import annotations
 import ast
 import importlib
 import textwrap
+from collections import Counter
 from dataclasses import dataclass
 
 from autograder import cells, claims
 from autograder.labs import Lab
 from autograder.mistakes import catalogue
+from course.checks import count
 
 CHECK_HELPERS = {"check_array", "check_close", "check_pair", "check_symmetric"}
 
@@ -75,18 +77,20 @@ def inventory(lab: Lab) -> Inventory:
     written = [c for c in nb.cells if cells.is_answer(c) and c.cell_type == "markdown"]
     visible = [c for c in nb.cells if "nbgrader" in c.metadata and cells.grade_id(c).startswith("check_")]
     hidden = importlib.import_module(f"autograder.hidden_tests.{lab.module}")
+    blank_points = {name: points[f"test_{name}"] for name in blanks}
+    mistakes = Counter(m.blank for m in catalogue(lab))
     return Inventory(
         lab=lab.id,
         blanks=len(blanks),
-        blank_points={name: points[f"test_{name}"] for name in blanks},
-        blank_mistakes={name: sum(m.blank == name for m in catalogue(lab)) for name in blanks},
-        autograded_points=sum(points[f"test_{name}"] for name in blanks),
+        blank_points=blank_points,
+        blank_mistakes={name: mistakes[name] for name in blanks},
+        autograded_points=sum(blank_points.values()),
         written_answers=len(written),
         written_points=sum(points[cells.grade_id(c)] for c in written),
         visible_checks=sum(_helper_calls("\n".join(l for l in c.source.splitlines() if not l.startswith("%"))) for c in visible),
         hidden_tests=len(blanks),
         hidden_assertions=_assertions_on_reference(lab, hidden, blanks),
-        mistakes=len(catalogue(lab)),
+        mistakes=sum(mistakes.values()),
         claims={cid: c.summary for cid, c in claims.checks(lab).items()},
     )
 
@@ -111,7 +115,7 @@ def print_inventory(labs: list[Lab]) -> None:
         name_w = max(len(name) for name in i.blank_points)
         for name, points in i.blank_points.items():
             mistakes = i.blank_mistakes[name]
-            print(f"  {name:<{name_w}}  {points:>4g} pt  {mistakes} {'mistake' if mistakes == 1 else 'mistakes'}")
+            print(f"  {name:<{name_w}}  {points:>4g} pt  {count(mistakes, 'mistake')}")
         print(f"Claims that {i.lab} states, each recomputed by a check (autograder/claims/):")
         for cid, summary in i.claims.items():
             print(textwrap.fill(f"{cid}: {summary}", 100, initial_indent="  ", subsequent_indent="      ",

@@ -55,6 +55,13 @@ def cheat_outcome(lab: Lab, cheat: Cheat) -> Outcome:
                    only=False, flagged=bool(cheat.caught_by & {STATIC, RUNTIME}))
 
 
+def honest_outcome(student: str, wrong: str | None) -> Outcome:
+    """The solved notebook (``wrong`` None), or a catalogued mistake in the blank ``wrong``, which
+    loses that blank's test and nothing else; neither is flagged."""
+    return Outcome(student, SOLVED if wrong is None else MISTAKE, () if wrong is None else (f"test_{wrong}",),
+                   only=True, flagged=False)
+
+
 def fault_outcome(lab: Lab, fault: faults.Fault, blank: str) -> Outcome:
     """A fault in ``blank`` costs what the catalogue says and nothing else; it is never flagged."""
     zero = {faults.ALL: None, "blank": (f"test_{blank}",), None: ()}[fault.loses]
@@ -72,13 +79,12 @@ def write(lab: Lab, size: int, folder: Path) -> list[Outcome]:
     for cheat in cheats.catalogue(lab):
         submissions.write(cheat.notebook(lab), folder, cheat.name, lab)
         outcomes.append(cheat_outcome(lab, cheat))
-    honest = itertools.cycle([(SOLVED, submissions.solved(lab), None)]
-                             + [(MISTAKE, submissions.with_mistake(lab, m), m.blank) for m in mistake_catalogue(lab)])
+    honest = itertools.cycle([(submissions.solved(lab), None)]
+                             + [(submissions.with_mistake(lab, m), m.blank) for m in mistake_catalogue(lab)])
     for k in range(size - len(outcomes)):
-        kind, nb, wrong = next(honest)
+        nb, wrong = next(honest)
         submissions.write(nb, folder, f"student{k:03d}", lab)
-        outcomes.append(Outcome(f"student{k:03d}", kind, () if wrong is None else (f"test_{wrong}",),
-                                only=True, flagged=False))
+        outcomes.append(honest_outcome(f"student{k:03d}", wrong))
     return outcomes
 
 

@@ -26,16 +26,15 @@ class NotWrittenYet(Exception):
 
 def require(*functions: Callable) -> None:
     """Stop a cell early, with a clear message, if a blank it needs is not written yet."""
-    if _cell["checks"] is not None or _hooks_installed():
+    if _hooks_installed():
         _cell["uses"].extend(getattr(f, "__name__", "") for f in functions)
     missing = [f.__name__ for f in functions if NOT_WRITTEN in getattr(getattr(f, "__code__", None), "co_consts", ())]
     if missing:
-        names = [f"{name}()" for name in missing]
-        listed = names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
-        it, its, cell = ("it", "its", "cell") if len(names) == 1 else ("them", "their", "cells")
+        w = _agreeing(len(missing))
         raise NotWrittenYet(
-            f"This cell needs {listed}, which you have not written yet. Write {it} in {its} {cell} above "
-            f"(replace the line that raises NotImplementedError), run {it}, then run this cell again."
+            f"This cell needs {listed([f'{name}()' for name in missing])}, which you have not written yet. Write "
+            f"{w['it']} in {w['its']} {w['cell']} above (replace the line that raises NotImplementedError), run "
+            f"{w['it']}, then run this cell again."
         )
 
 
@@ -117,15 +116,12 @@ def is_plural(name: str) -> bool:
     return head.isalpha() and head.islower() and head.endswith("s") and not head.endswith(_SINGULAR_ENDINGS)
 
 
-def count(n: int, noun: str, plural: str | None = None) -> str:
+def count(n: int, noun: str) -> str:
     """"1 fix", "2 fixes": a number with its noun in agreement (the last word is made plural)."""
     if n == 1:
         return f"{n} {noun}"
-    if plural is None:
-        *first, last = noun.split(" ")
-        last = last + ("es" if last.endswith(("s", "x", "ch", "sh")) else "s")
-        plural = " ".join([*first, last])
-    return f"{n} {plural}"
+    *first, last = noun.split(" ")
+    return " ".join([f"{n}", *first, last + ("es" if last.endswith(("s", "x", "ch", "sh")) else "s")])
 
 
 def check_symmetric(matrix: Any, name: str, hint: str = "") -> None:
@@ -187,7 +183,7 @@ def _grading() -> bool:
     return os.environ.get("NBGRADER_EXECUTION") == GRADING
 
 
-def _listed(names: list[str]) -> str:
+def listed(names: list[str]) -> str:
     """'a', 'a and b', 'a, b and c'."""
     return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
 
@@ -218,11 +214,16 @@ def _not_passing(names: list[str]) -> list[str]:
     return [name for name in dict.fromkeys(names) if not _passes(name)]
 
 
+def _agreeing(n: int) -> dict[str, str]:
+    """The words that agree with ``n`` blanks: "it ... its cell ... does ... that", or "them ... their cells ... do ... those"."""
+    one = n == 1
+    return {"it": "it" if one else "them", "its": "its" if one else "their", "cell": "cell" if one else "cells",
+            "does": "does" if one else "do", "that": "that" if one else "those"}
+
+
 def _upstream(names: list[str]) -> dict[str, str]:
     """The words that agree with a list of blanks: "your kupdate, which does ... its", or "... do ... their"."""
-    one = len(names) == 1
-    return {"your": "your " + _listed(names), "does": "does" if one else "do", "its": "its" if one else "their",
-            "that": "that" if one else "those", "cell": "cell" if one else "cells"}
+    return {"your": "your " + listed(names), **_agreeing(len(names))}
 
 
 def validate(function: Callable) -> None:
@@ -330,7 +331,7 @@ def explain(error: BaseException, tb: Any, blanks: list[str]) -> str | None:
     name = code.co_name
     at = f"at the line `{raising}` of {inner.f_code.co_name}" if raising else f"in {inner.f_code.co_name}"
     during = ""
-    if caller and inside[0] > 0:
+    if caller:
         frame = calls[inside[0] - 1][0]
         place = ("this cell" if frame.f_code.co_name == "<module>" and frame.f_globals.get("__name__") == "__main__"
                  else f"{frame.f_code.co_name} ({frame.f_globals.get('__name__')})")
@@ -344,11 +345,10 @@ def explain(error: BaseException, tb: Any, blanks: list[str]) -> str | None:
 
 
 def _shell() -> Any:
-    try:
-        from IPython import get_ipython
-    except ImportError:  # not in IPython: no hooks, no namespace
-        return None
-    return get_ipython()
+    """The running IPython shell, or None. A shell exists only once IPython is imported, so a plain
+    Python process (the grader, pytest) never imports IPython for this."""
+    ipython = sys.modules.get("IPython")
+    return ipython.get_ipython() if ipython is not None else None
 
 
 def _before_cell(info: Any) -> None:
@@ -401,8 +401,10 @@ def _hooks_installed() -> bool:
 
 
 def _install() -> None:
+    if _grading():
+        return
     shell = _shell()
-    if shell is None or _grading() or getattr(shell, "_course_checks_installed", False):
+    if shell is None or getattr(shell, "_course_checks_installed", False):
         return
     shell.events.register("pre_run_cell", _before_cell)
     shell.set_custom_exc((Exception,), _explain_failure)

@@ -286,13 +286,19 @@ PF_ERRORS_FILE = "nonlinear_filters_pf_errors.records.npz"
 are computed from, shipped so that tests can check the results without rerunning the particle filter."""
 
 
+def pf_records(errors: dict[str, dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """The particle filter's errors of each batch that runs it (batch name -> (runs, K, 3)), from the
+    errors of every filter by batch: what PF_ERRORS_FILE holds."""
+    return {name: by_filter["pf"] for name, by_filter in errors.items() if "pf" in by_filter}
+
+
 def write_data(directory: Path) -> list[Path]:
     """Build the shipped Monte Carlo results from DATA_SEED, and the particle filter's errors, into ``directory``."""
     errors = {batch.name: batch.errors() for batch in batches()}
     path = Path(directory) / air_traffic.DATA_FILE.name
     path.write_text(results_text(results_from_errors(errors)))
     records = Path(directory) / PF_ERRORS_FILE
-    write_npz(records, {name: by_filter["pf"] for name, by_filter in errors.items() if "pf" in by_filter})
+    write_npz(records, pf_records(errors))
     return [path, records]
 
 

@@ -67,7 +67,7 @@ def test_the_feedback_shows_each_flag_as_written(graded, request):
     if any(cheat.name == "dunder-import-reference" for _, cheat in request.module.CASES):
         assert any("__import__" in flag for row in flagged for flag in row.flags)
     for row in flagged:
-        page = (workdir / "feedback" / row.student / row.lab / f"{row.lab}.html").read_text()
+        page = grading.feedback_page(workdir, row.lab, row.student).read_text()
         text = html.unescape(re.sub(r"<[^>]*>", "", page))
         for flag in row.flags:
             assert f"{FLAG} {flag}" in text, (row.student, flag)

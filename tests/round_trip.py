@@ -105,7 +105,7 @@ def test_feedback_shows_messages_but_not_hidden_tests(graded) -> None:
     reason each lost cell lost its points is on the page."""
     rows, workdir = graded
     for (student, lab_id), row in rows.items():
-        page = (workdir / "feedback" / student / lab_id / f"{lab_id}.html").read_text()
+        page = grading.feedback_page(workdir, lab_id, student).read_text()
         text = html.unescape(re.sub(r"<[^>]*>", "", page))
         assert not HIDDEN_CODE.search(text), (student, HIDDEN_CODE.search(text))
         blanks = cells.blank_names(cells.read(Lab(lab_id).source_notebook))

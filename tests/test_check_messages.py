@@ -4,8 +4,6 @@ catalogued mistake; and an exception raised inside a student's function is expla
 from __future__ import annotations
 
 import re
-import sys
-import traceback
 
 import matplotlib
 import numpy as np
@@ -62,7 +60,7 @@ def _message(error: BaseException, blank: str) -> str:
 
 
 @over_labs
-def test_visible_check_messages_of_every_mistake_read_as_sentences(lab: Lab, monkeypatch, tmp_path):
+def test_visible_check_messages_of_every_mistake_read_as_sentences(lab: Lab, monkeypatch):
     """Runs the solved notebook's cells (not the graded ones) in this process and, before each
     blank's visible checks, each catalogued mistake of that blank with them."""
     matplotlib.use("Agg")
@@ -96,12 +94,6 @@ def test_visible_check_messages_of_every_mistake_read_as_sentences(lab: Lab, mon
 
 
 def test_an_exception_inside_a_blank_names_the_call_its_inputs_and_a_likely_cause():
-    def gain_information_form(B, H, R):
-        B_inv = np.linalg.inv(B)
-        RinvH = np.linalg.solve(R, H)
-        return np.linalg.solve(B_inv - H.T @ RinvH, RinvH.T)  # the sign error
-
-    gain_information_form.__globals__["__name__"]  # defined in this module, not __main__
     namespace = {"__name__": "__main__", "np": np}
     exec(compile(
         "def gain_information_form(B, H, R):\n"

@@ -7,7 +7,6 @@ nbgrader, on the function each catalogued mistake defines (the notebook's model 
 mistake's edit). The grading round trip shows the same messages in the feedback.
 """
 
-import importlib
 import inspect
 import re
 import sys
@@ -20,6 +19,7 @@ from autograder import cells, diagnosis
 from autograder.diagnosis import LEAD, diagnose, diagnosed, mistake_function
 from autograder.labs import all_labs
 from autograder.mistakes import Mistake, catalogue
+from lab_code import define, hidden_tests
 from over_labs import LABS, over_labs
 from random_draws import random_draws
 
@@ -28,20 +28,8 @@ MINIMUM_RATE = 1.0
 with a reason: a mistake the diagnosis cannot tell from another on the hidden cases."""
 
 
-def _hidden(lab):
-    return importlib.import_module(f"autograder.hidden_tests.{lab.module}")
-
-
 def _answers(lab) -> dict[str, str]:
     return cells.model_answers(cells.read(lab.source_notebook))
-
-
-def _define(lab, code: str, name: str):
-    """The function ``name`` that ``code`` defines, in the reference module's namespace, as a
-    student's answer cell would define it."""
-    namespace = dict(vars(lab.solutions()))
-    exec(compile(code, f"<answer {name}>", "exec"), namespace)
-    return namespace[name]
 
 
 def _message(error: BaseException) -> str:
@@ -51,7 +39,7 @@ def _message(error: BaseException) -> str:
 def _named(lab, blank: str, function) -> list[str]:
     """The slugs of the mistakes of ``blank`` whose hints the failing hidden test's message gives."""
     try:
-        getattr(_hidden(lab), f"check_{blank}")(function)
+        getattr(hidden_tests(lab), f"check_{blank}")(function)
     except Exception as error:  # noqa: BLE001 (every failure has a message to read)
         message = _message(error)
     else:
@@ -65,7 +53,7 @@ def _diagnoses() -> tuple[tuple[str, str, tuple[str, ...]], ...]:
     for lab in all_labs():
         answers = _answers(lab)
         for mistake in catalogue(lab):
-            wrong = _define(lab, mistake.apply(answers[mistake.blank]), mistake.blank)
+            wrong = define(lab, mistake.apply(answers[mistake.blank]), mistake.blank)
             rows.append((lab.id, f"{mistake.blank}/{mistake.slug}", tuple(_named(lab, mistake.blank, wrong))))
     return tuple(rows)
 
@@ -91,11 +79,11 @@ def test_the_reference_and_the_model_answers_are_never_diagnosed(lab):
     """A correct answer passes, so it is never diagnosed in grading; here the diagnosis is asked
     directly, as if the check had failed, and must find no mistake for the reference function or
     for the notebook's model answer (no mistake behaves like the right answer on the hidden cases)."""
-    hidden, reference, answers = _hidden(lab), lab.solutions(), _answers(lab)
+    hidden, reference, answers = hidden_tests(lab), lab.solutions(), _answers(lab)
     for blank in cells.blank_names(cells.read(lab.source_notebook)):
         check = getattr(hidden, f"check_{blank}").__wrapped__
-        for function in (getattr(reference, blank), _define(lab, answers[blank], blank)):
-            assert diagnose(lab.module, blank, function, check, budget_s=120) is None, blank
+        for function in (getattr(reference, blank), define(lab, answers[blank], blank)):
+            assert diagnose(function, check, budget_s=120) is None, blank
 
 
 @over_labs
@@ -103,7 +91,7 @@ def test_every_hidden_test_is_diagnosed_and_every_mistake_has_a_hint(lab):
     """Every blank's check carries the diagnosis; every mistake has a hint that is whole sentences
     to the student, found nowhere in another mistake's hint of the same blank, and its model-answer
     function can be built from the reference's source."""
-    hidden = _hidden(lab)
+    hidden = hidden_tests(lab)
     for blank in cells.blank_names(cells.read(lab.source_notebook)):
         assert getattr(getattr(hidden, f"check_{blank}"), "diagnosed_blank", None) == blank, (
             f"check_{blank} is not decorated with @diagnosed")
@@ -122,9 +110,9 @@ def test_a_diagnosed_message_keeps_the_hidden_tests_message_and_adds_the_hint():
     one line."""
     lab = next(lab for lab in LABS if lab.id == "train-kf")
     mistake = next(m for m in catalogue(lab) if m.slug == "innovation-sign")
-    wrong = _define(lab, mistake.apply(_answers(lab)["kupdate"]), "kupdate")
+    wrong = define(lab, mistake.apply(_answers(lab)["kupdate"]), "kupdate")
     with pytest.raises(AssertionError) as caught:
-        _hidden(lab).check_kupdate(wrong)
+        hidden_tests(lab).check_kupdate(wrong)
     message, lead = str(caught.value), LEAD.format(blank="kupdate")
     assert message.startswith("x_a on a random case") and "is not right" in message, message
     assert message.endswith(f". {lead} {mistake.hint}") and "\n" not in message, message
@@ -170,7 +158,7 @@ def test_a_match_is_within_the_tight_tolerance_only(scale, named, monkeypatch, s
     def twice(x):
         return scale * x
 
-    assert (diagnose("toy", "twice", twice, check_twice) is not None) is named
+    assert (diagnose(twice, check_twice) is not None) is named
     with pytest.raises(AssertionError) as caught:
         diagnosed(check_twice)(twice)
     assert str(caught.value).startswith("twice is not right.")
@@ -183,6 +171,6 @@ def test_two_mistakes_that_match_give_no_diagnosis(monkeypatch, seed):
     neither rather than guess."""
     same = Mistake("twice", "three-again", "3 x, written otherwise", "2.0 * x", "x * 3.0", hint="Your twice is 3 x.")
     check_twice = _toy_lab(monkeypatch, (THREE, same), seed)
-    assert diagnose("toy", "twice", lambda x: 3.0 * x, check_twice) is None
+    assert diagnose(lambda x: 3.0 * x, check_twice) is None
     check_twice = _toy_lab(monkeypatch, (THREE,), seed)
-    assert diagnose("toy", "twice", lambda x: 3.0 * x, check_twice) is THREE
+    assert diagnose(lambda x: 3.0 * x, check_twice) is THREE

@@ -36,7 +36,7 @@ def graded(tmp_path_factory):
 
 
 def page(workdir) -> str:
-    return (workdir / "feedback" / STUDENT / LAB.id / LAB.notebook_name.replace(".ipynb", ".html")).read_text()
+    return grading.feedback_page(workdir, LAB.id, STUDENT).read_text()
 
 
 def panel_heading(text: str, grade_id: str) -> str:

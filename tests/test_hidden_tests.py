@@ -6,7 +6,6 @@ This is the fast twin of the grading round trip (tests/round_trip.py): it runs e
 """
 
 import ast
-import importlib
 import inspect
 import re
 import traceback
@@ -18,22 +17,8 @@ import pytest
 from autograder import cells
 from autograder.mistakes import catalogue
 from course.checks import check_close
+from lab_code import answer_file, define, hidden_tests
 from over_labs import LABS, over_labs
-
-
-def _hidden(lab):
-    return importlib.import_module(f"autograder.hidden_tests.{lab.module}")
-
-
-def _answer_file(name: str) -> str:
-    return f"<answer {name}>"
-
-
-def _define(lab, code: str, name: str):
-    """The function ``name`` that ``code`` defines, in the reference module's namespace."""
-    namespace = dict(vars(lab.solutions()))
-    exec(compile(code, _answer_file(name), "exec"), namespace)
-    return namespace[name]
 
 
 # -- smoke tests: they fail only if a check crashes or rejects the reference ----------------------------
@@ -44,7 +29,7 @@ def test_smoke_every_check_runs_and_accepts_the_reference(lab):
     blank has a check, and it runs to the end on the reference function."""
     reference = lab.solutions()
     for name in cells.blank_names(cells.read(lab.source_notebook)):
-        getattr(_hidden(lab), f"check_{name}")(getattr(reference, name))
+        getattr(hidden_tests(lab), f"check_{name}")(getattr(reference, name))
 
 
 @over_labs
@@ -53,7 +38,7 @@ def test_smoke_every_check_accepts_the_model_answer_as_the_notebook_defines_it(l
     passes (it differs from the reference module only by where it is defined)."""
     answers = cells.model_answers(cells.read(lab.source_notebook))
     for name in cells.blank_names(cells.read(lab.source_notebook)):
-        getattr(_hidden(lab), f"check_{name}")(_define(lab, answers[name], name))
+        getattr(hidden_tests(lab), f"check_{name}")(define(lab, answers[name], name))
 
 
 # -- the mistakes -----------------------------------------------------------------------------------------
@@ -71,12 +56,15 @@ def test_each_blank_has_at_least_two_catalogued_mistakes(lab):
 MISTAKES = [(lab, m) for lab in LABS for m in catalogue(lab)]
 
 
-def _failure(lab, mistake) -> BaseException | None:
-    """What the blank's hidden test raises on the mistaken answer (None: it passes it)."""
+def _failure(lab, mistake, diagnosis: bool = True) -> BaseException | None:
+    """What the blank's hidden test raises on the mistaken answer (None: it passes it), with the
+    diagnosis's hint in its message, or without running the diagnosis (which re-raises the same
+    exception: tests/test_diagnosis.py tests what it adds)."""
     answer = cells.model_answers(cells.read(lab.source_notebook))[mistake.blank]
-    wrong = _define(lab, mistake.apply(answer), mistake.blank)
+    wrong = define(lab, mistake.apply(answer), mistake.blank)
+    check = getattr(hidden_tests(lab), f"check_{mistake.blank}")
     try:
-        getattr(_hidden(lab), f"check_{mistake.blank}")(wrong)
+        (check if diagnosis else check.__wrapped__)(wrong)
     except Exception as error:  # noqa: BLE001 (which exception it is, is what the test checks)
         return error
     return None
@@ -87,7 +75,7 @@ def test_each_mistake_fails_its_blanks_hidden_tests_as_catalogued(lab, mistake):
     """A wrong answer fails with the hidden test's AssertionError, raised by the test, not by the
     student's code; a mistake catalogued with ``raises=`` another exception crashes the student's
     function with it. A check that crashes on its own (a TypeError in the test) fails this test."""
-    error = _failure(lab, mistake)
+    error = _failure(lab, mistake, diagnosis=False)
     assert error is not None, f"{mistake.student_id(lab)} passes the hidden test of {mistake.blank}"
     where = [frame.filename for frame in traceback.extract_tb(error.__traceback__)]
     described = f"{type(error).__name__}: {error}"
@@ -95,10 +83,10 @@ def test_each_mistake_fails_its_blanks_hidden_tests_as_catalogued(lab, mistake):
         f"{mistake.student_id(lab)} should fail with {mistake.raises.__name__} (its catalogue entry), "
         f"but the hidden test raised {described}")
     if mistake.raises is AssertionError:
-        assert where[-1] != _answer_file(mistake.blank), f"the student's code raised it, not the hidden test: {described}"
+        assert where[-1] != answer_file(mistake.blank), f"the student's code raised it, not the hidden test: {described}"
         assert str(error).strip(), "the hidden test failed without a message for the student"
     else:
-        assert _answer_file(mistake.blank) in where, f"raised outside the student's function: {described}"
+        assert answer_file(mistake.blank) in where, f"raised outside the student's function: {described}"
 
 
 # -- the hidden tests hide the reference's values -----------------------------------------------------------
@@ -114,7 +102,7 @@ def _show_expected_parameter(function) -> bool:
 def test_every_comparison_in_the_hidden_tests_hides_the_expected_values(lab):
     """Every call of a helper that can print the expected values (it has ``show_expected``) passes
     ``show_expected=False`` literally: feedback shows the message to the student."""
-    module = _hidden(lab)
+    module = hidden_tests(lab)
     tree = ast.parse(inspect.getsource(module))
     calls = 0
     for node in ast.walk(tree):

@@ -36,6 +36,7 @@ from autograder import cells, cheats, integrity, submissions
 from autograder.integrity import INTEGRITY_SETUP, PROBE_NAME, RUNTIME_PROBE, Finding, runtime_findings
 from autograder.labs import ROOT, Lab, get_lab
 from autograder.mistakes import catalogue as mistakes
+from course.checks import GRADING
 from over_labs import LABS, over_labs
 
 TRAIN = get_lab("train-kf")
@@ -139,7 +140,8 @@ async def _execute(nb: NotebookNode, lab: Lab, course: Path) -> Run:
 
 
 def execute_all(jobs: dict[str, tuple[NotebookNode, Lab, Path]]) -> dict[str, Run]:
-    """Run every job, ``PARALLEL`` kernels at a time."""
+    """Run every job, ``PARALLEL`` kernels at a time, as ``nbgrader autograde`` runs its kernels
+    (NBGRADER_EXECUTION: course.checks then installs no hooks, and validate() does nothing)."""
     async def main():
         gate = asyncio.Semaphore(PARALLEL)
 
@@ -149,7 +151,8 @@ def execute_all(jobs: dict[str, tuple[NotebookNode, Lab, Path]]) -> dict[str, Ru
 
         return dict(await asyncio.gather(*(one(name, *job) for name, job in jobs.items())))
 
-    return asyncio.run(main())
+    with setenv(NBGRADER_EXECUTION=GRADING):
+        return asyncio.run(main())
 
 
 HONEST_HABITS = '''%timeit -n 3 -r 1 predict(np.zeros(2), np.eye(2), np.eye(2), np.eye(2))
@@ -309,9 +312,7 @@ def runs(course: Path) -> dict[str, Run]:
             continue
         jobs[f"overwrite/{cheat.name}"] = (trimmed(restored, TRAIN), TRAIN, course)
     before = (course / "gradebook.db").read_bytes()
-    # as `nbgrader autograde` runs its kernels: course.checks then installs no hooks and validate() does nothing
-    with setenv(NBGRADER_EXECUTION="autograde"):
-        results = execute_all(jobs)
+    results = execute_all(jobs)
     results["gradebook-bytes"] = (before, (course / "gradebook.db").read_bytes())  # type: ignore[assignment]
     results.update(broken)  # type: ignore[arg-type]
     return results

@@ -23,6 +23,7 @@ from scipy import stats
 from scipy.integrate import solve_ivp
 from scipy.special import gammaln
 
+from autograder.diagnosis import mistake_function
 from autograder.hidden_tests import reentry_pf as checks
 from autograder.mistakes.reentry_pf import MISTAKES
 from course import falling_object as fo
@@ -41,10 +42,7 @@ def scalar_rhs(h: float, v: float, beta: float) -> list[float]:
 
 def mistaken(mistake) -> object:
     """The reference function of ``mistake.blank`` with the mistake made in its source."""
-    source = textwrap.dedent(inspect.getsource(getattr(ref, mistake.blank)))
-    namespace = dict(vars(ref))
-    exec(compile(mistake.apply(source), f"<mistake {mistake.slug}>", "exec"), namespace)
-    return namespace[mistake.blank]
+    return mistake_function(ref, mistake)
 
 
 def load_benchmark():

@@ -9,7 +9,6 @@ from __future__ import annotations
 
 import copy
 import os
-import subprocess
 import sys
 import tomllib
 
@@ -20,6 +19,7 @@ from autograder import cells
 from autograder.bundle import student_pyproject, write_bundle
 from autograder.labs import ROOT, get_lab
 from autograder.leaks import find_leaks
+from importable import importable
 
 LAB = get_lab("train-kf")
 
@@ -43,7 +43,4 @@ def test_no_hidden_package_is_installed_here_or_in_the_bundle(tmp_path):
     assert (bundle / "pyproject.toml").read_text() == student_pyproject((ROOT / "pyproject.toml").read_text())
     assert find_leaks(bundle) == []
     # this environment, outside the course root and without PYTHONPATH, as a kernel started elsewhere
-    env = {name: value for name, value in os.environ.items() if name != "PYTHONPATH"}
-    probe = "import importlib.util as u; print([u.find_spec(m) is None for m in ('solutions', 'autograder', 'course')])"
-    out = subprocess.run([sys.executable, "-c", probe], cwd=tmp_path, env=env, capture_output=True, text=True, check=True)
-    assert out.stdout.strip() == "[True, True, False]", out.stdout
+    assert importable(sys.executable, tmp_path) == {"solutions": False, "autograder": False, "course": True}

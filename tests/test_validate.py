@@ -5,7 +5,6 @@ on the solved one. It runs nbgrader's own Validator on the release notebooks."""
 from __future__ import annotations
 
 import nbformat
-import pytest
 from nbgrader.validator import Validator
 
 from autograder import cells, submissions
