@@ -10,16 +10,16 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parent
 
-# The grading kernel must import the hidden reference package `solutions` and the hidden-test
-# helpers in `autograder`, which live here and are never installed. Kernels inherit this variable.
-# The autograder's preprocessors are imported from here too.
+# The grader's process imports the autograder's preprocessors, the hidden tests and the reference
+# `solutions` from here; they are never installed. Grading kernels do not get this path: the hidden
+# tests compare in the grader's process (autograder/compare.py), and the kernel needs only `course`.
 sys.path.insert(0, str(ROOT))
-os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p)
 # nbgrader runs `alembic` to create a gradebook; find it beside this Python even in an environment
 # that was not activated (`.venv/bin/python -m autograder ...`).
 os.environ["PATH"] = os.pathsep.join((os.path.dirname(sys.executable), os.environ.get("PATH", "")))
 
 from autograder.execute import GradingExecute  # noqa: E402
+from autograder.sandbox_kernel import SandboxedKernelManager  # noqa: E402
 from autograder.flag_cheating import FlagCheating  # noqa: E402
 from autograder.restore_cells import RestoreLabCells  # noqa: E402
 from course.checks import NOT_WRITTEN  # noqa: E402
@@ -52,11 +52,15 @@ if os.environ.get("GRADEBOOK_URL"):
 c.ClearSolutions.code_stub = {"python": f'# YOUR CODE HERE\nraise NotImplementedError("{NOT_WRITTEN}")'}
 c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
 
-# Grading. A deleted or edited test cell is restored from the gradebook before grading. The kernel
-# must import `solutions` (GradingExecute refuses to grade otherwise), and each kernel is capped:
+# Grading. A deleted or edited test cell is restored from the gradebook before grading. The grader
+# must import the hidden tests (GradingExecute refuses to grade otherwise), and each kernel is capped:
 # memory, time per cell, time per submission, output per cell. A kernel that dies or hangs is
 # restarted and the cells before the fatal one are replayed (see autograder/execute.py).
 c.OverwriteCells.add_missing_cells = True
+# Each grading kernel runs in the sandbox (autograder/sandbox.py): it reads only the Python
+# installation and course/, writes only its submission's folder and a private one, and has no
+# network. Where the OS cannot sandbox, grading runs anyway and says so (KIT_SANDBOX=off turns it off).
+c.GradingExecute.kernel_manager_class = SandboxedKernelManager
 # GRADING_CELL_TIMEOUT lowers the time per cell, e.g. for the tests' deliberately stuck submissions.
 c.Execute.timeout = int(os.environ.get("GRADING_CELL_TIMEOUT", "30"))
 c.GradingExecute.memory_limit_gb = 4.0

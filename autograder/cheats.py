@@ -5,8 +5,11 @@ or the blank release) into a dishonest one. ``tests/test_integrity.py`` checks t
 the way its entry says:
 
 - ``static``: ``integrity.static_findings`` flags it before execution;
-- ``runtime``: the kernel's integrity monitor reports it (``RUNTIME_PROBE`` after a test cell),
-  and refuses the worst operations outright;
+- ``grader``: the hidden tests compare in the grader's process (autograder/compare.py), so what it
+  does to the kernel (patched NumPy or helpers, swallowed errors, an object that equals anything,
+  a search of the kernel's memory or stack) cannot change a verdict, and it earns nothing unflagged;
+- ``sandbox``: the grading kernel cannot read the reference's files or write outside its folder
+  (autograder/sandbox.py), so it fails where it reaches for them;
 - ``overwrite``: the sanitize step (RestoreLabCells, then nbgrader's OverwriteCells) restores the
   test cells it edited or deleted, so it gains nothing and needs no flag. (``retag-test-cell``, a
   test cell given an unknown grade_id, makes nbgrader 0.9.6's OverwriteCells fail instead: the
@@ -40,7 +43,7 @@ from autograder.labs import Lab
 from autograder.mistakes import Mistake
 from autograder.mistakes import catalogue as mistake_catalogue
 
-STATIC, RUNTIME, OVERWRITE, HIDDEN_TESTS = "static", "runtime", "overwrite", "hidden-tests"
+STATIC, GRADER, SANDBOX, OVERWRITE, HIDDEN_TESTS = "static", "grader", "sandbox", "overwrite", "hidden-tests"
 
 
 @dataclass(frozen=True)
@@ -187,14 +190,18 @@ return sys.modules["solutions.{module}"].{blank}({call})
 """)
 _SYS_PATH = _replace_answer("return {blank}_reference({call})", before="""import os
 import sys
-sys.path.insert(0, os.environ["PYTHONPATH"].split(os.pathsep)[0])
+
+import course
+
+sys.path.insert(0, os.path.dirname(os.path.dirname(course.__file__)))  # the course root
 from solutions.{module} import {blank} as {blank}_reference
 
 
 """)
 _OPEN_EXEC = _replace_answer("""
 import os
-root = os.environ["PYTHONPATH"].split(os.pathsep)[0]
+import course
+root = os.path.dirname(os.path.dirname(course.__file__))
 namespace = {{"__name__": "reference"}}
 with open(os.path.join(root, "solutions", "{module}.py")) as handle:
     exec(handle.read(), namespace)
@@ -362,6 +369,14 @@ with open("../../other-student/{module}/notes.txt", "w") as handle:
 _SHELL_COMMAND = _added_cell("""\
 !cp ../../other-student/*/*.ipynb .
 """, plant=False)
+_SYMLINK = _added_cell("""\
+import glob
+import os
+
+for name in glob.glob("*.ipynb"):  # nbgrader writes the graded notebook here after the kernel stops
+    os.remove(name)
+    os.symlink(os.path.abspath(os.path.join("..", "..", "..", "gradebook.db")), name)
+""", plant=False)
 
 # -- test cells -------------------------------------------------------------------------------------
 
@@ -401,54 +416,56 @@ def _hardcode_visible(lab: Lab) -> NotebookNode:
 
 CHEATS: tuple[Cheat, ...] = (
     Cheat("import-reference", "reaching the reference through `import`: the answer calls solutions.<lab>",
-          "blank", frozenset({STATIC, RUNTIME}), _IMPORT, exact=True),
+          "blank", frozenset({STATIC, SANDBOX}), _IMPORT, exact=True),
     Cheat("importlib-reference", "reaching the reference through `importlib.import_module`",
-          "blank", frozenset({STATIC}), _IMPORTLIB, exact=True),
+          "blank", frozenset({STATIC, SANDBOX}), _IMPORTLIB, exact=True),
     Cheat("dunder-import-reference", "reaching the reference through `__import__`",
-          "blank", frozenset({STATIC}), _DUNDER_IMPORT, exact=True),
+          "blank", frozenset({STATIC, SANDBOX}), _DUNDER_IMPORT, exact=True),
     Cheat("sys-modules-reference", "reaching the reference through `sys.modules`",
-          "blank", frozenset({STATIC}), _SYS_MODULES, exact=True),
+          "blank", frozenset({STATIC, GRADER}), _SYS_MODULES, exact=True),
     Cheat("sys-path-reference", "a `sys.path` edit, then an import of the reference",
-          "blank", frozenset({STATIC, RUNTIME}), _SYS_PATH, exact=True),
+          "blank", frozenset({STATIC, SANDBOX}), _SYS_PATH, exact=True),
     Cheat("open-exec-reference", "`open()` of the reference's .py file and `exec` of its source",
-          "blank", frozenset({STATIC, RUNTIME}), _OPEN_EXEC),
+          "blank", frozenset({STATIC, SANDBOX}), _OPEN_EXEC),
     Cheat("exec-obfuscated-import", "an import of the reference hidden in rot13 and run with `exec`",
-          "blank", frozenset({STATIC, RUNTIME}), _exec_obfuscated),
+          "blank", frozenset({STATIC, SANDBOX}), _exec_obfuscated),
     Cheat("gc-reference", "finding the loaded reference module through the garbage collector",
-          "blank", frozenset({STATIC, RUNTIME}), _GC_SEARCH, exact=True),
+          "blank", frozenset({STATIC, GRADER}), _GC_SEARCH, exact=True),
     Cheat("patch-allclose", "monkeypatching `np.allclose`, `np.isclose` and `numpy.testing` so every check passes",
-          "all", frozenset({STATIC, RUNTIME}), _PATCH_ALLCLOSE, plants_mistake=True),
+          "all", frozenset({STATIC, GRADER}), _PATCH_ALLCLOSE, plants_mistake=True),
     Cheat("patch-check-helpers", "monkeypatching the assert helpers (`check_close`, `check_array`) in place",
-          "all", frozenset({STATIC, RUNTIME}), _PATCH_HELPERS, plants_mistake=True),
+          "all", frozenset({STATIC, GRADER}), _PATCH_HELPERS, plants_mistake=True),
     Cheat("alias-patch-allclose", "monkeypatching `np.allclose` through an alias the syntax scan cannot follow",
-          "all", frozenset({RUNTIME}), _ALIAS_PATCH, plants_mistake=True),
+          "all", frozenset({GRADER}), _ALIAS_PATCH, plants_mistake=True),
     Cheat("builtins-patch", "replacing a builtin (`builtins.AssertionError`)",
-          "all", frozenset({STATIC, RUNTIME}), _BUILTINS_PATCH),
+          "all", frozenset({STATIC, GRADER}), _BUILTINS_PATCH),
     Cheat("eq-dunder", "an object whose `__eq__` says it equals anything, returned by the blank",
-          "blank", frozenset({STATIC, RUNTIME}), _EQ_DUNDER, exact=True),
+          "blank", frozenset({STATIC, GRADER}), _EQ_DUNDER, exact=True),
     Cheat("array-frame-walk", "a returned object whose `__array__` walks the stack to the hidden test's expected "
-          "value", "blank", frozenset({STATIC, RUNTIME}), _ARRAY_FRAME_WALK, labs=("train-kf",), exact=True),
+          "value", "blank", frozenset({STATIC, GRADER}), _ARRAY_FRAME_WALK, labs=("train-kf",), exact=True),
     Cheat("showtraceback", "`get_ipython().showtraceback` replaced, so later errors print nothing (swallowed)",
-          "all", frozenset({STATIC, RUNTIME}), _SHOWTRACEBACK, plants_mistake=True),
-    Cheat("excepthook", "`sys.excepthook` replaced", "all", frozenset({STATIC}), _EXCEPTHOOK, plants_mistake=True),
+          "all", frozenset({STATIC, GRADER}), _SHOWTRACEBACK, plants_mistake=True),
+    Cheat("excepthook", "`sys.excepthook` replaced", "all", frozenset({STATIC, GRADER}), _EXCEPTHOOK, plants_mistake=True),
     Cheat("input-transformer", "an `input_transformers_cleanup` entry that rewrites the test cells to `pass`",
-          "all", frozenset({STATIC, RUNTIME}), _INPUT_TRANSFORMER, plants_mistake=True),
+          "all", frozenset({STATIC, GRADER}), _INPUT_TRANSFORMER, plants_mistake=True),
     Cheat("run-cell", "`run_cell` replaced by one that skips the test cells",
-          "all", frozenset({STATIC, RUNTIME}), _RUN_CELL, plants_mistake=True),
+          "all", frozenset({STATIC, GRADER}), _RUN_CELL, plants_mistake=True),
     Cheat("events", "a `pre_run_cell` event callback that swaps the reference in before each test cell",
-          "all", frozenset({STATIC, RUNTIME}), _EVENTS, plants_mistake=True),
+          "all", frozenset({STATIC, GRADER}), _EVENTS, plants_mistake=True),
     Cheat("custom-exc", "`set_custom_exc` with a handler that shows nothing, so errors are swallowed",
-          "all", frozenset({STATIC, RUNTIME}), _CUSTOM_EXC, plants_mistake=True),
+          "all", frozenset({STATIC, GRADER}), _CUSTOM_EXC, plants_mistake=True),
     Cheat("ast-transformer", "an AST transformer that wraps every later cell in try/except: pass",
-          "all", frozenset({STATIC, RUNTIME}), _AST_TRANSFORMER, plants_mistake=True),
+          "all", frozenset({STATIC, GRADER}), _AST_TRANSFORMER, plants_mistake=True),
     Cheat("swallow-whole-cell", "a whole answer cell wrapped in try/except that discards every error",
           "none", frozenset({STATIC}), _swallow_cell),
     Cheat("gradebook-write", "writing to the gradebook (../../../gradebook.db) with sqlite3",
-          "all", frozenset({STATIC, RUNTIME}), _GRADEBOOK),
+          "all", frozenset({STATIC, SANDBOX}), _GRADEBOOK),
     Cheat("other-student-write", "writing into another student's folder",
-          "all", frozenset({STATIC, RUNTIME}), _OTHER_STUDENT),
+          "all", frozenset({STATIC, SANDBOX}), _OTHER_STUDENT),
     Cheat("shell-command", "a shell command (`!cp`) that copies other students' notebooks",
-          "all", frozenset({STATIC, RUNTIME}), _SHELL_COMMAND),
+          "all", frozenset({STATIC, SANDBOX}), _SHELL_COMMAND),
+    Cheat("symlink-redirect", "a symbolic link left in the graded notebook's place, so that nbgrader's write of "
+          "the graded notebook lands on the gradebook", "all", frozenset({STATIC, SANDBOX}), _SYMLINK),
     Cheat("delete-test-cell", "the graded test cell of a wrong blank deleted",
           "blank", frozenset({OVERWRITE}), _delete_test, plants_mistake=True),
     Cheat("edit-test-cell", "the graded test cell of a wrong blank edited to `pass`",

@@ -2,13 +2,14 @@
 
 ``GradingExecute`` runs a submission cell by cell, like nbgrader's Execute, and adds:
 
-- a refusal to grade in a kernel that cannot import the reference ``solutions`` (without it every
-  hidden test fails with ModuleNotFoundError and nbgrader still reports success);
-- caps on each kernel: address space (``memory_limit_gb``), time per cell (``timeout``), time for
-  the whole notebook (``notebook_timeout``), and output kept per cell (``max_output_bytes``);
-- the integrity monitor (autograder/integrity.py): installed before any student cell, and probed
-  after each graded test cell; its findings go to ``resources["integrity_findings"]`` for
-  ``FlagCheating``;
+- hidden tests run in the grader's process, never in the student's kernel (autograder/compare.py):
+  a test cell's visible part runs in the kernel, then its check runs here against the student's
+  function, which the kernel only calls; the grader refuses to start if it cannot import the checks
+  and the reference they compare with (without them every hidden test would fail and nbgrader
+  would still report success);
+- caps on each kernel: address space (``memory_limit_gb``), time per cell (``timeout``, the visible
+  part and the hidden test together), time for the whole notebook (``notebook_timeout``), and
+  output kept per cell (``max_output_bytes``);
 - a kernel that does not start (on a loaded machine a start can take minutes) is started again,
   up to ``kernel_start_attempts`` times in all, rather than nbgrader dropping the submission;
 - recovery: when the kernel dies (``os._exit``, a crash, the memory cap) or a cell times out, the
@@ -20,6 +21,11 @@
 
 from __future__ import annotations
 
+import contextlib
+import functools
+import os
+import shutil
+import tempfile
 import time
 
 from jupyter_core.utils import ensure_async, run_sync
@@ -30,22 +36,16 @@ from nbformat.v4 import new_output
 from nbgrader.preprocessors import Execute
 from traitlets import Float, Integer
 
-from autograder import cells
-from autograder.integrity import INTEGRITY_SETUP, PROBE_NAME, RUNTIME_PROBE, runtime_findings
+from autograder import cells, compare, sandbox
 from autograder.restore_cells import add_grader_notes
 
-PROBE = "__import__('solutions')"
 TIMEOUT_ERROR = "CellTimeoutError"
 KERNEL_DIED = "KernelDied"
 NOT_RUN = "NotRun"
 
 
-class ReferenceUnavailable(RuntimeError):
-    """The grading kernel cannot import the hidden ``solutions`` package."""
-
-
 class GradingExecute(Execute):
-    """nbgrader's Execute with caps, kernel recovery and the reference check."""
+    """nbgrader's Execute with hidden tests in the grader's process, caps and kernel recovery."""
 
     memory_limit_gb = Float(4.0, help="Address-space cap of each grading kernel, GiB (0: none).").tag(config=True)
     notebook_timeout = Integer(300, help="Seconds for a whole submission; later cells are not run.").tag(config=True)
@@ -53,31 +53,22 @@ class GradingExecute(Execute):
     max_restarts = Integer(12, help="Kernel restarts per submission before the rest is not run.").tag(config=True)
     kernel_start_attempts = Integer(3, help="Kernel starts tried before a submission is given up.").tag(config=True)
 
-    def _setup_code(self) -> str:
-        lines = [PROBE]
+    def _setup_code(self) -> list[tuple[str, str]]:
+        """(what it is, code) run silently in every new kernel before any student cell."""
+        steps = [("the grader's kernel-side module", compare.kernel_setup_code())]
         if self.memory_limit_gb > 0:
             cap = int(self.memory_limit_gb * 2**30)
-            lines.append(f"__import__('resource').setrlimit(__import__('resource').RLIMIT_AS, ({cap}, {cap}))")
-        return "\n".join(lines)
+            steps.append(("the memory cap", f"__import__('resource').setrlimit(__import__('resource').RLIMIT_AS, ({cap}, {cap}))"))
+        return steps
 
     async def async_start_new_kernel_client(self):
         kc = await self._async_start_kernel_client_with_retries()
-        msg_id = await ensure_async(kc.execute(self._setup_code(), silent=True, store_history=False))
-        reply = await self.async_wait_for_reply(msg_id)
-        if reply is None or reply["content"]["status"] != "ok":
-            content = reply["content"] if reply else {}
-            await self._async_cleanup_kernel()
-            raise ReferenceUnavailable(
-                "The grading kernel cannot import the hidden reference package `solutions` "
-                f"({content.get('ename', 'no reply')}: {content.get('evalue', '')}). Every hidden test "
-                "would fail, so nothing was graded. Run nbgrader from the course root, whose "
-                "nbgrader_config.py puts the root on the kernel's PYTHONPATH."
-            )
-        msg_id = await ensure_async(kc.execute(INTEGRITY_SETUP, silent=True, store_history=False))
-        reply = await self.async_wait_for_reply(msg_id)
-        if reply is None or reply["content"]["status"] != "ok":
-            await self._async_cleanup_kernel()
-            raise RuntimeError(f"The integrity monitor did not install in the grading kernel: {reply and reply['content']}")
+        for what, code in self._setup_code():
+            msg_id = await ensure_async(kc.execute(code, silent=True, store_history=False))
+            reply = await self.async_wait_for_reply(msg_id)
+            if reply is None or reply["content"]["status"] != "ok":
+                await self._async_cleanup_kernel()
+                raise RuntimeError(f"{what} did not install in the grading kernel: {reply and reply['content']}")
         return kc
 
     async def _async_start_kernel_client_with_retries(self):
@@ -100,12 +91,20 @@ class GradingExecute(Execute):
 
     def preprocess(self, nb: NotebookNode, resources=None, km=None):
         """Execute every code cell, recovering from dead and stuck kernels (see the module doc)."""
+        _warn_once_if_not_sandboxed(self.log)
         NotebookClient.__init__(self, nb, km)
+        tests = compare.hidden_tests(nb)
+        checks = {index: test.load() for index, test in tests.items()}  # ReferenceUnavailable before any kernel starts
         self.reset_execution_trackers()
         self._check_assign_resources(resources)
+        with _scratch_copy(self.resources):
+            return self._execute_cells(tests, checks)
+
+    def _execute_cells(self, tests: dict[int, compare.HiddenTest], checks: dict) -> tuple[NotebookNode, dict]:
+        """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""
+        earlier: set[str] = set()
         self._output_bytes: dict[int, int] = {}
         notes: list[str] = []
-        self.resources["integrity_findings"] = findings = []
         deadline = time.monotonic() + self.notebook_timeout
         failed: set[int] = set()
         restarts = 0
@@ -125,7 +124,11 @@ class GradingExecute(Execute):
                 stopped = (f"This cell ran for more than {self.timeout} s and was stopped. The grader "
                            "restarted the kernel, re-ran the cells above, and went on without this one.")
                 try:
-                    self.execute_cell(cell, index, store_history=True)
+                    if index in tests:
+                        self._execute_test_cell(cell, index, tests[index], checks[index], frozenset(earlier))
+                        earlier.add(tests[index].blank)
+                    else:
+                        self.execute_cell(cell, index, store_history=True)
                 except DeadKernelError:
                     notes.append(f"The kernel died in cell {_name(cell, index)}; it was restarted and the cells "
                                  "above it were run again.")
@@ -138,8 +141,6 @@ class GradingExecute(Execute):
                 else:
                     timeouts = [o for o in cell.outputs if o.output_type == "error" and o.ename == TIMEOUT_ERROR]
                     if not timeouts:
-                        if cells.meta(cell).get("grade") and not cells.meta(cell).get("solution"):
-                            findings += [f for f in self._probe(_name(cell, index)) if f not in findings]
                         continue
                     timeouts[-1]["evalue"] = stopped
                     timeouts[-1]["traceback"] = [f"{TIMEOUT_ERROR}: {stopped}"]
@@ -155,15 +156,75 @@ class GradingExecute(Execute):
         self.set_widgets_metadata()
         return self.nb, self.resources
 
-    def _probe(self, cell: str) -> list:
-        """The integrity monitor's findings so far, asked for after the graded cell ``cell``."""
-        msg_id = self.kc.execute("", silent=True, store_history=False, user_expressions={PROBE_NAME: RUNTIME_PROBE})
+    def _execute_test_cell(self, cell: NotebookNode, index: int, test: compare.HiddenTest, check, earlier: frozenset[str]) -> None:
+        """Run the visible part of a test cell in the kernel, then, unless it failed, its hidden test
+        here (autograder/compare.py); the cell gets the outputs of both. Raises CellTimeoutError or
+        DeadKernelError as ``execute_cell`` does."""
+        start = time.monotonic()
+        source = cell.source
+        cell.source = compare.split(source)[0]
         try:
-            reply = self.wait_for_reply(msg_id)
-        except (DeadKernelError, CellTimeoutError):
-            reply = None
-        result = reply["content"].get("user_expressions", {}).get(PROBE_NAME) if reply else None
-        return runtime_findings(result, cell)
+            self.execute_cell(cell, index, store_history=True)
+        finally:
+            cell.source = source
+        if any(o.output_type == "error" for o in cell.outputs):
+            return  # the visible checks failed (or the cell was stopped): the hidden test would too
+        deadline = start + self.timeout if self.timeout else None
+        listener = compare.Listener(getattr(self.km, "private_folder", None))  # the sandbox lets the kernel reach it
+        msg_id = self.kc.execute(compare.serve_code(listener.path, test), silent=True,
+                                 store_history=False, allow_stdin=False)
+        try:
+            peer, why_not = compare.connect(listener, deadline, lambda: self._replied(msg_id))
+            if peer is None:
+                cell.outputs.append(compare.error_output("AssertionError", why_not))
+            else:
+                try:
+                    cell.outputs += compare.run_check(peer, test, check, earlier)
+                except compare.KernelStopped:
+                    if not self._finished_alive(msg_id):
+                        raise DeadKernelError("Kernel died") from None
+                    cell.outputs.append(compare.error_output(
+                        "AssertionError", f"The hidden test of {test.blank} could not finish: your code ended the "
+                        "grader's connection to the kernel (with sys.exit, or by closing sockets)."))
+                finally:
+                    compare.stop(peer)
+        except compare.PeerTimeout:
+            raise CellTimeoutError.error_from_timeout_and_cell("Cell execution timed out", self.timeout, cell) from None
+        finally:
+            listener.close()
+        self._wait_served(msg_id)
+
+    def _replied(self, msg_id: str) -> bool:
+        """Whether the kernel has finished the silent execution ``msg_id`` (then it will not connect)."""
+        async def replied() -> bool:
+            while await self.kc.shell_channel.msg_ready():
+                reply = await self.kc.shell_channel.get_msg(timeout=0)
+                if reply["parent_header"].get("msg_id") == msg_id:
+                    self._served_reply = msg_id
+                    return True
+            return False
+
+        return run_sync(replied)()
+
+    def _finished_alive(self, msg_id: str, patience_s: float = 10.0) -> bool:
+        """After the kernel closed the hidden test's connection: True once it has finished serving
+        and is alive (the student's code ended the connection), False once it is dead, or if neither
+        is known within ``patience_s`` (then it is restarted like a dead one). A dead kernel can still
+        look alive for a moment after its connection closes."""
+        deadline = time.monotonic() + patience_s
+        while time.monotonic() < deadline:
+            if not run_sync(self.km.is_alive)():
+                return False
+            if self._replied(msg_id):
+                return True
+            time.sleep(0.05)
+        return False
+
+    def _wait_served(self, msg_id: str) -> None:
+        """Wait for the kernel to finish serving the hidden test (it stops when told to)."""
+        if getattr(self, "_served_reply", None) == msg_id:
+            return
+        self.wait_for_reply(msg_id)
 
     def _restart_and_replay(self, upto: int, failed: set[int], deadline: float) -> None:
         """A fresh kernel that has silently run every code cell before ``upto`` that did not fail."""
@@ -171,7 +232,8 @@ class GradingExecute(Execute):
         for index, cell in enumerate(self.nb.cells[:upto]):
             if cell.cell_type != "code" or index in failed or time.monotonic() > deadline:
                 continue
-            msg_id = self.kc.execute(cell.source, silent=True, store_history=False, allow_stdin=False)
+            source = compare.split(cell.source)[0]  # a hidden test never runs in the kernel
+            msg_id = self.kc.execute(source, silent=True, store_history=False, allow_stdin=False)
             try:
                 reply = self.wait_for_reply(msg_id, cell)
             except (DeadKernelError, CellTimeoutError):
@@ -203,6 +265,34 @@ class GradingExecute(Execute):
                 "and dropped the rest.]\n")))
             return out
         return super().output(outs, msg, display_id, cell_index)
+
+
+@contextlib.contextmanager
+def _scratch_copy(resources: dict):
+    """Run the kernel in a scratch copy of the submission's folder (its regular files), not in the
+    folder itself: nbgrader writes the graded notebook into that folder after the kernel is gone,
+    and a kernel that could write there could leave a symbolic link in the notebook's place that
+    sends nbgrader's write to the gradebook or another student's file. Yields the scratch folder."""
+    metadata = resources.setdefault("metadata", {})
+    folder = metadata.get("path")
+    with tempfile.TemporaryDirectory(prefix="kit-work-") as scratch:
+        if folder and os.path.isdir(folder):
+            for entry in os.scandir(folder):
+                if entry.is_file(follow_symlinks=False):
+                    shutil.copy2(entry.path, scratch)
+        metadata["path"] = scratch
+        try:
+            yield scratch
+        finally:
+            metadata["path"] = folder
+
+
+@functools.cache
+def _warn_once_if_not_sandboxed(log) -> None:
+    """Say once per grading process, in nbgrader's log, that the kernels are not fully sandboxed."""
+    status = sandbox.status()
+    if not status.complete:
+        log.warning("%s. See README (The grading kernel's sandbox).", status.summary)
 
 
 def _name(cell: NotebookNode, index: int) -> str:

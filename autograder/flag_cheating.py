@@ -1,10 +1,9 @@
 """Taking away the points that a dishonest submission games, and flagging it for review.
 
-Runs right after GradingExecute and before nbgrader saves the scores. It joins the static scan of
-the submission's code with the findings of the kernel's integrity monitor (autograder/integrity.py),
-puts an error in the test cell of every blank a finding games (so nbgrader scores it 0, and the
-gradebook and grades.csv agree), and writes each reason as a "Flagged for review" note at the top
-of the notebook, where the instructor's table and the feedback show it.
+Runs right after GradingExecute and before nbgrader saves the scores. It scans the submission's
+code (autograder/integrity.py), puts an error in the test cell of every blank a finding games (so
+nbgrader scores it 0, and the gradebook and grades.csv agree), and writes each reason as a "Flagged
+for review" note at the top of the notebook, where the instructor's table and the feedback show it.
 """
 
 from __future__ import annotations
@@ -28,7 +27,7 @@ class FlagCheating(NbGraderPreprocessor):
     def preprocess(self, nb: NotebookNode, resources: dict) -> tuple[NotebookNode, dict]:
         lab = Lab(resources["nbgrader"]["assignment"])
         findings: list[Finding] = []
-        for finding in static_findings(nb, lab) + resources.get("integrity_findings", []):
+        for finding in static_findings(nb, lab):
             if finding.reason not in [f.reason for f in findings]:
                 findings.append(finding)
         blanks = cells.blank_names(cells.read(lab.source_notebook))

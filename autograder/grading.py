@@ -14,7 +14,6 @@ import multiprocessing
 import re
 import shutil
 import sys
-import tempfile
 import textwrap
 import warnings
 from concurrent.futures import ProcessPoolExecutor, as_completed
@@ -32,8 +31,7 @@ from traitlets.config import Config
 from tqdm import tqdm
 from traitlets.config.loader import PyFileConfigLoader
 
-from autograder import cells, default_jobs, late, versions
-from autograder.execute import GradingExecute
+from autograder import cells, compare, default_jobs, late, sandbox, versions
 from autograder.flag_cheating import FLAG
 from autograder.labs import ROOT, Lab
 from autograder.restore_cells import add_grader_notes, forget_grader_notes, grader_notes
@@ -95,14 +93,26 @@ def feedback_page(workdir: Path, lab_id: str, student: str) -> Path:
     return workdir / "feedback" / student / lab_id / f"{lab_id}.html"
 
 
-def check_kernel_has_reference() -> None:
-    """Refuse to grade unless a grading kernel, started as nbgrader starts it, imports ``solutions``.
+def check_reference_available(labs: list[Lab]) -> None:
+    """Refuse to grade unless this process, where the hidden tests compare, imports every hidden test
+    of these labs and the reference they use.
 
-    Raises ReferenceUnavailable (from autograder.execute) if it cannot.
+    Raises ReferenceUnavailable (from autograder.compare) if it cannot.
     """
-    config = course_config()  # loading it also sets the kernel's PYTHONPATH
-    with tempfile.TemporaryDirectory() as cwd:
-        GradingExecute(config=config).preprocess(nbformat.v4.new_notebook(), {"metadata": {"path": cwd}})
+    course_config()  # loading it puts the course root on this process's path, as for plain nbgrader
+    for lab in labs:
+        for test in compare.hidden_tests(cells.read(lab.source_notebook)).values():
+            test.load()
+
+
+def sandbox_line() -> str:
+    """What confines the grading kernels on this machine, as the grader's output says it (loudly if
+    they are not fully sandboxed)."""
+    status = sandbox.status()
+    if status.complete:
+        return f"Grading kernels are sandboxed: {status.summary}."
+    return (f"WARNING: {status.summary}. The hidden tests still compare outside the kernel, so no answer can be "
+            "forged, but see README (The grading kernel's sandbox) for what a kernel can reach here.")
 
 
 def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
@@ -383,18 +393,19 @@ def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = No
 def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int | None = None) -> list[GradeRow]:
     """Autograde ``submissions/<student>/<lab>/<lab>.ipynb`` in the course ``workdir``.
 
-    Refuses to start unless the grading kernel can import ``solutions``. Grades only the
+    Refuses to start unless this process can import the hidden tests and the reference. Grades only the
     submissions given (with ``jobs`` processes), so that regrading one student leaves everyone
     else's grades as they were. Writes feedback HTML to ``workdir/feedback/`` and the grades of
     every graded submission in the course to ``out_csv`` (default ``workdir/grades.csv``), prints
     the table, and returns the rows.
     """
-    check_kernel_has_reference()
     workdir.mkdir(parents=True, exist_ok=True)
     known = {p.parent.name for p in (ROOT / "source").glob("*/*.ipynb")}
     for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
         print(f"Skipped {folder}: there is no lab called {folder.name}.")
     labs = [Lab(lab_id) for lab_id in sorted(known & {p.name for p in submissions.glob("*/*") if p.is_dir()})]
+    check_reference_available(labs)
+    print(sandbox_line())
     print(f"Setting up the course folder {workdir} for {count(len(labs), 'lab')} (nbgrader generate_assignment).")
     generate_release(labs, workdir)
     late.set_due_dates(labs, course_config(workdir))

@@ -1,4 +1,5 @@
-"""Helpers for the hidden tests, which run only in the grading kernel.
+"""Helpers for the hidden tests, which run in the grader's process (autograder/compare.py), or in
+the kernel of a source notebook run by hand, where the reference is present.
 
 Partial credit is isolated: a blank's hidden tests call the student's function with every other
 blank it uses bound to the reference, so that one mistake costs one blank's points.
@@ -13,6 +14,7 @@ from __future__ import annotations
 import functools
 import types
 import warnings
+import sys
 from typing import Callable, Iterable
 
 
@@ -23,6 +25,9 @@ def isolate(func: Callable, reference: types.ModuleType, blanks: Iterable[str], 
     ``warnings_fail`` (the default) a warning in the copy fails with a message; a check that turns
     warnings into failures with a more specific hint of its own passes False.
     """
+    compare = sys.modules.get("autograder.compare")  # imported by the grader only, not in a kernel run by hand
+    if compare is not None and isinstance(func, compare.StudentFunction):  # grading: the function is in the kernel
+        return func.isolated(reference, blanks, warnings_fail)
     if not isinstance(func, types.FunctionType):
         raise AssertionError(f"{func!r} should be a function defined with `def`.")
     others = {name: getattr(reference, name) for name in blanks if name != func.__name__}

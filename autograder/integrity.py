@@ -1,43 +1,31 @@
-"""Cheating defences: what a submission's code may not do, found before and during grading.
+"""Suspicious code in a submission, found before grading and flagged for the instructor's review.
 
-The grading kernel must import the hidden reference ``solutions`` (the hidden tests compare with
-it), so the defences work on the submission itself:
+Grading no longer depends on it for correctness. The hidden tests compare in the grader's process
+(autograder/compare.py), so nothing the student's kernel does can change a verdict; the sandbox
+(autograder/sandbox.py) keeps the kernel from the reference's files, the gradebook and other
+students' folders. What the scan adds is a record: an attempt to cheat is worth an instructor's
+attention even when it gained nothing, and where the OS cannot sandbox the kernel, the scan's
+findings are the defence against reading the reference's files.
 
-- ``static_findings(nb, lab)``, before execution: a scan of the syntax trees of the answer cells
-  and of any code cell the student added (IPython magics included, as IPython transforms them).
-  It finds routes to the reference (``import``, ``importlib``, ``__import__``, ``sys.modules``,
-  ``sys.path``, reads of its files, ``exec``/``eval``/``compile``), tampering with IPython
-  (``get_ipython``, magics, ``sys.excepthook``), monkeypatching of modules and helpers,
-  comparison and conversion dunders (``__eq__``, ``__array__``, ...) on classes a blank returns,
-  stack-frame walking, file writes outside the submission's folder, shell commands, and
-  try/except blocks that swallow every error of a whole cell.
-- ``INTEGRITY_SETUP``, run silently once in the grading kernel before any student cell, snapshots
-  the originals and installs the audit hook of ``autograder.integrity_monitor``.
-- ``RUNTIME_PROBE``, evaluated silently after each graded test cell as the user expression
-  ``integrity``, returns the monitor's report; ``runtime_findings`` turns it into findings.
+``static_findings(nb, lab)`` scans the syntax trees of the answer cells and of any code cell the
+student added (IPython magics included, as IPython transforms them). It finds routes to the
+reference (``import``, ``importlib``, ``__import__``, ``sys.modules``, ``sys.path``, reads of its
+files, ``exec``/``eval``/``compile``), tampering with IPython (``get_ipython``, magics,
+``sys.excepthook``), monkeypatching of modules and helpers, comparison and conversion dunders
+(``__eq__``, ``__array__``, ...) on classes a blank returns, stack-frame walking, file writes
+outside the submission's folder, shell commands, and try/except blocks that swallow every error of
+a whole cell.
 
 Each ``Finding`` names the blanks whose points it games: a trick inside one blank's answer games
 that blank; tampering with shared machinery (NumPy, the check helpers, IPython, builtins, the
 gradebook) games every blank (``None``); something suspicious that games nothing (a helper of the
 visible checks redefined, a cell wrapped in a try/except that discards every error) has ``()``:
-it is flagged for review and costs no points.
+it is flagged for review and costs no points. ``FlagCheating`` (autograder/flag_cheating.py) zeroes
+the test cells of the blanks a finding games, and flags the submission with the reasons.
 
 Edited and deleted test cells need no detector: the sanitize step (RestoreLabCells, then
 nbgrader's OverwriteCells) restores them from the gradebook. Hard-coded answers for the visible
 cases need none either: the hidden tests use random inputs.
-
-In the grading executor:
-
-1. ``static_findings(nb, lab)`` on the submitted notebook (before or after sanitizing: locked
-   cells are skipped either way, because nbgrader restores them);
-2. ``INTEGRITY_SETUP`` silently, at every kernel start (restarts too, before replaying cells),
-   after the kernel's own set-up code (``__import__('solutions')``, limits);
-3. after each graded test cell, ``kc.execute("", silent=True, store_history=False,
-   user_expressions={PROBE_NAME: RUNTIME_PROBE})`` and ``runtime_findings(<the user expression's
-   reply>, <the test cell's grade_id>)``. Reports are cumulative within one kernel: keep the first
-   of equal findings, and keep the findings of a kernel that died;
-4. every autograded test cell of a blank in ``finding.blanks`` (every one if ``None``) scores 0,
-   and the submission is flagged with the findings' reasons.
 """
 
 from __future__ import annotations
@@ -45,7 +33,7 @@ from __future__ import annotations
 import ast
 import copy
 import functools
-import json
+import os
 import re
 from dataclasses import dataclass
 from pathlib import Path
@@ -53,7 +41,6 @@ from pathlib import Path
 from nbformat import NotebookNode
 
 from autograder import cells
-from autograder.integrity_monitor import CONTAINER_DUNDERS, FORBIDDEN_DUNDERS, HEADER, REPORT_EVENT, benign_command
 from autograder.labs import Lab
 
 
@@ -69,60 +56,39 @@ class Finding:
     """One sentence for the instructor's review."""
 
 
-INTEGRITY_SETUP = "__import__('autograder.integrity_monitor', fromlist=['install']).install()"
-"""Run silently (``silent=True, store_history=False``) once, before any student cell, and again after
-every kernel restart before cells are replayed. Leaves no names behind."""
+FORBIDDEN_DUNDERS = frozenset({
+    "__eq__", "__ne__", "__lt__", "__le__", "__gt__", "__ge__", "__bool__", "__float__", "__int__",
+    "__index__", "__complex__", "__array__", "__array_ufunc__", "__array_function__",
+    "__array_interface__", "__array_struct__", "__array_priority__", "__array_wrap__",
+    "__array_finalize__", "__instancecheck__", "__subclasscheck__", "__getattr__", "__getattribute__",
+})
+"""Methods that let a returned object fool a comparison or a conversion to an array. (Arithmetic
+ones such as ``__sub__`` are allowed: the checks convert to arrays before any arithmetic.)"""
+CONTAINER_DUNDERS = frozenset({"__getitem__", "__iter__", "__len__"})
+"""Also forbidden on subclasses of tuple, list, dict, float, int and ndarray."""
 
-PROBE_NAME = "integrity"
-RUNTIME_PROBE = f"(lambda c: (__import__('sys').audit({REPORT_EVENT!r}, c), c[0] if c else '')[1])([])"
-"""An expression. After each graded test cell, run
-``kc.execute("", silent=True, store_history=False, user_expressions={"integrity": RUNTIME_PROBE})``
-and pass ``reply["content"]["user_expressions"]["integrity"]`` (or its ``data["text/plain"]``) to
-``runtime_findings``. It prints nothing and binds no names. The report is cumulative."""
+BENIGN_COMMANDS = frozenset({"pip", "pip3", "conda", "mamba", "ls", "pwd", "echo", "which", "nvidia-smi", "date",
+                             "whoami", "uname", "hostname"})
+"""Shell commands an honest student leaves in a notebook: flagged, but they cost no points."""
 
 
-# -- runtime -------------------------------------------------------------------------------------
-
-def runtime_findings(probe_result, cell: str) -> list[Finding]:
-    """The findings in the monitor's report, found by the probe run after the test cell ``cell``.
-
-    ``probe_result`` is the text/plain value of the user expression (the repr of a JSON string),
-    the JSON string itself, or the whole user-expression reply. A missing, failed or forged-looking
-    report is itself a finding (every blank): the monitor answers unless the kernel was tampered
-    with. The report is cumulative, so the same finding comes back after every later test cell;
-    keep the first.
-    """
-    if isinstance(probe_result, dict):
-        if probe_result.get("status") != "ok":
-            what = f"{probe_result.get('ename', 'no answer')}: {probe_result.get('evalue', '')}".strip(": ")
-            return [Finding(cell, None, f"The integrity probe failed in the kernel ({what}); the notebook has "
-                                        "probably tampered with builtins, sys or IPython.")]
-        probe_result = probe_result.get("data", {}).get("text/plain", "")
-    text = (probe_result or "").strip()
-    if text[:1] in ("'", '"', "("):
+def benign_command(command) -> bool:
+    """Whether a shell command is one of BENIGN_COMMANDS, with no paths up or out, and no pipes,
+    redirections, substitutions or second commands."""
+    if isinstance(command, (bytes, bytearray)):
+        command = os.fsdecode(bytes(command))
+    if not isinstance(command, str):
         try:
-            text = ast.literal_eval(text)
-        except (ValueError, SyntaxError):
-            text = ""
-    try:
-        entries = json.loads(text) if isinstance(text, str) and text else None
-    except ValueError:
-        entries = None
-    if isinstance(entries, list) and entries and isinstance(entries[0], dict) and entries[0].get("monitor") == "failed":
-        return [Finding(cell, None, f"The integrity monitor failed in the kernel ({entries[0].get('error', '?')}); "
-                                    "the notebook has probably tampered with what it inspects.")]
-    if not isinstance(entries, list) or not entries or entries[0] != HEADER:
-        detail = "no report" if not entries else "a report in the wrong format"
-        return [Finding(cell, None, f"The integrity monitor gave {detail} after this test cell; the notebook has "
-                                    "probably tampered with the audit machinery, sys or IPython.")]
-    findings = []
-    for entry in entries[1:]:
-        if not isinstance(entry, dict) or not isinstance(entry.get("reason"), str):
-            findings.append(Finding(cell, None, "The integrity monitor's report holds an entry in the wrong format."))
-            continue
-        blanks = entry.get("blanks")
-        findings.append(Finding(cell, None if blanks is None else tuple(str(b) for b in blanks), entry["reason"]))
-    return findings
+            command = " ".join(os.fsdecode(part) for part in command)
+        except TypeError:
+            return False
+    words = command.split()
+    if not words or any(c in command for c in ";&|<>`$\n") or ".." in command:
+        return False
+    first = os.path.basename(words[0])
+    if first in ("python", "python3") and words[1:3] == ["-m", "pip"]:
+        first, words = "pip", words[2:]
+    return first in BENIGN_COMMANDS and not any(w.startswith(("/", "~")) for w in words[1:])
 
 
 # -- static --------------------------------------------------------------------------------------

@@ -14,7 +14,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from autograder import cells, cheats, faults, submissions
-from autograder.cheats import RUNTIME, STATIC, Cheat
+from autograder.cheats import STATIC, Cheat, target
 from autograder.grading import GradeRow
 from autograder.labs import Lab
 from autograder.mistakes import catalogue as mistake_catalogue
@@ -48,11 +48,15 @@ class Outcome:
 
 
 def cheat_outcome(lab: Lab, cheat: Cheat) -> Outcome:
-    """A cheat earns nothing for the blanks it games; it is flagged exactly when the integrity
-    checks catch it (the sanitize step and the hidden tests defeat the others without a flag)."""
-    gamed = cheat.blanks(lab)
-    return Outcome(cheat.name, CHEAT, None if gamed is None else tuple(f"test_{b}" for b in gamed),
-                   only=False, flagged=bool(cheat.caught_by & {STATIC, RUNTIME}))
+    """A cheat gains nothing. One that the scan catches is flagged and loses every blank it games;
+    the others (defeated by the grader's comparison, the sandbox, the sanitize step or the hidden
+    tests' random inputs) are not flagged and lose the blank they tried to pass with a wrong answer."""
+    if STATIC in cheat.caught_by:
+        gamed = cheat.blanks(lab)
+        return Outcome(cheat.name, CHEAT, None if gamed is None else tuple(f"test_{b}" for b in gamed),
+                       only=False, flagged=True)
+    wrong = cheat.aim or target(lab) if cheat.plants_mistake or cheat.games == "blank" else None
+    return Outcome(cheat.name, CHEAT, () if wrong is None else (f"test_{wrong}",), only=False, flagged=False)
 
 
 def honest_outcome(student: str, wrong: str | None) -> Outcome:

@@ -19,6 +19,7 @@ from pathlib import Path
 
 from packaging.requirements import Requirement
 
+from autograder import sandbox
 from autograder.labs import ROOT
 
 LOCK = ROOT / "environment.lock"
@@ -136,7 +137,7 @@ def environment() -> dict:
 def record(grades_csv: Path) -> Path:
     """Write the environment record beside a grades CSV (``grades.csv`` -> ``grades.versions.json``)."""
     path = Path(grades_csv).with_suffix(".versions.json")
-    record = environment()
+    record = {**environment(), "sandbox": sandbox.status().summary}
     path.write_text(json.dumps(record, indent=2) + "\n")
     if record["differs_from_lock"]:
         differ = ", ".join(f"{name} {v['installed']} (locked {v['locked']})" if v["installed"] else

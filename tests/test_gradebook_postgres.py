@@ -26,7 +26,7 @@ from gradebook_sql import csv_disagreements, formgrader_gives, nbgrader_export, 
 
 LAB = get_lab("train-kf")
 MISTAKE = catalogue(LAB)[0]
-CHEAT = next(c for c in cheats.catalogue(LAB) if c.caught_by == {cheats.STATIC} and c.games == "blank")
+CHEAT = next(c for c in cheats.catalogue(LAB) if cheats.STATIC in c.caught_by and c.games == "blank")
 LATE = {"late": 1.5, "late_mistake": 10.0}
 """Days late: 2 started days (20%), and over the 50% cap."""
 

@@ -107,3 +107,32 @@ def test_source_notebook_is_stored_executed_without_errors(lab):
     assert not streams, f"cells that write to stderr (nbgrader zeroes a test cell that does): {streams}"
     checked = [c for c in code if c.source.startswith("# NBVAL_CHECK_OUTPUT")]
     assert checked and all(c.outputs for c in checked), "at least one cell prints final numbers for nbval to check"
+
+
+def _blanks_called(reference, blank: str, blanks: set[str]) -> set[str]:
+    """The other blanks that the reference's ``blank`` calls, directly or through the reference
+    module's own helper functions."""
+    found, seen, todo = set(), {blank}, [getattr(reference, blank).__code__]
+    while todo:
+        code = todo.pop()
+        todo += [c for c in code.co_consts if inspect.iscode(c)]
+        for name in code.co_names:
+            value = getattr(reference, name, None)
+            if name in blanks and name != blank:
+                found.add(name)
+            elif name not in seen and inspect.isfunction(value) and value.__module__ == reference.__name__:
+                seen.add(name)
+                todo.append(value.__code__)
+    return found
+
+
+@over_labs
+def test_a_blank_that_calls_others_is_graded_after_them(lab):
+    """In grading, the grader answers a blank's calls of another blank with the reference only if
+    that blank's own hidden test came earlier (autograder/compare.py): a test can then never collect
+    the reference's answers for a later one. So the notebook grades the blanks a blank calls first."""
+    order = cells.blank_names(cells.read(lab.source_notebook))
+    reference = lab.solutions()
+    for position, blank in enumerate(order):
+        later = _blanks_called(reference, blank, set(order)) - set(order[:position])
+        assert not later, f"{blank} calls {sorted(later)}, whose hidden tests come after its own"

@@ -11,7 +11,8 @@ import nbformat
 import pytest
 
 from autograder import grading, submissions
-from autograder.execute import GradingExecute, ReferenceUnavailable
+from autograder.compare import ReferenceUnavailable
+from autograder.execute import GradingExecute
 from autograder.labs import ROOT
 from over_labs import LABS
 from round_trip import *  # noqa: F401,F403 (the tests, the graded fixture, the lab parametrization)
@@ -20,10 +21,18 @@ from round_trip import HALVES
 HALF = HALVES[0]
 
 
-def test_grading_refuses_a_kernel_without_the_reference(tmp_path, monkeypatch):
-    monkeypatch.setenv("PYTHONPATH", "")
-    with pytest.raises(ReferenceUnavailable, match="cannot import the hidden reference package"):
-        GradingExecute().preprocess(nbformat.v4.new_notebook(), {"metadata": {"path": str(tmp_path)}})
+def test_grading_refuses_to_start_without_the_reference(tmp_path, monkeypatch):
+    """A hidden test that the grader's process cannot import stops the submission before any kernel
+    starts (otherwise every hidden test would fail and nbgrader would still report success)."""
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(
+        "### BEGIN HIDDEN TESTS\nfrom autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(kupdate)\n"
+        "### END HIDDEN TESTS\n")])
+    monkeypatch.setitem(sys.modules, "autograder.hidden_tests.train_kf", None)  # import fails, as without the course root
+    started = []
+    monkeypatch.setattr(GradingExecute, "async_start_new_kernel_client", lambda self: started.append(1))
+    with pytest.raises(ReferenceUnavailable, match="cannot import autograder.hidden_tests.train_kf.check_kupdate"):
+        GradingExecute().preprocess(nb, {"metadata": {"path": str(tmp_path)}})
+    assert started == []
 
 
 def test_plain_nbgrader_autogrades_from_the_course_root(tmp_path):

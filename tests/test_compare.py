@@ -1,0 +1,285 @@
+"""Hidden tests compare in the grader's process (autograder/compare.py) against the student's
+function in the kernel (autograder/kernel_side.py).
+
+Here the kernel's side runs in a thread of the test process, serving functions from a plain dict
+as the notebook's namespace, over a real Unix socket: what crosses the wire, what comes back, what
+the student's function can reach, and what a hostile kernel's messages can do to the grader. The
+grading round trip (tests/test_round_trip.py) runs the same code in real grading kernels.
+"""
+
+from __future__ import annotations
+
+import json
+import linecache
+import socket
+import struct
+import threading
+import time
+import warnings
+
+import numpy as np
+import pytest
+from matplotlib.figure import Figure
+
+from autograder import compare, kernel_side
+from autograder.compare import HiddenTest, HiddenTestFormError, StudentFunction
+from autograder.hidden import isolate
+from autograder.kernel_side import Codec, Peer, ProtocolError, Wire
+from course.falling_object import FilterHistory
+from course.starship import check_band_plot
+from random_draws import random_draws
+
+
+class Kernel:
+    """The kernel's side of one hidden test, in a thread, serving ``namespace[name]``."""
+
+    def __init__(self, namespace: dict, name: str):
+        self.listener = compare.Listener()
+        self.thread = threading.Thread(target=kernel_side.serve, args=(self.listener.path, name, namespace),
+                                       daemon=True)
+        self.thread.start()
+        self.peer, self.why_not = compare.connect(self.listener, None, lambda: not self.thread.is_alive())
+
+    def close(self) -> None:
+        if self.peer is not None:
+            compare.stop(self.peer)
+        self.thread.join(10)
+        self.listener.close()
+
+
+@pytest.fixture
+def kernel():
+    opened = []
+
+    def start(namespace: dict, name: str, earlier: frozenset = frozenset()):
+        k = Kernel(namespace, name)
+        opened.append(k)
+        return k if k.peer is None else StudentFunction(k.peer, name, frozenset(earlier))
+
+    yield start
+    for k in opened:
+        k.close()
+
+
+def _define(source: str, **names) -> dict:
+    """The namespace of a notebook cell that ran ``source`` (its lines known to linecache, as IPython's are)."""
+    filename = f"/tmp/ipykernel_0/{abs(hash(source))}.py"
+    linecache.cache[filename] = (len(source), None, source.splitlines(True), filename)
+    namespace = {"np": np, **names}
+    exec(compile(source, filename, "exec"), namespace)
+    return namespace
+
+
+def test_values_cross_exactly(kernel):
+    """Arrays of every numeric kind come back bit for bit, with their dtype and shape; NaN, inf,
+    NumPy scalars, complex numbers, nested tuples, lists and dicts keep their types."""
+    student = kernel(_define("def echo(*args, **kwargs):\n    return args, kwargs\n"), "echo")
+    values = (np.sin(np.arange(12.0)).reshape(3, 4), np.array([np.nan, np.inf, -0.0, 5e-324]), np.arange(6, dtype=np.int32).reshape(2, 3),
+              np.array([True, False]), np.exp(1j * np.arange(3.0)) / 3, np.float32(1.5), np.int64(7),
+              2.5, 3, True, None, "text", 1 + 2j, [1, (2.0, [3])], {"a": np.eye(2), 4: "four"}, np.empty((0, 3)))
+    args, kwargs = student(*values, option=np.float64(np.pi))
+    assert len(args) == len(values)
+    for sent, got in zip(values, args):
+        assert type(got) is type(sent), (sent, got)
+        if isinstance(sent, np.ndarray):
+            assert got.dtype == sent.dtype and got.shape == sent.shape and got.tobytes() == sent.tobytes()
+    assert args[13] == [1, (2.0, [3])] and args[14]["a"].tolist() == [[1, 0], [0, 1]] and args[14][4] == "four"
+    assert type(kwargs["option"]) is np.float64 and kwargs["option"] == np.pi
+
+
+@random_draws(false_fail=0.0, why="an identity: the same draws from the same state, in the kernel and here")
+def test_what_the_call_writes_into_its_arguments_comes_back(kernel, seed):
+    """A dict argument gets what the function stored, and a generator argument ends in the state the
+    same draws leave it in locally."""
+    source = ("def step(x, rng, info):\n"
+              "    draws = rng.standard_normal(5)\n"
+              "    info['ess'] = 3.5\n"
+              "    info['parents'] = rng.integers(0, 4, size=4)\n"
+              "    return x + draws.sum()\n")
+    student = kernel(_define(source), "step")
+    local = _define(source)["step"]
+    remote_rng, local_rng = np.random.default_rng(seed), np.random.default_rng(seed)
+    remote_info, local_info = {}, {}
+    assert student(1.0, remote_rng, info=remote_info) == local(1.0, local_rng, info=local_info)
+    assert remote_rng.bit_generator.state == local_rng.bit_generator.state
+    assert remote_info["ess"] == 3.5 and remote_info["parents"].tolist() == local_info["parents"].tolist()
+
+
+def test_a_plot_blank_draws_on_the_axes_the_check_gave_it(kernel):
+    """The Axes the check passes is drawn on with the same lines, band, labels and legend, and is the
+    object returned, so the plot checks inspect it as they would locally."""
+    source = ("def plot(ax, t, truth, mean, std):\n"
+              "    ax.plot(t, truth, label='truth')\n"
+              "    ax.plot(t, mean, label='estimate')\n"
+              "    ax.fill_between(t, mean - 3 * std, mean + 3 * std, alpha=0.3, label='3 sigma')\n"
+              "    ax.set(xlabel='Time [s]', ylabel='c [m2/kg]')\n"
+              "    ax.legend()\n"
+              "    return ax\n")
+    student = kernel(_define(source), "plot")
+    t = np.linspace(0, 10, 21)
+    truth, mean, std = np.sin(t), np.sin(t) + 0.01, 0.1 + 0.01 * t
+    ax = Figure().subplots()
+    returned = student(ax, t, truth, mean, std)
+    assert returned is ax
+    check_band_plot(ax, returned, t, truth, mean, std, "plot")
+    assert ax.get_xlabel() == "Time [s]" and [x.get_text() for x in ax.get_legend().get_texts()] == ["truth", "estimate", "3 sigma"]
+
+
+def test_course_objects_and_callbacks_cross(kernel):
+    """A course dataclass comes back as itself; a function the check passes in is called back in the
+    grader's process, however often the student's function calls it."""
+    calls = []
+
+    def model(x):
+        calls.append(x.shape)
+        return 2.0 * x
+
+    source = ("def run(f, points):\n"
+              "    out = np.stack([f(p) for p in points])\n"
+              "    return FilterHistory(*(out[:, k % 4] for k in range(10)))\n")
+    student = kernel(_define(source, FilterHistory=FilterHistory), "run")
+    points = np.arange(12.0).reshape(3, 4)
+    history = student(model, points)
+    assert isinstance(history, FilterHistory) and len(calls) == 3
+    assert np.array_equal(history.mean, 2.0 * points[:, 0])
+
+
+def test_the_grader_answers_only_for_earlier_blanks_and_never_for_the_one_under_test(kernel):
+    """Isolation: the student's run calls the reference's step for a blank graded earlier, its own
+    for a blank graded later, and its own run when it calls itself."""
+    reference = type(np)("reference")
+    reference.step = lambda x: x + 100.0
+    reference.later = lambda x: x + 1000.0
+    reference.run = lambda x, depth=0: -1.0
+    source = ("def step(x):\n    return x + 1.0\n"
+              "def later(x):\n    return x + 10.0\n"
+              "def run(x, depth=0):\n    return step(x) + later(x) + (run(x, 1) if depth == 0 else 0.0)\n")
+    namespace = _define(source)
+    student = kernel(namespace, "run", earlier=frozenset({"step", "run"}))
+    isolated = isolate(student, reference, ("step", "later", "run"))
+    # step from the reference (earlier), later from the student (graded later); the recursive call
+    # is the notebook's own run, which sees the notebook's own step, as in a local isolate
+    assert isolated(0.0) == (100.0 + 10.0) + (1.0 + 10.0)
+    assert namespace["step"](0.0) == 1.0  # the notebook's own names are left alone
+
+
+def test_errors_come_back_by_type_with_the_students_line(kernel):
+    """A NumPy or builtin exception is re-raised as itself, another keeps its name; the message says
+    which line of the student's function raised it."""
+    source = ("class Oops(Exception):\n    pass\n"
+              "def solve(A, b, kind):\n"
+              "    if kind == 'custom':\n"
+              "        raise Oops('my own error')\n"
+              "    return np.linalg.solve(A, b)\n")
+    student = kernel(_define(source), "solve")
+    with pytest.raises(np.linalg.LinAlgError, match="Singular matrix") as caught:
+        student(np.zeros((2, 2)), np.ones(2), "solve")
+    assert "line 6" in caught.value.where and "np.linalg.solve(A, b)" in caught.value.where
+    with pytest.raises(kernel_side.RaisedElsewhere) as caught:
+        student(np.eye(2), np.ones(2), "custom")
+    assert type(caught.value).__name__ == "Oops" and str(caught.value) == "my own error"
+
+
+def test_warnings_fail_with_a_message_or_reach_the_check_that_asked_for_them(kernel):
+    source = "def log(x):\n    print('computing')\n    return np.log(x)\n"
+    reference = type(np)("reference")
+    student = kernel(_define(source), "log")
+    with pytest.raises(AssertionError, match="log gave the warning RuntimeWarning"):
+        isolate(student, reference, ("log",))(np.array([-1.0]))
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        value = isolate(student, reference, ("log",), warnings_fail=False)(np.array([-1.0]))
+    assert np.isnan(value[0]) and [w.category for w in caught] == [RuntimeWarning]
+
+
+def test_an_object_the_wire_cannot_carry_is_a_clear_failure(kernel):
+    """The eq-dunder trick (an object that equals anything) never reaches a comparison."""
+    source = ("class Anything:\n    def __eq__(self, other):\n        return True\n"
+              "def gain(B, H, R):\n    return Anything()\n")
+    student = kernel(_define(source), "gain")
+    with pytest.raises(TypeError, match="gain returned a Anything object, which the grader cannot compare"):
+        student(np.eye(2), np.eye(2), np.eye(2))
+
+
+def test_a_missing_function_is_named(kernel):
+    k = kernel({"kupdate": 3}, "kupdate")
+    assert k.peer is None and "kupdate is a int, not a function" in k.why_not
+    k = kernel({}, "predict")
+    assert k.peer is None and "predict is not defined" in k.why_not
+
+
+@pytest.fixture
+def pair():
+    """(the grader's end, the kernel's end) of a connected socket pair, closed afterwards."""
+    ends = socket.socketpair()
+    yield ends
+    for end in ends:
+        end.close()
+
+
+def _crafted(header: dict, buffers: list[bytes] = ()) -> bytes:
+    data = json.dumps(header).encode()
+    out = struct.pack("!QQ", len(data), len(buffers)) + data
+    for b in buffers:
+        out += struct.pack("!Q", len(b)) + b
+    return out
+
+
+@pytest.mark.parametrize("header, buffers, match", [
+    ({"op": "return", "value": {"t": "array", "dtype": "|O", "shape": [1], "buffer": 0}}, [b"\0" * 8], "array of object"),
+    ({"op": "return", "value": {"t": "array", "dtype": "<f8", "shape": [3], "buffer": 0}}, [b"\0" * 16], "size does not match"),
+    ({"op": "return", "value": {"t": "array", "dtype": "<f8", "shape": [1], "buffer": 5}}, [b"\0" * 8], "buffer that is not there"),
+    ({"op": "return", "value": {"t": "pickle", "v": "gASVAAAAAAAAAAB9lC4="}}, [], "unknown kind"),
+    ({"op": "return", "value": {"t": "dataclass", "module": "os", "name": "stat_result", "fields": {}}}, [], "dataclass from os"),
+    ({"op": "return", "value": {"t": "generator", "bit_generator": "Evil", "state": {}}}, [], "bit generator"),
+    ({"op": "return", "value": {"t": "py", "v": [1, 2]}}, [], "not plain"),
+    ({"op": "launch"}, [], "unexpected message"),
+])
+def test_a_hostile_kernels_messages_are_refused(header, buffers, match, pair):
+    """Whatever a tampered kernel sends, the grader decodes only data, or raises ProtocolError."""
+    grader, kernel_end = pair
+    kernel_end.sendall(_crafted(header, list(buffers)))
+    peer = Peer(Wire(grader))
+    with pytest.raises(ProtocolError, match=match):
+        peer.apply_answer(*peer.serve_until_answer(), (), {})
+
+
+def test_an_oversized_message_is_refused_before_it_is_read(pair):
+    grader, kernel_end = pair
+    kernel_end.sendall(struct.pack("!QQ", kernel_side.MAX_MESSAGE_BYTES + 1, 0))
+    with pytest.raises(ProtocolError, match="larger than the wire allows"):
+        Wire(grader).receive()
+
+
+def test_a_silent_kernel_times_out(pair):
+    wire = Wire(pair[0])
+    wire.deadline = time.monotonic() + 0.2
+    with pytest.raises(kernel_side.PeerTimeout):
+        wire.receive()
+
+
+def test_the_hidden_block_has_one_form():
+    code = "from autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(kupdate)\n"
+    assert compare.hidden_test(code) == HiddenTest("autograder.hidden_tests.train_kf", "check_kupdate", "kupdate")
+    for bad in ("from autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(predict)\n",
+                "from solutions.train_kf import kupdate\nkupdate(1)\n",
+                "import os\nfrom autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(kupdate)\n",
+                "from autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(kupdate, seed=1)\n",
+                "from autograder.hidden_tests.train_kf import check_kupdate as c\nc(kupdate)\n"):
+        with pytest.raises(HiddenTestFormError):
+            compare.hidden_test(bad)
+    source = "validate(kupdate)\n### BEGIN HIDDEN TESTS\n" + code + "### END HIDDEN TESTS\n"
+    assert compare.split(source) == ("validate(kupdate)\n", "\n" + code)
+
+
+def test_a_missing_reference_stops_grading_before_any_kernel(monkeypatch):
+    test = HiddenTest("autograder.hidden_tests.no_such_lab", "check_f", "f")
+    with pytest.raises(compare.ReferenceUnavailable, match="cannot import autograder.hidden_tests.no_such_lab"):
+        test.load()
+
+
+def test_the_codec_never_sends_code():
+    """Functions travel as numbers the other side calls back, never as code."""
+    buffers: list[bytes] = []
+    node = Codec().encode((np.sin, lambda x: x), buffers)
+    assert [item["t"] for item in node["items"]] == ["callable", "callable"] and buffers == []
