@@ -329,7 +329,7 @@ def _draw(ax, drawing, codec: Codec, buffers, peer) -> None:
         ax.plot(xy[:, 0], xy[:, 1], label=str(line.get("label", "")))
     for band in drawing.get("bands", []):
         paths = [np.asarray(codec.decode(p, buffers, peer), dtype=float).reshape(-1, 2) for p in band.get("paths", [])]
-        ax.add_collection(PolyCollection(paths, label=str(band.get("label", ""))))
+        ax.add_collection(PolyCollection(paths, closed=False, label=str(band.get("label", ""))))  # the vertices as drawn
     ax.set_xlabel(str(drawing.get("xlabel", "")))
     ax.set_ylabel(str(drawing.get("ylabel", "")))
     ax.set_title(str(drawing.get("title", "")))

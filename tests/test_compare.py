@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from autograder import compare, kernel_side
+from autograder import compare, diagnosis, kernel_side
 from autograder.compare import HiddenTest, HiddenTestFormError, StudentFunction
 from autograder.hidden import isolate
 from autograder.kernel_side import Codec, Peer, ProtocolError, Wire
@@ -123,6 +123,9 @@ def test_a_plot_blank_draws_on_the_axes_the_check_gave_it(kernel):
     assert returned is ax
     check_band_plot(ax, returned, t, truth, mean, std, "plot")
     assert ax.get_xlabel() == "Time [s]" and [x.get_text() for x in ax.get_legend().get_texts()] == ["truth", "estimate", "3 sigma"]
+    local = Figure().subplots()
+    _define(source)["plot"](local, t, truth, mean, std)
+    assert diagnosis._same(diagnosis._leaves(ax), diagnosis._leaves(local)), "the diagnosis sees the plot as drawn"
 
 
 def test_course_objects_and_callbacks_cross(kernel):
