@@ -12,16 +12,16 @@ ROOT = Path(__file__).resolve().parent
 
 # The grader's process imports the autograder's preprocessors, the hidden tests and the reference
 # `solutions` from here; they are never installed. Grading kernels do not get this path: the hidden
-# tests compare in the grader's process (autograder/compare.py), and the kernel needs only `course`.
+# tests compare in the grader's process (autograder/pipeline/compare.py), and the kernel needs only `course`.
 sys.path.insert(0, str(ROOT))
 # nbgrader runs `alembic` to create a gradebook; find it beside this Python even in an environment
 # that was not activated (`.venv/bin/python -m autograder ...`).
 os.environ["PATH"] = os.pathsep.join((os.path.dirname(sys.executable), os.environ.get("PATH", "")))
 
-from autograder.execute import GradingExecute  # noqa: E402
-from autograder.sandbox_kernel import SandboxedKernelManager  # noqa: E402
-from autograder.flag_cheating import FlagCheating  # noqa: E402
-from autograder.restore_cells import RestoreLabCells  # noqa: E402
+from autograder.pipeline.execute import GradingExecute  # noqa: E402
+from autograder.kernel.manager import SandboxedKernelManager  # noqa: E402
+from autograder.integrity.flag import FlagCheating  # noqa: E402
+from autograder.pipeline.restore import RestoreLabCells  # noqa: E402
 from course.checks import NOT_WRITTEN  # noqa: E402
 from nbconvert.preprocessors import ClearMetadataPreprocessor, CSSHTMLHeaderPreprocessor  # noqa: E402
 from nbgrader.preprocessors import (  # noqa: E402
@@ -55,9 +55,9 @@ c.ClearSolutions.text_stub = "YOUR ANSWER HERE"
 # Grading. A deleted or edited test cell is restored from the gradebook before grading. The grader
 # must import the hidden tests (GradingExecute refuses to grade otherwise), and each kernel is capped:
 # memory, time per cell, time per submission, output per cell. A kernel that dies or hangs is
-# restarted and the cells before the fatal one are replayed (see autograder/execute.py).
+# restarted and the cells before the fatal one are replayed (see autograder/pipeline/execute.py).
 c.OverwriteCells.add_missing_cells = True
-# Each grading kernel runs in the sandbox (autograder/sandbox.py): it reads only the Python
+# Each grading kernel runs in the sandbox (autograder/kernel/sandbox.py): it reads only the Python
 # installation and course/, writes only its submission's folder and a private one, and has no
 # network. Where the OS cannot sandbox, grading runs anyway and says so (KIT_SANDBOX=off turns it off).
 c.GradingExecute.kernel_manager_class = SandboxedKernelManager
@@ -87,7 +87,7 @@ c.Autograde.sanitize_preprocessors = [
     CheckCellMetadata,
 ]
 # After execution, the integrity findings (static scan and the kernel's monitor) take away the
-# points of every blank a submission games, and flag it for review (autograder/flag_cheating.py).
+# points of every blank a submission games, and flag it for review (autograder/integrity/flag.py).
 c.Autograde.autograde_preprocessors = [
     GradingExecute,
     FlagCheating,
@@ -101,8 +101,8 @@ c.Autograde.autograde_preprocessors = [
 
 # Feedback shows students their graded notebook without the hidden tests' code, with the kit's
 # template over nbgrader's: written answers not graded yet say so, a test cell that earns its marks
-# under a failed visible check says why, long messages wrap (autograder/feedback.py).
-from autograder.feedback import NBGRADER_TEMPLATES, TEMPLATE, TEMPLATE_PATHS, TEMPLATES, FeedbackGrades  # noqa: E402
+# under a failed visible check says why, long messages wrap (autograder/pipeline/feedback.py).
+from autograder.pipeline.feedback import NBGRADER_TEMPLATES, TEMPLATE, TEMPLATE_PATHS, TEMPLATES, FeedbackGrades  # noqa: E402
 
 c.GenerateFeedback.preprocessors = [FeedbackGrades, CSSHTMLHeaderPreprocessor, ClearHiddenTests]
 c.GenerateFeedback.HTMLExporter.template_name = TEMPLATE
@@ -111,15 +111,15 @@ c.GenerateFeedback.HTMLExporter.extra_template_paths = TEMPLATE_PATHS
 
 # Late submissions: the labs' due dates are in due_dates.toml (`python -m autograder grade` writes
 # them into the gradebook). A late submission loses percent_per_day of its earned points for every
-# started day late, at most max_percent (autograder/late.py).
-from autograder.late import LatePenalty  # noqa: E402
+# started day late, at most max_percent (autograder/pipeline/late.py).
+from autograder.pipeline.late import LatePenalty  # noqa: E402
 
 c.AssignLatePenalties.plugin_class = LatePenalty
 c.LatePenalty.percent_per_day = 10.0
 c.LatePenalty.max_percent = 50.0
 
 # `nbgrader export` rewrites grades.csv from the gradebook in the kit's format, with the scores
-# given by hand in formgrader, without grading again (autograder/export.py).
-from autograder.export import GradesExport  # noqa: E402
+# given by hand in formgrader, without grading again (autograder/pipeline/export.py).
+from autograder.pipeline.export import GradesExport  # noqa: E402
 
 c.ExportApp.plugin_class = GradesExport

@@ -55,25 +55,25 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
 
     if args.command == "labs":
-        from autograder.inventory import print_inventory
+        from autograder.authoring.inventory import print_inventory
         from autograder.labs import all_labs
 
         print_inventory(all_labs())
     elif args.command == "release":
-        from autograder.release import release_all
+        from autograder.release.notebooks import release_all
 
         release_all()
         print(f"Released to {ROOT / 'release'}; no leaks found.")
     elif args.command == "bundle":
-        from autograder.bundle import write_bundle
+        from autograder.release.bundle import write_bundle
 
         print(f"Student bundle written to {write_bundle(args.out)}; no leaks found.")
     elif args.command == "grade":
-        from autograder.grading import grade as grade_submissions
+        from autograder.pipeline.grading import grade as grade_submissions
 
         grade_submissions(args.submissions.resolve(), args.workdir.resolve(), args.out, args.jobs)
     elif args.command == "feedback":
-        from autograder.feedback import regenerate
+        from autograder.pipeline.feedback import regenerate
 
         workdir = args.workdir.resolve()
         rows = regenerate(workdir, args.out)
@@ -82,11 +82,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"Rewrote the feedback of {count(len(rows), 'graded submission')} in {workdir / 'feedback'} "
               f"and the grades in {args.out or workdir / 'grades.csv'}.")
     elif args.command == "demo":
-        from autograder.demo import run_demo
+        from autograder.catalogues.demo import run_demo
 
         return 0 if run_demo(args.workdir.resolve(), args.jobs, args.full) else 1
     elif args.command == "data":
-        from autograder import data as shipped
+        from autograder.release import data as shipped
 
         if args.check:
             stale = shipped.stale_files()
@@ -95,11 +95,11 @@ def main(argv: list[str] | None = None) -> int:
         for path in shipped.rebuild():
             print(f"wrote {path.relative_to(ROOT)}")
     elif args.command == "collect":
-        from autograder.intake import run_collect
+        from autograder.pipeline.collect import run_collect
 
         return run_collect(args.lab, args.download, args.students, args.out, args.pattern, args.timezone)
     elif args.command == "similarity":
-        from autograder.similarity import run_similarity
+        from autograder.integrity.similarity import run_similarity
 
         return run_similarity(args.folder, args.threshold, args.out)
     return 0

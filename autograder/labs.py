@@ -33,14 +33,37 @@ class Lab:
     def release_notebook(self) -> Path:
         return ROOT / "release" / self.id / self.notebook_name
 
-    def solutions(self) -> ModuleType:
-        """The lab's hidden reference module, ``solutions.<module>``."""
-        return importlib.import_module(f"solutions.{self.module}")
+    @property
+    def hidden_folder(self) -> Path:
+        """``solutions/<module>/``: the lab's hidden code, edited together (the reference, its hidden
+        tests, the catalogued mistakes, the checks of the lab's claims)."""
+        return ROOT / "solutions" / self.module
+
+    def hidden_module(self, name: str) -> ModuleType:
+        """One module of the lab's hidden code: ``solutions.<module>.<name>`` (``reference``,
+        ``hidden_tests``, ``mistakes`` or ``claims``)."""
+        return importlib.import_module(f"solutions.{self.module}.{name}")
+
+    def blanks(self) -> tuple[str, ...]:
+        """The names of the functions the lab's blanks define, in the notebook's order: read from
+        the source notebook, the one list of them."""
+        from autograder import cells
+
+        return tuple(cells.blank_names(cells.read(self.source_notebook)))
+
+    def reference(self) -> ModuleType:
+        """The lab's reference for every blank, ``solutions.<module>.reference``."""
+        return self.hidden_module("reference")
 
 
 def all_labs() -> list[Lab]:
     """Every lab that has a source notebook, in alphabetical order."""
     return [Lab(p.parent.name) for p in sorted((ROOT / "source").glob("*/*.ipynb")) if p.stem == p.parent.name]
+
+
+def lab_of(module_name: str) -> Lab:
+    """The lab whose hidden code ``module_name`` belongs to (``solutions.<module>.hidden_tests``)."""
+    return Lab(module_name.split(".")[1].replace("_", "-"))
 
 
 def get_lab(lab_id: str) -> Lab:

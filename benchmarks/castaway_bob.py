@@ -30,7 +30,7 @@ if str(ROOT) not in sys.path:  # run as a script from anywhere
 
 from course import ocean  # noqa: E402
 from solutions import castaway_bob as ref  # noqa: E402
-from solutions import castaway_bob_flow  # noqa: E402
+from solutions.castaway_bob import flow as castaway_bob_flow  # noqa: E402
 
 SEED = 2024
 RUN_CV = ocean.constant_velocity_filter(ref.kalman_step, ref.transition_matrix, ref.observation_matrix)

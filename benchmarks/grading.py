@@ -21,7 +21,8 @@ from nbclient import NotebookClient
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from autograder import grading, submissions  # noqa: E402
+from autograder import submissions  # noqa: E402
+from autograder.pipeline import grading, nbgrader_apps
 from autograder.labs import all_labs, get_lab  # noqa: E402
 
 
@@ -36,7 +37,7 @@ def notebook_seconds(path: Path, runs: int = 3) -> float:
 
 
 def main(lab_ids: list[str]) -> None:
-    grading.course_config()  # puts the course root on the kernels' PYTHONPATH
+    nbgrader_apps.course_config()  # puts the course root on the kernels' PYTHONPATH
     labs = [get_lab(i) for i in lab_ids] if lab_ids else all_labs()
     print(f"{'lab':<16}{'solved notebook [s]':>20}{'submissions':>13}{'grading [s]':>13}{'per submission [s]':>20}")
     for lab in labs:

@@ -2,7 +2,7 @@
 
     python benchmarks/grading_throughput.py [--size 200] [--jobs 1 2] [LAB ...]   (default: every lab)
 
-The class of each lab has ``size`` submissions (autograder/synthetic_class.py): every catalogued
+The class of each lab has ``size`` submissions (autograder/catalogues/synthetic_class.py): every catalogued
 fault once (careless work: stuck, crashing, memory-hungry, unreadable, ...), every catalogued cheat
 once (hostile work), then the solved notebook and the catalogued mistakes in turn (honest work). It
 is graded from scratch in a new course folder for each number of jobs. The script prints
@@ -26,7 +26,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from autograder import grading, synthetic_class  # noqa: E402
+from autograder import synthetic_class  # noqa: E402
+from autograder.pipeline import grading
 from autograder.labs import all_labs, get_lab  # noqa: E402
 
 

@@ -1,5 +1,5 @@
 """What one call of a student's function costs when the hidden test runs in the grader's process
-(autograder/compare.py) and the function in a sandboxed grading kernel.
+(autograder/pipeline/compare.py) and the function in a sandboxed grading kernel.
 
 Starts one kernel as grading does (SandboxedKernelManager, the kernel-side module sent as source),
 defines an identity function and one that calls a served blank, and times, for arguments of several
@@ -22,7 +22,7 @@ ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
 from autograder import compare  # noqa: E402
-from autograder.sandbox_kernel import SandboxedKernelManager  # noqa: E402
+from autograder.kernel.manager import SandboxedKernelManager  # noqa: E402
 
 REPEATS = 200
 SIZES = {"3 x 3": (3, 3), "3 x 1,000": (3, 1_000), "3 x 10,000 (a particle cloud)": (3, 10_000)}

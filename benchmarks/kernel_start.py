@@ -4,7 +4,7 @@
 
 Starts the python3 kernel ``runs`` times with each manager, in turn (so that the machine's load
 falls on all alike): jupyter_client's AsyncKernelManager as nbclient uses it (TCP on loopback), the
-same over Unix sockets (ipc), and autograder.sandbox's SandboxedKernelManager (ipc, launcher,
+same over Unix sockets (ipc), and autograder.kernel.sandbox's SandboxedKernelManager (ipc, launcher,
 Landlock, network namespace). For each it prints the median seconds from starting the kernel to
 its first reply, and to the end of a first cell that imports NumPy and SciPy and saves a Matplotlib
 figure (the sandboxed kernel gets its font list from the sandbox's cache, made once beforehand).
@@ -25,7 +25,7 @@ from jupyter_client.manager import AsyncKernelManager
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from autograder.sandbox import SandboxedKernelManager, status  # noqa: E402
+from autograder.kernel.sandbox import SandboxedKernelManager, status  # noqa: E402
 
 FIRST_CELL = """
 import numpy, scipy.linalg, matplotlib

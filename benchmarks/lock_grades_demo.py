@@ -31,12 +31,12 @@ from autograder.labs import all_labs, get_lab  # noqa: E402
 GRADE = """
 import sys
 from pathlib import Path
-from autograder import grading
+from autograder.pipeline import grading
 grading.grade(Path(sys.argv[1]), Path(sys.argv[2]), jobs=2)
 """
 
 CHECK_LOCK = """
-from autograder import versions
+from autograder.pipeline import versions
 differ = versions.differences_from_lock(versions.LOCK)
 assert not differ, f"the environment made from environment.lock differs from it: {differ}"
 """

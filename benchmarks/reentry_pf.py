@@ -2,7 +2,7 @@
 
 Three implementations of the same step (a)-(d), timed in the same run on the shipped data:
 
-- ``reference``: ``solutions.reentry_pf.pf_step`` (log-weights, inverse-CDF resampling at sorted
+- ``reference``: ``solutions.reentry_pf.reference.pf_step`` (log-weights, inverse-CDF resampling at sorted
   uniforms, so the search and the copy run through memory in order);
 - ``plain``: straightforward vectorised NumPy, the way the handout reads (weights as
   probabilities, ``rng.choice(N, N, p=w)``);

@@ -1,6 +1,6 @@
 """Dishonest submissions, graded by the real pipeline alongside honest ones: the tests that
 tests/test_cheating_graded.py (every cheat of train-kf) and tests/test_cheating_graded_other_labs.py
-(the other labs) both run, each on its own class (autograder/cheats.py has the catalogue;
+(the other labs) both run, each on its own class (autograder/catalogues/cheats.py has the catalogue;
 tests/test_integrity.py tests the detector itself).
 
 Each cheat earns nothing for the blanks it games, and each that the integrity checks catch is
@@ -17,8 +17,9 @@ import re
 
 import pytest
 
-from autograder import grading, submissions, synthetic_class
-from autograder.flag_cheating import FLAG
+from autograder.pipeline import grading, nbgrader_apps
+from autograder.catalogues import submissions, synthetic_class
+from autograder.integrity.flag import FLAG
 
 __all__ = ["graded", "pytest_generate_tests", "test_the_honest_submission_keeps_full_marks_and_is_not_flagged",
            "test_a_cheat_earns_nothing_for_what_it_games_and_is_flagged_when_caught",
@@ -67,7 +68,7 @@ def test_the_feedback_shows_each_flag_as_written(graded, request):
     if any(cheat.name == "dunder-import-reference" for _, cheat in request.module.CASES):
         assert any("__import__" in flag for row in flagged for flag in row.flags)
     for row in flagged:
-        page = grading.feedback_page(workdir, row.lab, row.student).read_text()
+        page = nbgrader_apps.feedback_page(workdir, row.lab, row.student).read_text()
         text = html.unescape(re.sub(r"<[^>]*>", "", page))
         for flag in row.flags:
             assert f"{FLAG} {flag}" in text, (row.student, flag)

@@ -48,8 +48,8 @@ def graded_run(nb_json: str, lab_id: str, course: str) -> str:
     """``nb_json`` (a sanitized notebook) after the course's GradingExecute, run from
     ``course/submitted/student/<lab_id>`` (where the catalogued cheats look for the gradebook and other students); the executed notebook as JSON.
     Picklable, for a process pool."""
-    from autograder.execute import GradingExecute
-    from autograder.grading import course_config
+    from autograder.pipeline.execute import GradingExecute
+    from autograder.pipeline.grading import course_config
 
     cwd = Path(course) / "submitted" / "student" / lab_id
     cwd.mkdir(parents=True, exist_ok=True)

@@ -1,6 +1,6 @@
 """The independent oracle for grades: the gradebook read with plain SQL, and grades.csv parsed back.
 
-The grading pipeline reads the gradebook through nbgrader's ORM (``autograder.grading.read_grades``)
+The grading pipeline reads the gradebook through nbgrader's ORM (``autograder.pipeline.grading.read_grades``)
 and writes grades.csv from those rows. Comparing grades.csv with the rows it was written from, or
 ``read_grades`` with itself, cannot fail. Here the gradebook is read with SQL through the database's
 own driver (``sqlite3`` or ``psycopg``), on nbgrader's tables, and grades.csv with the ``csv``
@@ -129,6 +129,6 @@ def formgrader_gives(db_url: str, lab: str, student: str, scores: dict[str, floa
 
 def nbgrader_export(workdir: Path, env: dict[str, str] | None = None) -> None:
     """`nbgrader export` as an instructor runs it from the course root, for the course ``workdir``:
-    grades.csv rewritten from the gradebook with the hand scores (autograder/export.py)."""
+    grades.csv rewritten from the gradebook with the hand scores (autograder/pipeline/export.py)."""
     subprocess.run([sys.executable, "-m", "nbgrader", "export", f"--CourseDirectory.root={workdir}"],
                    cwd=ROOT, env=env, check=True, capture_output=True)

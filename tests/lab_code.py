@@ -3,7 +3,6 @@ tests/test_hidden_tests.py and tests/test_diagnosis.py."""
 
 from __future__ import annotations
 
-import importlib
 from collections.abc import Callable
 from types import ModuleType
 
@@ -11,8 +10,8 @@ from autograder.labs import Lab
 
 
 def hidden_tests(lab: Lab) -> ModuleType:
-    """``autograder.hidden_tests.<module>``."""
-    return importlib.import_module(f"autograder.hidden_tests.{lab.module}")
+    """``solutions.<module>.hidden_tests``."""
+    return lab.hidden_module("hidden_tests")
 
 
 def answer_file(name: str) -> str:
@@ -23,6 +22,6 @@ def answer_file(name: str) -> str:
 def define(lab: Lab, code: str, name: str) -> Callable:
     """The function ``name`` that ``code`` defines, in the reference module's namespace, as a
     student's answer cell would define it."""
-    namespace = dict(vars(lab.solutions()))
+    namespace = dict(vars(lab.reference()))
     exec(compile(code, answer_file(name), "exec"), namespace)
     return namespace[name]

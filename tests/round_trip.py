@@ -20,10 +20,12 @@ from pathlib import Path
 
 import pytest
 
-from autograder import cells, grading, submissions
-from autograder.grading import GradeRow
+from autograder import cells
+from autograder.pipeline import grading, nbgrader_apps
+from autograder.catalogues import submissions
+from autograder.pipeline.grading import GradeRow
 from autograder.labs import Lab
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 from course.checks import NOT_WRITTEN
 from gradebook_sql import csv_disagreements, read_csv, sheets
 from over_labs import LABS
@@ -92,7 +94,7 @@ def test_each_mistake_loses_its_blank_and_only_its_blank(graded, lab: Lab) -> No
 def test_grades_csv_matches_the_gradebook(graded) -> None:
     """grades.csv parsed back against the SQLite gradebook read with SQL (tests/gradebook_sql.py)."""
     rows, workdir = graded
-    table, book = read_csv(workdir / "grades.csv"), sheets(grading.course_config(workdir).CourseDirectory.db_url)
+    table, book = read_csv(workdir / "grades.csv"), sheets(nbgrader_apps.course_config(workdir).CourseDirectory.db_url)
     assert set(book) == set(rows) == set(table)
     assert csv_disagreements(table, book) == []
 
@@ -105,7 +107,7 @@ def test_feedback_shows_messages_but_not_hidden_tests(graded) -> None:
     reason each lost cell lost its points is on the page."""
     rows, workdir = graded
     for (student, lab_id), row in rows.items():
-        page = grading.feedback_page(workdir, lab_id, student).read_text()
+        page = nbgrader_apps.feedback_page(workdir, lab_id, student).read_text()
         text = html.unescape(re.sub(r"<[^>]*>", "", page))
         assert not HIDDEN_CODE.search(text), (student, HIDDEN_CODE.search(text))
         blanks = cells.blank_names(cells.read(Lab(lab_id).source_notebook))
@@ -136,7 +138,7 @@ def test_no_honest_submission_is_flagged(graded) -> None:
 
 def test_feedback_names_the_mistake_it_diagnoses(graded, lab: Lab) -> None:
     """In grading (in the kernel, under the integrity monitor), the reason a mistake's cell lost its
-    points gives that mistake's hint and no other mistake's (autograder/diagnosis.py). All of them
+    points gives that mistake's hint and no other mistake's (autograder/hidden_tests/diagnosis.py). All of them
     are named on an idle machine; a diagnosis that runs out of time is left out, so at least half."""
     named = 0
     for mistake in catalogue(lab):

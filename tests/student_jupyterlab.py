@@ -35,7 +35,7 @@ from pathlib import Path
 
 from playwright.sync_api import Browser, sync_playwright
 
-from autograder.bundle import JUPYTER_CONFIG
+from autograder.release.bundle import JUPYTER_CONFIG
 from autograder.labs import ROOT
 
 START_TIMEOUT = 120.0  # seconds for JupyterLab to answer its HTTP API (a loaded 2-core CI machine)

@@ -16,13 +16,13 @@ import pytest
 from filterpy.kalman import KalmanFilter
 from scipy.interpolate import RegularGridInterpolator
 
-import solutions.castaway_bob as ref
-from autograder import data
+import solutions.castaway_bob.reference as ref
+from autograder.release import data
 from course import ocean
 from course.checks import random_spd
 from random_draws import random_draws
 from shipped_data import same_bits
-from solutions import castaway_bob_flow
+from solutions.castaway_bob import flow as flow_build
 
 
 @pytest.fixture(scope="module")
@@ -423,11 +423,11 @@ def test_flow_has_ocean_speeds_and_a_periodic_vortex_street(flow):
 
 def test_shipped_file_says_how_it_was_built(flow):
     with np.load(ocean.DATA_FILE) as data:
-        assert int(data["seed"]) == castaway_bob_flow.FLOW_SEED
-        assert float(data["reynolds"]) == castaway_bob_flow.REYNOLDS
+        assert int(data["seed"]) == flow_build.FLOW_SEED
+        assert float(data["reynolds"]) == flow_build.REYNOLDS
         assert data["velocity_m_s"].dtype == np.float16
         assert "phiflow" in str(data["solver"])
-    assert flow.velocity.shape == (castaway_bob_flow.N_SNAPSHOTS, 120, 50, 2)
+    assert flow.velocity.shape == (flow_build.N_SNAPSHOTS, 120, 50, 2)
     np.testing.assert_allclose(np.diff(flow.t), 360.0)
 
 
@@ -435,7 +435,7 @@ def test_the_file_writer_is_a_function_of_the_arrays(tmp_path):
     # rewriting the shipped arrays gives the shipped bytes: no timestamps, fixed order and level
     with np.load(ocean.DATA_FILE) as data:
         arrays = {name: data[name] for name in data.files}
-    castaway_bob_flow.write_npz(tmp_path / "again.npz", arrays)
+    flow_build.write_npz(tmp_path / "again.npz", arrays)
     assert (tmp_path / "again.npz").read_bytes() == ocean.DATA_FILE.read_bytes()
     with zipfile.ZipFile(io.BytesIO(ocean.DATA_FILE.read_bytes())) as archive:
         assert {info.date_time for info in archive.infolist()} == {(1980, 1, 1, 0, 0, 0)}
@@ -449,14 +449,14 @@ def test_the_solver_is_reproducible_from_its_seed():
     # Three solver steps (each about 1 s): the seeded kick, advection, diffusion and the pressure solve
     # warm-started from the previous step's pressure all take part; the kick already differs at the
     # first kept snapshot (by 0.49 m/s between seeds 1 and 2).
-    first = castaway_bob_flow.simulate_wake(seed=1, n_snapshots=2, spin_up_steps=1)
-    again = castaway_bob_flow.simulate_wake(seed=1, n_snapshots=2, spin_up_steps=1)
-    other = castaway_bob_flow.simulate_wake(seed=2, n_snapshots=2, spin_up_steps=1)
+    first = flow_build.simulate_wake(seed=1, n_snapshots=2, spin_up_steps=1)
+    again = flow_build.simulate_wake(seed=1, n_snapshots=2, spin_up_steps=1)
+    other = flow_build.simulate_wake(seed=2, n_snapshots=2, spin_up_steps=1)
     np.testing.assert_array_equal(first["velocity"], again["velocity"])
     assert not np.array_equal(first["velocity"], other["velocity"])
 
 
-CHECKPOINTS = data.RECORDS_DIR / castaway_bob_flow.CHECKPOINT_FILE_NAME
+CHECKPOINTS = data.RECORDS_DIR / flow_build.CHECKPOINT_FILE_NAME
 
 
 @random_draws(false_fail=0.0, fixed_seed=True,
@@ -473,13 +473,13 @@ def test_shipped_checkpoint_after_the_cross_current_is_rebuilt_from_the_seed(tmp
     300 are rerun only by the full rebuild, `python -m autograder data --check` (136 s), which maintainers
     run after changing the lab or its environment.
     """
-    _, states = castaway_bob_flow.run_solver(
-        stop=castaway_bob_flow.KICK_STEPS, checkpoint_steps=(castaway_bob_flow.KICK_STEPS,))
-    shipped = castaway_bob_flow.shipped_checkpoint(castaway_bob_flow.KICK_STEPS, CHECKPOINTS)
-    for part in castaway_bob_flow.STATE_PARTS:
-        assert same_bits(states[castaway_bob_flow.KICK_STEPS][part], shipped[part]), f"{part} differs from a rebuild"
-    states[castaway_bob_flow.SPIN_UP_STEPS] = castaway_bob_flow.shipped_checkpoint(castaway_bob_flow.SPIN_UP_STEPS, CHECKPOINTS)
-    castaway_bob_flow.write_npz(tmp_path / "checkpoints.npz", castaway_bob_flow.checkpoint_arrays(states))
+    _, states = flow_build.run_solver(
+        stop=flow_build.KICK_STEPS, checkpoint_steps=(flow_build.KICK_STEPS,))
+    shipped = flow_build.shipped_checkpoint(flow_build.KICK_STEPS, CHECKPOINTS)
+    for part in flow_build.STATE_PARTS:
+        assert same_bits(states[flow_build.KICK_STEPS][part], shipped[part]), f"{part} differs from a rebuild"
+    states[flow_build.SPIN_UP_STEPS] = flow_build.shipped_checkpoint(flow_build.SPIN_UP_STEPS, CHECKPOINTS)
+    flow_build.write_npz(tmp_path / "checkpoints.npz", flow_build.checkpoint_arrays(states))
     assert (tmp_path / "checkpoints.npz").read_bytes() == CHECKPOINTS.read_bytes(), "the checkpoint file has other contents"
 
 
@@ -497,9 +497,9 @@ def test_shipped_flow_is_rebuilt_bit_for_bit_from_its_checkpoint(tmp_path):
     the shipped state at step 300 is where steps 34 to 300 lead, i.e. a hand edit of that state, or a change
     that would act only in those steps.
     """
-    start = castaway_bob_flow.shipped_checkpoint(castaway_bob_flow.SPIN_UP_STEPS, CHECKPOINTS)
-    snapshots, _ = castaway_bob_flow.run_solver(start=start)
-    castaway_bob_flow.write_npz(tmp_path / "flow.npz", castaway_bob_flow.flow_arrays(castaway_bob_flow.kept_flow(snapshots)))
+    start = flow_build.shipped_checkpoint(flow_build.SPIN_UP_STEPS, CHECKPOINTS)
+    snapshots, _ = flow_build.run_solver(start=start)
+    flow_build.write_npz(tmp_path / "flow.npz", flow_build.flow_arrays(flow_build.kept_flow(snapshots)))
     assert (tmp_path / "flow.npz").read_bytes() == ocean.DATA_FILE.read_bytes(), "the flow file differs from a rebuild"
 
 

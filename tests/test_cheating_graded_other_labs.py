@@ -5,12 +5,12 @@ Graded here, for each lab: every cheat that the static scan does not catch (the 
 sanitize step or the hidden tests must stop it while the notebook is graded), and one cheat that the
 scan catches for each kind of charge (one blank, every blank, none), which shows the flag and the
 charge end to end in that lab. The scan's other catches go through the same lab-independent flagging
-(autograder/flag_cheating.py): tests/test_integrity.py scans every cheat of every lab, and
+(autograder/integrity/flag.py): tests/test_integrity.py scans every cheat of every lab, and
 benchmarks/grading_throughput.py grades every cheat of every lab. Grading all of them here (27 per
 lab) would add about ten minutes of grading to every CI run.
 """
 
-from autograder import cheats
+from autograder.catalogues import cheats
 from autograder.labs import get_lab
 from cheating_graded import *  # noqa: F401,F403 (the tests, the graded fixture, the parametrization)
 from over_labs import LABS

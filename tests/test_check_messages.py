@@ -11,7 +11,7 @@ import pytest
 
 from autograder import cells
 from autograder.labs import Lab
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 from course.checks import count, explain, is_plural
 from over_labs import over_labs
 

@@ -1,13 +1,13 @@
 """Every result a lab states is marked, and every marked result is recomputed and holds.
 
 A marker ``<!-- claim: <lab>/<name> -->`` in a source notebook's Markdown or in README must have a
-check registered in ``autograder/claims/<module>.py``, and every check must have a marker: a check
+check registered in ``solutions/<module>/claims.py``, and every check must have a marker: a check
 whose sentence was deleted, or a sentence whose check was never written, fails here.
 """
 
 import pytest
 
-from autograder import claims
+from autograder.authoring import claims
 from autograder.labs import ROOT, all_labs
 
 LABS = {lab.id: lab for lab in all_labs()}
@@ -16,7 +16,7 @@ MARKERS = claims.all_markers()
 
 
 def test_every_claims_module_belongs_to_a_lab():
-    modules = {p.stem for p in (ROOT / "autograder" / "claims").glob("*.py") if p.stem != "__init__"}
+    modules = {p.parent.name for p in (ROOT / "solutions").glob("*/claims.py")}
     assert modules <= {lab.module for lab in LABS.values()}, f"claims modules without a lab: {modules - {l.module for l in LABS.values()}}"
 
 
@@ -27,7 +27,7 @@ def test_every_marker_names_a_lab():
 
 def test_every_marker_has_a_check():
     missing = {cid: places for cid, places in MARKERS.items() if cid not in CHECKS}
-    assert not missing, "claim markers without a check in autograder/claims/: " + "; ".join(
+    assert not missing, "claim markers without a check in solutions/<module>/claims.py: " + "; ".join(
         f"{cid} ({', '.join(places)})" for cid, places in sorted(missing.items())
     )
 

@@ -8,12 +8,12 @@ import argparse
 import os
 import re
 
-import pytest
 
-from autograder import cells, default_jobs, grading
+from autograder import cells, default_jobs
+from autograder.pipeline import grading, table
 from autograder.__main__ import build_parser
-from autograder.grading import GradeRow
-from autograder.inventory import print_inventory
+from autograder.pipeline.grading import GradeRow
+from autograder.authoring.inventory import print_inventory
 from autograder.labs import Lab
 
 
@@ -91,7 +91,7 @@ def test_the_table_fits_100_columns_with_whole_words_and_each_lost_cell_once():
         _row("solved", {}, []),
         _row("noreason", {}, ["test_c"], notes=("It was submitted as train (1).ipynb and graded as train-kf.ipynb.",)),
     ]
-    text = grading.format_table(rows, {"nonlinear-filters": ["unreadable"]}, width=100)
+    text = table.format_table(rows, {"nonlinear-filters": ["unreadable"]}, width=100)
     lines = text.splitlines()
     assert max(len(line) for line in lines) <= 100, max(lines, key=len)
     words = set(re.findall(r"\S+", LONG + " NotWrittenYet: You have not written this function yet. "
@@ -117,8 +117,8 @@ def test_the_table_fits_100_columns_with_whole_words_and_each_lost_cell_once():
 def test_the_quick_demo_class_and_its_check(tmp_path):
     """The default demo class of one lab: blank, solved, two mistakes in different blanks, one cheat
     and one fault, each with what grading must make of it; a row that differs is reported."""
-    from autograder import demo
-    from autograder.synthetic_class import Outcome
+    from autograder.catalogues import demo
+    from autograder.catalogues.synthetic_class import Outcome
 
     lab = Lab("train-kf")
     expected = demo.write_demo_class([lab], tmp_path / "class")
@@ -143,7 +143,7 @@ def test_the_quick_demo_class_and_its_check(tmp_path):
 def test_the_demo_closes_with_a_verdict_and_where_to_look(tmp_path, monkeypatch, capsys):
     """run_demo's own output around the grading (grading itself replaced: it grades nothing here,
     so every row is missing and the verdict must say so)."""
-    from autograder import demo
+    from autograder.catalogues import demo
 
     monkeypatch.setattr(demo, "all_labs", lambda: [Lab("train-kf")])
     monkeypatch.setattr(demo.grading, "grade", lambda *args, **kwargs: [])

@@ -1,5 +1,5 @@
-"""Hidden tests compare in the grader's process (autograder/compare.py) against the student's
-function in the kernel (autograder/kernel_side.py).
+"""Hidden tests compare in the grader's process (autograder/pipeline/compare.py) against the student's
+function in the kernel (autograder/kernel/side.py).
 
 Here the kernel's side runs in a thread of the test process, serving functions from a plain dict
 as the notebook's namespace, over a real Unix socket: what crosses the wire, what comes back, what
@@ -21,10 +21,12 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from autograder import compare, diagnosis, kernel_side
-from autograder.compare import HiddenTest, HiddenTestFormError, StudentFunction
-from autograder.hidden import isolate
-from autograder.kernel_side import Codec, Peer, ProtocolError, Wire
+from autograder.pipeline import compare
+from autograder.hidden_tests import diagnosis
+from autograder.kernel import side
+from autograder.pipeline.compare import HiddenTest, HiddenTestFormError, StudentFunction
+from autograder.hidden_tests.isolate import isolate
+from autograder.kernel.side import Codec, Peer, ProtocolError, Wire
 from course.falling_object import FilterHistory
 from course.starship import check_band_plot
 from random_draws import random_draws
@@ -35,7 +37,7 @@ class Kernel:
 
     def __init__(self, namespace: dict, name: str):
         self.listener = compare.Listener()
-        self.thread = threading.Thread(target=kernel_side.serve, args=(self.listener.path, name, namespace),
+        self.thread = threading.Thread(target=side.serve, args=(self.listener.path, name, namespace),
                                        daemon=True)
         self.thread.start()
         self.peer, self.why_not = compare.connect(self.listener, None, lambda: not self.thread.is_alive())
@@ -178,7 +180,7 @@ def test_errors_come_back_by_type_with_the_students_line(kernel):
     with pytest.raises(np.linalg.LinAlgError, match="Singular matrix") as caught:
         student(np.zeros((2, 2)), np.ones(2), "solve")
     assert "line 6" in caught.value.where and "np.linalg.solve(A, b)" in caught.value.where
-    with pytest.raises(kernel_side.RaisedElsewhere) as caught:
+    with pytest.raises(side.RaisedElsewhere) as caught:
         student(np.eye(2), np.ones(2), "custom")
     assert type(caught.value).__name__ == "Oops" and str(caught.value) == "my own error"
 
@@ -249,7 +251,7 @@ def test_a_hostile_kernels_messages_are_refused(header, buffers, match, pair):
 
 def test_an_oversized_message_is_refused_before_it_is_read(pair):
     grader, kernel_end = pair
-    kernel_end.sendall(struct.pack("!QQ", kernel_side.MAX_MESSAGE_BYTES + 1, 0))
+    kernel_end.sendall(struct.pack("!QQ", side.MAX_MESSAGE_BYTES + 1, 0))
     with pytest.raises(ProtocolError, match="larger than the wire allows"):
         Wire(grader).receive()
 
@@ -257,18 +259,18 @@ def test_an_oversized_message_is_refused_before_it_is_read(pair):
 def test_a_silent_kernel_times_out(pair):
     wire = Wire(pair[0])
     wire.deadline = time.monotonic() + 0.2
-    with pytest.raises(kernel_side.PeerTimeout):
+    with pytest.raises(side.PeerTimeout):
         wire.receive()
 
 
 def test_the_hidden_block_has_one_form():
-    code = "from autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(kupdate)\n"
-    assert compare.hidden_test(code) == HiddenTest("autograder.hidden_tests.train_kf", "check_kupdate", "kupdate")
-    for bad in ("from autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(predict)\n",
-                "from solutions.train_kf import kupdate\nkupdate(1)\n",
-                "import os\nfrom autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(kupdate)\n",
-                "from autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(kupdate, seed=1)\n",
-                "from autograder.hidden_tests.train_kf import check_kupdate as c\nc(kupdate)\n"):
+    code = "from solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate)\n"
+    assert compare.hidden_test(code) == HiddenTest("solutions.train_kf.hidden_tests", "check_kupdate", "kupdate")
+    for bad in ("from solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(predict)\n",
+                "from solutions.train_kf.reference import kupdate\nkupdate(1)\n",
+                "import os\nfrom solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate)\n",
+                "from solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate, seed=1)\n",
+                "from solutions.train_kf.hidden_tests import check_kupdate as c\nc(kupdate)\n"):
         with pytest.raises(HiddenTestFormError):
             compare.hidden_test(bad)
     source = "validate(kupdate)\n### BEGIN HIDDEN TESTS\n" + code + "### END HIDDEN TESTS\n"
@@ -276,8 +278,8 @@ def test_the_hidden_block_has_one_form():
 
 
 def test_a_missing_reference_stops_grading_before_any_kernel(monkeypatch):
-    test = HiddenTest("autograder.hidden_tests.no_such_lab", "check_f", "f")
-    with pytest.raises(compare.ReferenceUnavailable, match="cannot import autograder.hidden_tests.no_such_lab"):
+    test = HiddenTest("solutions.no_such_lab.hidden_tests", "check_f", "f")
+    with pytest.raises(compare.ReferenceUnavailable, match="cannot import solutions.no_such_lab.hidden_tests"):
         test.load()
 
 

@@ -14,7 +14,7 @@ def test_require_recognises_every_stub_that_nbgrader_generates(lab):
     for cell in cells.read(lab.release_notebook).cells:
         if cells.is_code_answer(cell):
             # the names the set-up cell gives the stubs (defaults such as INNOVATION_STD) are the reference module's too
-            namespace = dict(vars(lab.solutions()))
+            namespace = dict(vars(lab.reference()))
             exec(cell.source, namespace)
             [func] = [v for k, v in namespace.items() if callable(v) and k == cells.grade_id(cell)]
             with pytest.raises(NotWrittenYet, match=rf"needs {func.__name__}\(\), which you have not written yet"):

@@ -1,6 +1,6 @@
 """Cheating gains nothing whether or not the scan finds it: submissions run through the grading
 execute step alone (GradingExecute with the course's configuration: hidden tests compared in the
-grader's process, the sandboxed kernel), without the scan (autograder/integrity.py), which
+grader's process, the sandboxed kernel), without the scan (autograder/integrity/scan.py), which
 tests/test_integrity.py tests on its own.
 
 - Every catalogued cheat that the comparison or the sandbox defeats scores 0 on the blank it tries
@@ -30,7 +30,8 @@ import pytest
 from nbformat import NotebookNode
 from nbgrader.utils import determine_grade
 
-from autograder import cells, cheats, submissions
+from autograder import cells
+from autograder.catalogues import cheats, submissions
 from autograder.labs import ROOT, Lab, get_lab
 from defended_runs import graded_run, sanitized
 from over_labs import LABS, over_labs
@@ -51,11 +52,11 @@ try:
 except Exception as error:
     found["import solutions"] = type(error).__name__
 try:
-    __import__("autograder.hidden_tests.train_kf")
+    __import__("solutions.train_kf.hidden_tests")
     found["import the hidden tests"] = "worked"
 except Exception as error:
     found["import the hidden tests"] = type(error).__name__
-for name, path in [("read solutions", "ROOT/solutions/train_kf.py"), ("read autograder", "ROOT/autograder/__init__.py"),
+for name, path in [("read solutions", "ROOT/solutions/train_kf/reference.py"), ("read autograder", "ROOT/autograder/__init__.py"),
                    ("read the gradebook", "COURSE/gradebook.db"), ("read the source", "ROOT/source/train-kf/train-kf.ipynb")]:
     try:
         open(path, "rb").read(1)

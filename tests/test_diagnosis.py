@@ -1,4 +1,4 @@
-"""Hidden-test messages name catalogued mistakes (autograder/diagnosis.py), measured over the whole
+"""Hidden-test messages name catalogued mistakes (autograder/hidden_tests/diagnosis.py), measured over the whole
 catalogue: the fraction of mistakes whose failing hidden test names them, no mistake ever named as
 another, and the reference and the notebook's model answers never diagnosed.
 
@@ -15,10 +15,11 @@ import types
 import numpy as np
 import pytest
 
-from autograder import cells, diagnosis
-from autograder.diagnosis import LEAD, diagnose, diagnosed, mistake_function
+from autograder import cells
+from autograder.hidden_tests import diagnosis
+from autograder.hidden_tests.diagnosis import LEAD, diagnose, diagnosed, mistake_function
 from autograder.labs import all_labs
-from autograder.mistakes import Mistake, catalogue
+from autograder.catalogues.mistakes import Mistake, catalogue
 from lab_code import define, hidden_tests
 from over_labs import LABS, over_labs
 from random_draws import random_draws
@@ -79,7 +80,7 @@ def test_the_reference_and_the_model_answers_are_never_diagnosed(lab):
     """A correct answer passes, so it is never diagnosed in grading; here the diagnosis is asked
     directly, as if the check had failed, and must find no mistake for the reference function or
     for the notebook's model answer (no mistake behaves like the right answer on the hidden cases)."""
-    hidden, reference, answers = hidden_tests(lab), lab.solutions(), _answers(lab)
+    hidden, reference, answers = hidden_tests(lab), lab.reference(), _answers(lab)
     for blank in cells.blank_names(cells.read(lab.source_notebook)):
         check = getattr(hidden, f"check_{blank}").__wrapped__
         for function in (getattr(reference, blank), define(lab, answers[blank], blank)):
@@ -102,7 +103,7 @@ def test_every_hidden_test_is_diagnosed_and_every_mistake_has_a_hint(lab):
         assert not re.search(r"\d(\.?\d){3}", hint), f"{mistake.slug}: a hint quotes no computed number: {hint!r}"
         others = [m.slug for m in mistakes if m.blank == mistake.blank and m is not mistake and hint in m.hint]
         assert others == [], f"the hint of {mistake.slug} is part of the hint of {others}"
-        assert callable(mistake_function(lab.solutions(), mistake))
+        assert callable(mistake_function(lab.reference(), mistake))
 
 
 def test_a_diagnosed_message_keeps_the_hidden_tests_message_and_adds_the_hint():
@@ -121,12 +122,12 @@ def test_a_diagnosed_message_keeps_the_hidden_tests_message_and_adds_the_hint():
 def _toy_lab(monkeypatch, mistakes: tuple[Mistake, ...], seed: int):
     """A toy lab "toy" with one blank, twice(x) = 2 x, the given mistakes, and its hidden test on
     random x drawn from ``seed``."""
-    reference = types.ModuleType("solutions.toy")
+    reference = types.ModuleType("solutions.toy.reference")
     reference.__file__ = __file__
     reference.np = np
-    catalogue_module = types.ModuleType("autograder.mistakes.toy")
+    catalogue_module = types.ModuleType("solutions.toy.mistakes")
     catalogue_module.MISTAKES = mistakes
-    hidden = types.ModuleType("autograder.hidden_tests.toy")
+    hidden = types.ModuleType("solutions.toy.hidden_tests")
     hidden.BLANKS = ("twice",)
     for module in (reference, catalogue_module, hidden):
         monkeypatch.setitem(sys.modules, module.__name__, module)

@@ -11,7 +11,8 @@ import pytest
 from nbgrader.api import Gradebook
 from nbgrader.coursedir import CourseDirectory
 
-from autograder import grading, submissions
+from autograder.pipeline import grading, grades, nbgrader_apps
+from autograder.catalogues import submissions
 from autograder.labs import get_lab
 from gradebook_sql import formgrader_gives, nbgrader_export
 
@@ -44,9 +45,9 @@ def test_grade_records_the_versions_beside_grades_csv(graded):
 
 def test_hand_grades_reach_grades_csv_through_nbgrader_export(graded):
     class_dir, workdir = graded
-    config = grading.course_config(workdir)
+    config = nbgrader_apps.course_config(workdir)
     db_url = CourseDirectory(config=config).db_url
-    [row] = grading.read_grades(workdir, [LAB])
+    [row] = grades.read_grades(workdir, [LAB])
     written = [cell for cell in row.cells if cell not in row.autograded]
     assert written and all(read_csv(workdir / "grades.csv")[cell] == "" for cell in written)
 

@@ -1,12 +1,14 @@
 """Faulty submissions are graded alongside honest ones: each gets a clear reason, loses only what
-its fault costs, and nobody else's grade changes (autograder/faults.py has the catalogue)."""
+its fault costs, and nobody else's grade changes (autograder/catalogues/faults.py has the catalogue)."""
 
 import shutil
 
 import pytest
 
-from autograder import cells, faults, grading, submissions, synthetic_class
-from autograder.faults import FAULTS
+from autograder import cells
+from autograder.catalogues import faults, submissions, synthetic_class
+from autograder.pipeline import grading, nbgrader_apps
+from autograder.catalogues.faults import FAULTS
 from autograder.labs import get_lab
 
 LAB = get_lab("train-kf")
@@ -54,7 +56,7 @@ def test_each_fault_costs_what_it_should_says_why_and_is_not_flagged(graded, fau
 def test_feedback_shows_the_graders_note_first(graded):
     fault = faults.get("kernel-dies")
     _, workdir, _ = graded
-    html = grading.feedback_page(workdir, LAB.id, fault.student_id(LAB)).read_text()
+    html = nbgrader_apps.feedback_page(workdir, LAB.id, fault.student_id(LAB)).read_text()
     assert html.index("Note from the grader") < html.index("Lab train-kf")
     assert "The kernel died in cell" in html
 

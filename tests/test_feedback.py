@@ -15,10 +15,12 @@ import re
 import nbformat
 import pytest
 
-from autograder import cells, grading, submissions
+from autograder import cells
+from autograder.pipeline import grading, nbgrader_apps
+from autograder.catalogues import submissions
 from autograder.__main__ import main
 from autograder.labs import get_lab
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 from gradebook_sql import formgrader_gives
 
 LAB = get_lab("train-kf")
@@ -36,7 +38,7 @@ def graded(tmp_path_factory):
 
 
 def page(workdir) -> str:
-    return grading.feedback_page(workdir, LAB.id, STUDENT).read_text()
+    return nbgrader_apps.feedback_page(workdir, LAB.id, STUDENT).read_text()
 
 
 def panel_heading(text: str, grade_id: str) -> str:
@@ -76,7 +78,7 @@ def test_the_feedback_command_rewrites_the_pages_after_hand_grading(graded, caps
     row, workdir = graded
     first, *rest = written(row)
     hand = row.max_cells[first] - 0.5
-    formgrader_gives(grading.course_config(workdir).CourseDirectory.db_url, LAB.id, STUDENT, {first: hand})
+    formgrader_gives(nbgrader_apps.course_config(workdir).CourseDirectory.db_url, LAB.id, STUDENT, {first: hand})
     assert "not graded yet" in panel_heading(page(workdir), first)  # nothing changes by itself
     assert main(["feedback", "--workdir", str(workdir)]) == 0
     assert "Rewrote the feedback of 1 graded submission in" in capsys.readouterr().out

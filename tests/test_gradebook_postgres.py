@@ -19,9 +19,11 @@ import pytest
 from nbgrader.coursedir import CourseDirectory
 
 import postgres_server
-from autograder import cells, cheats, grading, late, submissions
+from autograder import cells
+from autograder.catalogues import cheats, submissions
+from autograder.pipeline import grading, late, nbgrader_apps
 from autograder.labs import ROOT, get_lab
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 from gradebook_sql import csv_disagreements, formgrader_gives, nbgrader_export, read_csv, sheets
 
 LAB = get_lab("train-kf")
@@ -77,7 +79,7 @@ def grade_and_hand_grade(class_dir, workdir, url: str | None):
         else:
             patch.delenv("GRADEBOOK_URL", raising=False)
         rows = grading.grade(class_dir, workdir, jobs=2)
-        db_url = CourseDirectory(config=grading.course_config(workdir)).db_url
+        db_url = CourseDirectory(config=nbgrader_apps.course_config(workdir)).db_url
     formgrader_gives(db_url, LAB.id, "late", {cell: p - 1.0 for cell, p in written_cells().items()})
     nbgrader_export(workdir, env)
     return {row.student: row for row in rows}, db_url
@@ -100,7 +102,7 @@ def graded_postgres(postgres_url, class_dir, tmp_path_factory):
 
 def test_the_configuration_follows_gradebook_url(monkeypatch, tmp_path):
     def db_url():
-        return CourseDirectory(config=grading.course_config(tmp_path)).db_url
+        return CourseDirectory(config=nbgrader_apps.course_config(tmp_path)).db_url
 
     monkeypatch.delenv("GRADEBOOK_URL", raising=False)
     assert db_url().startswith(f"sqlite:///{tmp_path / 'gradebook.db'}")

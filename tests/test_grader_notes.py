@@ -4,9 +4,11 @@ them as written, and a note that arrives inside a submission is not taken for th
 import nbformat
 from nbconvert.filters.markdown import markdown2html
 
-from autograder import cells, grading, submissions
+from autograder import cells
+from autograder.pipeline import intake
+from autograder.catalogues import submissions
 from autograder.labs import get_lab
-from autograder.restore_cells import NOTE_TITLE, NOTES_KEY, add_grader_notes, grader_notes
+from autograder.pipeline.restore import NOTE_TITLE, NOTES_KEY, add_grader_notes, grader_notes
 
 LAB = get_lab("train-kf")
 NOTES = [
@@ -34,7 +36,7 @@ def test_a_note_inside_a_submission_is_the_students_own_cell(tmp_path):
     path = submissions.write(nb, tmp_path / "class", "s001", LAB)
     path.rename(path.with_name("my copy.ipynb"))
 
-    grading.import_submissions(tmp_path / "class", tmp_path / "course", [LAB])
+    intake.import_submissions(tmp_path / "class", tmp_path / "course", [LAB])
 
     imported = cells.read(tmp_path / "course" / "submitted" / "s001" / LAB.id / LAB.notebook_name)
     assert grader_notes(imported) == [f"It was submitted as my copy.ipynb and graded as {LAB.notebook_name}."]

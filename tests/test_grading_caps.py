@@ -1,4 +1,4 @@
-"""The caps on each grading kernel that README promises (autograder/execute.py, nbgrader_config.py):
+"""The caps on each grading kernel that README promises (autograder/pipeline/execute.py, nbgrader_config.py):
 their values, and the two ways a submission stops early, run on small notebooks with the grading
 executor alone (no gradebook): the time limit for the whole submission, and too many restarts.
 
@@ -9,15 +9,15 @@ that says why (so they score 0 when they are test cells), and the grader's note 
 import nbformat
 from nbclient import NotebookClient
 
-from autograder import grading
-from autograder.execute import NOT_RUN, GradingExecute
-from autograder.restore_cells import grader_notes
+from autograder.pipeline import nbgrader_apps
+from autograder.pipeline.execute import NOT_RUN, GradingExecute
+from autograder.pipeline.restore import grader_notes
 
 
 def test_the_caps_are_readmes():
     """README: 4 GiB of address space, 30 s per cell, 300 s per submission, 1,000,000 characters of
     output kept per cell."""
-    config = grading.course_config()
+    config = nbgrader_apps.course_config()
     executor = GradingExecute(config=config)
     assert (executor.memory_limit_gb, executor.timeout, executor.notebook_timeout, executor.max_output_bytes) == (
         4.0, 30, 300, 1_000_000)
@@ -27,7 +27,7 @@ def run(sources: list[str], tmp_path, **caps) -> nbformat.NotebookNode:
     """``sources`` as code cells, run by the grading executor with the course's configuration and
     ``caps`` in it (set in the configuration, which the executor re-reads for each notebook)."""
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in sources])
-    config = grading.course_config(tmp_path)
+    config = nbgrader_apps.course_config(tmp_path)
     for name, value in caps.items():
         setattr(config.GradingExecute, name, value)
     executor = GradingExecute(config=config)

@@ -15,7 +15,7 @@ import numpy as np
 import pytest
 
 from autograder import cells
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 from course.checks import check_close
 from lab_code import answer_file, define, hidden_tests
 from over_labs import LABS, over_labs
@@ -27,7 +27,7 @@ from over_labs import LABS, over_labs
 def test_smoke_every_check_runs_and_accepts_the_reference(lab):
     """A smoke test (the reference cannot fail its own comparison unless a check is broken): every
     blank has a check, and it runs to the end on the reference function."""
-    reference = lab.solutions()
+    reference = lab.reference()
     for name in cells.blank_names(cells.read(lab.source_notebook)):
         getattr(hidden_tests(lab), f"check_{name}")(getattr(reference, name))
 
@@ -192,7 +192,7 @@ def test_a_failing_hidden_test_shows_no_reference_number(lab, mistake, monkeypat
     """The message a student reads when this mistake fails its hidden test holds no number that the
     reference computed while the test ran, other than the inputs it was given (every function of
     solutions.<module> is recorded)."""
-    reference = lab.solutions()
+    reference = lab.reference()
     inputs: list = []
     outputs: list = []
     for name, function in vars(reference).items():

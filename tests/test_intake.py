@@ -9,9 +9,10 @@ import zipfile
 import nbformat
 import pytest
 
-from autograder import grading, submissions
+from autograder.pipeline import intake
+from autograder.catalogues import submissions
 from autograder.__main__ import main
-from autograder.intake import IntakeError, collect
+from autograder.pipeline.collect import IntakeError, collect
 from autograder.labs import ROOT, get_lab
 
 LAB = get_lab("train-kf")
@@ -77,7 +78,7 @@ def test_collects_a_zip_into_the_grading_layout_and_reports_every_other_file(dow
 
     # grade() takes this layout as it is, timestamp included
     workdir = tmp_path / "course"
-    assert grading.import_submissions(out, workdir, [LAB]) == {"train-kf": ["s001", "s002", "s003"]}
+    assert intake.import_submissions(out, workdir, [LAB]) == {"train-kf": ["s001", "s002", "s003"]}
     assert (workdir / "submitted/s001/train-kf/timestamp.txt").read_text() == "2026-10-03 00:00:00"
 
 
@@ -135,7 +136,7 @@ def test_plain_nbgrader_zip_collect_uses_the_collector(download, tmp_path):
     (archive / zip_path.name).write_bytes(zip_path.read_bytes())
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     subprocess.run([sys.executable, "-m", "nbgrader", "zip_collect", LAB.id,
-                    "--collector=autograder.intake.StudentIdCollector",
+                    "--collector=autograder.pipeline.collect.StudentIdCollector",
                     f"--StudentIdCollector.students_file={students}"],
                    cwd=course, env=env, check=True, capture_output=True)
     assert sorted(p.name for p in (course / "submitted").iterdir()) == ["s001", "s002", "s003"]

@@ -1,5 +1,5 @@
-"""The static scan (autograder/integrity.py) against the catalogue of hostile submissions
-(autograder/cheats.py) and the honest corpus: no finding on any honest notebook (every lab's blank
+"""The static scan (autograder/integrity/scan.py) against the catalogue of hostile submissions
+(autograder/catalogues/cheats.py) and the honest corpus: no finding on any honest notebook (every lab's blank
 release, solved notebook and catalogued mistakes, and a notebook of honest habits); every cheat it
 should catch is caught, charged to the right blanks; it is silent where another defence works.
 
@@ -14,10 +14,12 @@ import nbformat
 import pytest
 from nbformat import NotebookNode
 
-from autograder import cells, cheats, integrity, submissions
-from autograder.integrity import Finding
+from autograder import cells
+from autograder.catalogues import cheats, submissions
+from autograder.integrity import scan
+from autograder.integrity.scan import Finding
 from autograder.labs import get_lab
-from autograder.mistakes import catalogue as mistakes
+from autograder.catalogues.mistakes import catalogue as mistakes
 from over_labs import LABS, over_labs
 
 TRAIN = get_lab("train-kf")
@@ -87,13 +89,13 @@ def covers(findings: list[Finding], blanks: tuple[str, ...] | None) -> bool:
 def test_static_scan_flags_no_honest_notebook(lab):
     notebooks = {"blank release": cells.read(lab.release_notebook), "solved": submissions.solved(lab)}
     notebooks |= {f"mistake {m.blank}/{m.slug}": submissions.with_mistake(lab, m) for m in mistakes(lab)}
-    flagged = {name: found for name, nb in notebooks.items() if (found := integrity.static_findings(nb, lab))}
+    flagged = {name: found for name, nb in notebooks.items() if (found := scan.static_findings(nb, lab))}
     assert not flagged
     assert len(notebooks) == 2 + len(mistakes(lab))
 
 
 def test_honest_habits_are_not_flagged():
-    assert integrity.static_findings(honest_habits_notebook(), TRAIN) == []
+    assert scan.static_findings(honest_habits_notebook(), TRAIN) == []
 
 
 # -- static scan of the cheats ----------------------------------------------------------------------
@@ -103,7 +105,7 @@ STATIC_CASES = [(lab, cheat) for lab in LABS for cheat in cheats.catalogue(lab) 
 
 @pytest.mark.parametrize("lab, cheat", STATIC_CASES, ids=[f"{lab.id}-{cheat.name}" for lab, cheat in STATIC_CASES])
 def test_static_scan_catches_cheat(lab, cheat):
-    findings = integrity.static_findings(cheat.notebook(lab), lab)
+    findings = scan.static_findings(cheat.notebook(lab), lab)
     assert findings, f"{cheat.name} ({cheat.attack}) was not found"
     wanted = cheat.blanks(lab)
     if wanted == ():
@@ -123,7 +125,7 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     "%config InteractiveShell.ast_node_interactivity = 'all'": [None],
     "%load_ext autoreload\n%autoreload 2": [],
     "%time x = predict(np.zeros(2), np.eye(2), np.eye(2), np.eye(2))": [],
-    "%time import solutions.train_kf": [None],
+    "%time import solutions.train_kf.reference": [None],
     "import os\nos.environ['OMP_NUM_THREADS'] = '1'": [()],
     "import sys\nsys.setrecursionlimit(5000)": [],
     "plt.rcParams['figure.figsize'] = (8, 4)": [],
@@ -141,7 +143,7 @@ def test_static_scan_edge_cases(source):
     nb = submissions.solved(TRAIN)
     index = next(i for i, c in enumerate(nb.cells) if cells.meta(c).get("grade_id") == "setup") + 1
     nb.cells.insert(index, nbformat.v4.new_code_cell(source))
-    found = integrity.static_findings(nb, TRAIN)
+    found = scan.static_findings(nb, TRAIN)
     assert sorted({f.blanks for f in found}, key=repr) == EDGE_CASES[source], found
 
 
@@ -151,13 +153,13 @@ NOT_STATIC = [(lab, cheat) for lab in LABS for cheat in cheats.catalogue(lab) if
 @pytest.mark.parametrize("lab, cheat", NOT_STATIC, ids=[f"{lab.id}-{cheat.name}" for lab, cheat in NOT_STATIC])
 def test_static_scan_is_silent_where_another_defence_works(lab, cheat):
     """Overwritten test cells, hard-coded visible cases and the aliased patch are not static findings."""
-    assert integrity.static_findings(cheat.notebook(lab), lab) == []
+    assert scan.static_findings(cheat.notebook(lab), lab) == []
 
 
 # -- hard-coded visible cases -----------------------------------------------------------------------
 
 def test_hard_coded_visible_cases_pass_the_visible_checks_and_fail_the_hidden_tests():
-    from autograder.hidden_tests.train_kf import check_process_noise
+    from solutions.train_kf.hidden_tests import check_process_noise
 
     nb = cheats.get("hardcode-visible").notebook(TRAIN)
     namespace: dict = {}
@@ -169,7 +171,7 @@ def test_hard_coded_visible_cases_pass_the_visible_checks_and_fail_the_hidden_te
     exec(visible.source, namespace)  # the visible checks pass
     with pytest.raises(AssertionError):
         check_process_noise(namespace["process_noise"])
-    assert integrity.static_findings(nb, TRAIN) == []
+    assert scan.static_findings(nb, TRAIN) == []
 
 
 # -- the catalogue ----------------------------------------------------------------------------------

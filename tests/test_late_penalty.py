@@ -10,10 +10,12 @@ import pytest
 from nbgrader.api import Gradebook
 from nbgrader.coursedir import CourseDirectory
 
-from autograder import cells, grading, late, submissions
-from autograder.intake import collect
+from autograder import cells
+from autograder.pipeline import grading, late, nbgrader_apps
+from autograder.catalogues import submissions
+from autograder.pipeline.collect import collect
 from autograder.labs import get_lab
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 from gradebook_sql import csv_disagreements, formgrader_gives, nbgrader_export, read_csv, sheets
 
 LAB = get_lab("train-kf")
@@ -53,7 +55,7 @@ def points(lab) -> dict[str, float]:
 
 def test_the_configured_penalty_is_readmes():
     """README: 10% of the earned points for every started day late, at most 50%."""
-    config = grading.course_config()
+    config = nbgrader_apps.course_config()
     assert (config.LatePenalty.percent_per_day, config.LatePenalty.max_percent) == (10.0, 50.0)
 
 
@@ -79,7 +81,7 @@ def test_late_submissions_lose_readmes_penalty_and_hand_grades_are_not_penalised
 
     workdir = tmp_path / "course"
     rows = {row.student: row for row in grading.grade(tmp_path / "SUBMISSIONS", workdir)}
-    db_url = CourseDirectory(config=grading.course_config(workdir)).db_url
+    db_url = CourseDirectory(config=nbgrader_apps.course_config(workdir)).db_url
     with Gradebook(db_url) as gb:
         assert gb.find_assignment(LAB.id).duedate == due.replace(tzinfo=None)
         assert gb.find_submission(LAB.id, "late").total_seconds_late == 1.5 * DAY

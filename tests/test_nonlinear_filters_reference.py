@@ -11,8 +11,8 @@ from filterpy.kalman import KalmanFilter
 from numpy.polynomial.hermite_e import hermegauss
 from scipy.integrate import quad_vec, solve_ivp
 
-import solutions.nonlinear_filters as ref
-from autograder import data
+import solutions.nonlinear_filters.reference as ref
+from autograder.release import data
 from autograder.hidden_tests import nonlinear_filters as checks
 from course import air_traffic, cut
 from course.checks import random_spd

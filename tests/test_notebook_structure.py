@@ -1,10 +1,8 @@
 """Every source notebook follows the kit's conventions (docs/adding-a-lab.md)."""
 
 import ast
-import importlib
 import inspect
 
-import pytest
 from nbgrader.nbgraderformat import MetadataValidator
 
 from autograder import cells
@@ -43,7 +41,7 @@ def test_notebook_starts_with_credit_and_minimal_tracebacks(lab):
 @over_labs
 def test_each_blank_is_one_function_identical_to_the_reference(lab):
     nb = cells.read(lab.source_notebook)
-    reference = lab.solutions()
+    reference = lab.reference()
     blanks = [c for c in nb.cells if cells.is_code_answer(c)]
     assert blanks, "a lab has blanks"
     for cell in blanks:
@@ -54,14 +52,14 @@ def test_each_blank_is_one_function_identical_to_the_reference(lab):
         expected = ast.parse(inspect.getsource(getattr(reference, name))).body[0]
         assert [a.arg for a in func.args.args] == [a.arg for a in expected.args.args], f"{name}: signature"
         assert _without_docstring(ast.parse(cells.model_answer(cell)).body[0]) == _without_docstring(expected), (
-            f"{name}: the model answer in the notebook differs from solutions.{lab.module}.{name}"
+            f"{name}: the model answer in the notebook differs from solutions.{lab.module}.reference.{name}"
         )
 
 
 @over_labs
 def test_each_blank_has_visible_checks_then_a_hidden_test_cell(lab):
     nb = cells.read(lab.source_notebook)
-    hidden = importlib.import_module(f"autograder.hidden_tests.{lab.module}")
+    hidden = lab.hidden_module("hidden_tests")
     by_id = {cells.grade_id(c): (i, c) for i, c in enumerate(nb.cells) if "nbgrader" in c.metadata}
     for name in cells.blank_names(nb):
         i_answer, _ = by_id[name]
@@ -75,14 +73,14 @@ def test_each_blank_has_visible_checks_then_a_hidden_test_cell(lab):
         assert cells.meta(test)["points"] > 0 and cells.meta(test)["locked"], f"test_{name}"
         visible, region = test.source.split(BEGIN_HIDDEN)
         assert region.split(END_HIDDEN)[0].strip().splitlines() == [
-            f"from autograder.hidden_tests.{lab.module} import check_{name}",
+            f"from solutions.{lab.module}.hidden_tests import check_{name}",
             f"check_{name}({name})",
         ], f"test_{name}: the hidden region only calls check_{name}"
         *comments, validate = visible.strip().splitlines()
         assert all(line.startswith("#") for line in comments) and validate == f"validate({name})", (
             f"test_{name}: comments, then validate({name}) (what Validate checks), then the hidden region"
         )
-        assert callable(getattr(hidden, f"check_{name}")), f"autograder.hidden_tests.{lab.module}.check_{name}"
+        assert callable(getattr(hidden, f"check_{name}")), f"solutions.{lab.module}.hidden_tests.check_{name}"
 
 
 @over_labs
@@ -129,10 +127,10 @@ def _blanks_called(reference, blank: str, blanks: set[str]) -> set[str]:
 @over_labs
 def test_a_blank_that_calls_others_is_graded_after_them(lab):
     """In grading, the grader answers a blank's calls of another blank with the reference only if
-    that blank's own hidden test came earlier (autograder/compare.py): a test can then never collect
+    that blank's own hidden test came earlier (autograder/pipeline/compare.py): a test can then never collect
     the reference's answers for a later one. So the notebook grades the blanks a blank calls first."""
     order = cells.blank_names(cells.read(lab.source_notebook))
-    reference = lab.solutions()
+    reference = lab.reference()
     for position, blank in enumerate(order):
         later = _blanks_called(reference, blank, set(order)) - set(order[:position])
         assert not later, f"{blank} calls {sorted(later)}, whose hidden tests come after its own"

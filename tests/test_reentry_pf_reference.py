@@ -1,5 +1,5 @@
-"""The reentry-pf reference (solutions.reentry_pf) against independent oracles, and the
-statistical hidden test of pf_step (autograder.hidden_tests.reentry_pf): its false-fail budget,
+"""The reentry-pf reference (solutions.reentry_pf.reference) against independent oracles, and the
+statistical hidden test of pf_step (solutions.reentry_pf.hidden_tests): its false-fail budget,
 the exact tail behind the chi-square test, the reference passing every check on each seed, the
 posterior statistic Gaussian over 200 seeds, and every catalogued pf_step mistake failing on each
 seed (tests/random_draws.py's 21)."""
@@ -23,9 +23,9 @@ from scipy import stats
 from scipy.integrate import solve_ivp
 from scipy.special import gammaln
 
-from autograder.diagnosis import mistake_function
+from autograder.hidden_tests.diagnosis import mistake_function
 from autograder.hidden_tests import reentry_pf as checks
-from autograder.mistakes.reentry_pf import MISTAKES
+from solutions.reentry_pf.mistakes import MISTAKES
 from course import falling_object as fo
 from random_draws import random_draws
 from solutions import reentry_pf as ref

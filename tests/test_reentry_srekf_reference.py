@@ -1,4 +1,4 @@
-"""The reentry-srekf reference (solutions.reentry_srekf) and its framework (course.starship),
+"""The reentry-srekf reference (solutions.reentry_srekf.reference) and its framework (course.starship),
 checked against independent oracles: physics tables, the handout's closed forms, finite and
 complex-step differences, the dense-covariance Gaussian formulas and a dense EKF."""
 
@@ -24,7 +24,7 @@ from matplotlib.collections import PolyCollection  # noqa: E402
 from course import starship  # noqa: E402
 from random_draws import random_draws  # noqa: E402
 from course.starship import G, L, M, P0, R, RADAR_R1, RADAR_R2, SIGMA_RANGE, T0  # noqa: E402
-from autograder.hidden_tests.reentry_srekf import BLANKS  # noqa: E402
+from solutions.reentry_srekf.hidden_tests import BLANKS  # noqa: E402
 from solutions import reentry_srekf as ref  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -509,7 +509,7 @@ def test_monte_carlo_draws_each_initial_error_from_the_prior_and_averages_the_ne
 
 
 def test_hidden_test_accepts_sign_correct_drag() -> None:
-    from autograder.hidden_tests.reentry_srekf import check_ballistic_dynamics
+    from solutions.reentry_srekf.hidden_tests import check_ballistic_dynamics
 
     def ballistic_dynamics(x):
         h, v, c = np.asarray(x, dtype=float)
@@ -612,7 +612,7 @@ def test_eigen_style_matrix_format_matches_handout() -> None:
     assert starship.format_matrix([2185.37, -152.739, 0.000982013]) == "    2185.37\n   -152.739\n0.000982013"
 
 
-# Regression pin. Provenance: printed by `python -m solutions.reentry_srekf` on the shipped
+# Regression pin. Provenance: printed by `python -m solutions.reentry_srekf.reference` on the shipped
 # course/data/starship_reentry.csv (seed 20230503) when the data was first built; it is not an
 # independent oracle. The handout's own data gives mu[end] = [2185.37, -152.739, 0.000982013] and
 # P[end] of the same size as these (diagonal 215, 1.57, 4.79e-10).
@@ -651,7 +651,7 @@ def test_report_regression_pin() -> None:
 def test_command_line_entry_point() -> None:
     path = "course/data/starship_reentry.csv"
     done = subprocess.run(
-        [sys.executable, "-m", "solutions.reentry_srekf", "--data", path],
+        [sys.executable, "-m", "solutions.reentry_srekf.reference", "--data", path],
         cwd=ROOT,
         capture_output=True,
         text=True,

@@ -2,7 +2,7 @@
 
 In a copy of the course (so that the repository's hidden tests stay as they are), a small class of
 train-kf is graded; then the hidden test of one blank is fixed, as an instructor would edit
-autograder/hidden_tests/train_kf.py, and the class is regraded in the same course folder. Only
+solutions/train_kf/hidden_tests.py, and the class is regraded in the same course folder. Only
 that blank's test cell changes, and only for the students whose answers the fix judges
 differently.
 """
@@ -14,9 +14,10 @@ import sys
 
 import nbformat
 
-from autograder import cells, submissions
+from autograder import cells
+from autograder.catalogues import submissions
 from autograder.labs import ROOT, get_lab
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 
 LAB = get_lab("train-kf")
 
@@ -46,7 +47,7 @@ def grade(course, class_dir, workdir) -> dict[str, dict[str, str]]:
 def test_regrading_after_a_test_fix_changes_only_that_cell_for_the_students_it_affects(tmp_path):
     course = tmp_path / "kit"
     shutil.copytree(ROOT, course, ignore=shutil.ignore_patterns(
-        ".git", ".venv", "demo", "submitted", "autograded", "feedback", "gradebook.db", "grades*", "*.log", "__pycache__"))
+        ".git", ".venv", "demo", "submitted", "autograded", "feedback", "gradebook.db", "grades.csv", "grades.versions.json", "*.log", "__pycache__"))
     mistakes = {m.slug: m for m in catalogue(LAB) if m.blank == "predict"}
     # no-Q gets B_f wrong (the fix forgives it); mean-not-moved gets x_f wrong (it does not)
     notebooks = {
@@ -61,7 +62,7 @@ def test_regrading_after_a_test_fix_changes_only_that_cell_for_the_students_it_a
 
     before = grade(course, class_dir, workdir)
     assert before["no_q"]["test_predict"] == before["mean_not_moved"]["test_predict"] == "0"
-    hidden = course / "autograder" / "hidden_tests" / "train_kf.py"
+    hidden = course / "solutions" / "train_kf" / "hidden_tests.py"
     hidden.write_text(hidden.read_text() + FIX)
     after = grade(course, class_dir, workdir)
 

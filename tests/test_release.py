@@ -1,6 +1,5 @@
 """Release hygiene: release/ is in sync with source/, and nothing students get leaks the answers."""
 
-import filecmp
 import json
 import os
 import subprocess
@@ -12,8 +11,10 @@ import nbformat
 import pytest
 from nbclient import NotebookClient
 
-from autograder import cells, data, grading, leaks, versions
-from autograder.bundle import LeakFound, write_bundle
+from autograder import cells
+from autograder.release import data, leaks
+from autograder.pipeline import versions, nbgrader_apps
+from autograder.release.bundle import LeakFound, write_bundle
 from autograder.labs import ROOT, all_labs
 from importable import importable
 from over_labs import over_labs
@@ -24,7 +25,7 @@ def _normalised(path: Path) -> dict:
 
 
 def test_release_is_in_sync_with_source(tmp_path):
-    grading.generate_release(all_labs(), tmp_path)
+    nbgrader_apps.generate_release(all_labs(), tmp_path)
     for lab in all_labs():
         fresh = tmp_path / "release" / lab.id / lab.notebook_name
         assert _normalised(fresh) == _normalised(lab.release_notebook), (
@@ -80,9 +81,9 @@ def test_student_bundle_has_no_leaks_and_installs_nothing_hidden(tmp_path):
 def test_bundle_refuses_a_tree_with_a_leak(tmp_path, monkeypatch):
     planted = tmp_path / "course_with_answer"
     planted.mkdir()
-    (planted / "helpers.py").write_text("from solutions.train_kf import predict\n")
+    (planted / "helpers.py").write_text("from solutions.train_kf.reference import predict\n")
     with pytest.raises(LeakFound, match="an import of the reference"):
-        from autograder.bundle import raise_on_leaks
+        from autograder.release.bundle import raise_on_leaks
 
         raise_on_leaks(planted)
 
@@ -101,13 +102,13 @@ def forecast(x, B, A, Q):
 @pytest.mark.parametrize(
     "text, what",
     [
-        (REFERENCE_PREDICT, "has the body of solutions/train_kf.py:predict"),
+        (REFERENCE_PREDICT, "has the body of solutions/train_kf/reference.py:predict"),
         ("x = 1\n### BEGIN SOLUTION\n", "a solution delimiter"),
         ("### BEGIN HIDDEN TESTS\n", "a hidden-test delimiter"),
         ("import solutions\n", "an import of the reference"),
-        ("   from autograder.hidden_tests.train_kf import check_predict\n", "an import of the reference"),
+        ("   from solutions.train_kf.hidden_tests import check_predict\n", "an import of the reference"),
         ("mod = __import__('solutions')\n", "a reference to the hidden packages"),
-        ("open('../../solutions/train_kf.py')\n", "a reference to the hidden packages"),
+        ("open('../../solutions/train_kf/reference.py')\n", "a reference to the hidden packages"),
     ],
 )
 def test_leak_detector_finds_planted_leaks(tmp_path, text, what):
@@ -120,7 +121,7 @@ def test_leak_detector_finds_a_reference_body_in_a_notebook(tmp_path):
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell("%xmode Minimal\n" + REFERENCE_PREDICT)])
     nbformat.write(nb, tmp_path / "lab.ipynb")
     assert [str(leak) for leak in leaks.find_leaks(tmp_path)] == [
-        "lab.ipynb: function forecast has the body of solutions/train_kf.py:predict"
+        "lab.ipynb: function forecast has the body of solutions/train_kf/reference.py:predict"
     ]
 
 

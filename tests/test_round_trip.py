@@ -10,9 +10,10 @@ import sys
 import nbformat
 import pytest
 
-from autograder import grading, submissions
-from autograder.compare import ReferenceUnavailable
-from autograder.execute import GradingExecute
+from autograder.pipeline import grades
+from autograder.catalogues import submissions
+from autograder.pipeline.compare import ReferenceUnavailable
+from autograder.pipeline.execute import GradingExecute
 from autograder.labs import ROOT
 from over_labs import LABS
 from round_trip import *  # noqa: F401,F403 (the tests, the graded fixture, the lab parametrization)
@@ -25,12 +26,12 @@ def test_grading_refuses_to_start_without_the_reference(tmp_path, monkeypatch):
     """A hidden test that the grader's process cannot import stops the submission before any kernel
     starts (otherwise every hidden test would fail and nbgrader would still report success)."""
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(
-        "### BEGIN HIDDEN TESTS\nfrom autograder.hidden_tests.train_kf import check_kupdate\ncheck_kupdate(kupdate)\n"
+        "### BEGIN HIDDEN TESTS\nfrom solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate)\n"
         "### END HIDDEN TESTS\n")])
-    monkeypatch.setitem(sys.modules, "autograder.hidden_tests.train_kf", None)  # import fails, as without the course root
+    monkeypatch.setitem(sys.modules, "solutions.train_kf.hidden_tests", None)  # import fails, as without the course root
     started = []
     monkeypatch.setattr(GradingExecute, "async_start_new_kernel_client", lambda self: started.append(1))
-    with pytest.raises(ReferenceUnavailable, match="cannot import autograder.hidden_tests.train_kf.check_kupdate"):
+    with pytest.raises(ReferenceUnavailable, match="cannot import solutions.train_kf.hidden_tests.check_kupdate"):
         GradingExecute().preprocess(nb, {"metadata": {"path": str(tmp_path)}})
     assert started == []
 
@@ -49,5 +50,5 @@ def test_plain_nbgrader_autogrades_from_the_course_root(tmp_path):
     submitted.parent.mkdir(parents=True)
     nbformat.write(submissions.solved(lab), submitted)
     subprocess.run([*nbgrader, "autograde", lab.id], cwd=tmp_path, env=env, check=True, capture_output=True)
-    [row] = grading.read_grades(tmp_path, [lab], ["student1"])
+    [row] = grades.read_grades(tmp_path, [lab], ["student1"])
     assert row.auto_score == row.auto_max > 0

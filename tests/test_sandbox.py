@@ -1,4 +1,4 @@
-"""The grading kernel's sandbox (autograder/sandbox.py, autograder/sandbox_kernel.py), with real
+"""The grading kernel's sandbox (autograder/kernel/sandbox.py, autograder/kernel/manager.py), with real
 processes: the launcher on small commands, and real kernels started by SandboxedKernelManager.
 
 Each probe runs in the confined process and reports what happened ("ok", or the exception); the
@@ -27,10 +27,10 @@ import pytest
 from nbclient import NotebookClient
 from nbformat.v4 import new_code_cell, new_notebook
 
-from autograder import sandbox
+from autograder.kernel import sandbox
 from autograder.labs import ROOT
-from autograder.sandbox import SandboxedKernelManager, launcher_command
-from autograder.sandbox_kernel import PRIVATE_PARENT
+from autograder.kernel.sandbox import SandboxedKernelManager, launcher_command
+from autograder.kernel.manager import PRIVATE_PARENT
 
 KERNEL_ARGUMENTS = ["--HistoryManager.hist_file=:memory:", "--IPKernelApp.log_level=ERROR"]
 
@@ -135,8 +135,8 @@ def hidden_file_probes(graded_class: dict[str, Path]) -> dict[str, str]:
     work = graded_class["work"]
     return {
         # the grading kernel's environment has no PYTHONPATH: a cheat puts the course root on sys.path first
-        "import solutions": f"(__import__('sys').path.insert(0, {str(ROOT)!r}), __import__('solutions.train_kf'))",
-        "read solutions/train_kf.py": f"read({str(ROOT / 'solutions' / 'train_kf.py')!r})",
+        "import solutions": f"(__import__('sys').path.insert(0, {str(ROOT)!r}), __import__('solutions.train_kf.reference'))",
+        "read solutions/train_kf/reference.py": f"read({str(ROOT / 'solutions' / 'train_kf' / 'reference.py')!r})",
         "read autograder/__init__.py": f"read({str(ROOT / 'autograder' / '__init__.py')!r})",
         "read the source notebook": f"read({str(ROOT / 'source' / 'train-kf' / 'train-kf.ipynb')!r})",
         "read nbgrader_config.py": f"read({str(ROOT / 'nbgrader_config.py')!r})",
@@ -288,7 +288,7 @@ def test_a_sandboxed_kernel_runs_the_labs_work_and_reaches_nothing_else(graded_c
         "write in /tmp": "EACCES",
         "connect to 127.0.0.1": "ENETUNREACH",
         "import solutions": "ModuleNotFoundError",
-        "read solutions/train_kf.py": "EACCES",
+        "read solutions/train_kf/reference.py": "EACCES",
         "read autograder/__init__.py": "EACCES",
         "read the source notebook": "EACCES",
         "read nbgrader_config.py": "EACCES",
@@ -317,7 +317,7 @@ def test_nbclient_runs_a_notebook_in_the_sandbox(graded_class):
     alice = graded_class["alice"]
     nb = new_notebook(cells=[
         new_code_cell("open('answer.txt', 'w').write('42')"),
-        new_code_cell(f"open({str(ROOT / 'solutions' / 'train_kf.py')!r}).read()"),
+        new_code_cell(f"open({str(ROOT / 'solutions' / 'train_kf' / 'reference.py')!r}).read()"),
         new_code_cell("print(open('answer.txt').read())"),
     ])
     nb.metadata["kernelspec"] = {"name": "python3", "display_name": "Python 3", "language": "python"}

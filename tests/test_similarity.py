@@ -9,11 +9,13 @@ import numpy as np
 import pytest
 import scipy.linalg
 
-import autograder.hidden_tests.train_kf as hidden
-from autograder import cells, similarity, submissions
+import solutions.train_kf.hidden_tests as hidden
+from autograder import cells
+from autograder.integrity import similarity
+from autograder.catalogues import submissions
 from autograder.__main__ import main
 from autograder.labs import get_lab
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 
 LAB = get_lab("train-kf")
 MODEL = cells.model_answers(cells.read(LAB.source_notebook))

@@ -1,7 +1,7 @@
 """An instructor runs a source notebook by hand, as README says: from the course root, with the
 root on PYTHONPATH (`PYTHONPATH=$PWD jupyter nbconvert --execute ...` or `... jupyter lab`). The
-kernel starts in the notebook's folder and its hidden-test cells import `autograder` (which imports
-`solutions`) through that PYTHONPATH. Without it they cannot: the hidden packages are installed
+kernel starts in the notebook's folder and its hidden-test cells import `solutions` (whose hidden tests
+import `autograder`) through that PYTHONPATH. Without it they cannot: the hidden packages are installed
 nowhere (`-e .` installs `course` only, here and in the student bundle), so that no kernel of the
 instructor's environment, a grading kernel included, finds the reference by accident."""
 
@@ -16,9 +16,9 @@ from nbclient import NotebookClient
 from nbformat.v4 import new_code_cell
 
 from autograder import cells
-from autograder.bundle import student_pyproject, write_bundle
+from autograder.release.bundle import student_pyproject, write_bundle
 from autograder.labs import ROOT, get_lab
-from autograder.leaks import find_leaks
+from autograder.release.leaks import find_leaks
 from importable import importable
 
 LAB = get_lab("train-kf")
@@ -26,7 +26,7 @@ LAB = get_lab("train-kf")
 
 def test_a_source_notebook_runs_top_to_bottom_with_the_course_root_on_pythonpath():
     nb = copy.deepcopy(cells.read(LAB.source_notebook))
-    assert any("import autograder" in c.source or "from autograder" in c.source for c in nb.cells if c.cell_type == "code")
+    assert any("from solutions." in c.source for c in nb.cells if c.cell_type == "code")
     nb.cells.append(new_code_cell("import autograder, solutions\nprint(autograder.__file__)"))
     env = {**{name: value for name, value in os.environ.items() if name != "PYTHONPATH"}, "PYTHONPATH": str(ROOT)}
     client = NotebookClient(nb, timeout=600, kernel_name="python3", resources={"metadata": {"path": str(LAB.source_notebook.parent)}})

@@ -25,7 +25,7 @@ from playwright.sync_api import Locator, Page, expect
 
 from autograder import cells
 from autograder.labs import get_lab
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 from student_jupyterlab import JupyterLab, chromium, running_jupyterlab
 
 LAB = get_lab("train-kf")  # the smallest lab: its first blank's check runs in well under a second
@@ -111,7 +111,7 @@ def kernel_status(page: Page) -> Locator:
 
 
 def model_answer() -> str:
-    """The blank's model answer in the source notebook (the code of solutions/train_kf.py: a test
+    """The blank's model answer in the source notebook (the code of solutions/train_kf/reference.py: a test
     compares their syntax trees)."""
     return cells.model_answers(cells.read(LAB.source_notebook))[BLANK]
 

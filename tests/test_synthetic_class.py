@@ -3,11 +3,11 @@ row is checked against its catalogued outcome."""
 
 import pytest
 
-from autograder import cheats, faults, synthetic_class
-from autograder.flag_cheating import FLAG
-from autograder.grading import GradeRow
+from autograder.catalogues import cheats, faults, synthetic_class
+from autograder.integrity.flag import FLAG
+from autograder.pipeline.grading import GradeRow
 from autograder.labs import get_lab
-from autograder.synthetic_class import CHEAT, FAULT, MISTAKE, SOLVED, Outcome
+from autograder.catalogues.synthetic_class import CHEAT, FAULT, MISTAKE, SOLVED, Outcome
 
 LAB = get_lab("train-kf")
 

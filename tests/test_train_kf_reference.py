@@ -7,8 +7,8 @@ import pytest
 import scipy.linalg
 from filterpy.kalman import KalmanFilter
 
-import solutions.train_kf as ref
-from autograder import data
+import solutions.train_kf.reference as ref
+from autograder.release import data
 from autograder.labs import get_lab
 from course import train
 from course.checks import random_spd

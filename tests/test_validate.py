@@ -7,9 +7,10 @@ from __future__ import annotations
 import nbformat
 from nbgrader.validator import Validator
 
-from autograder import cells, submissions
+from autograder import cells
+from autograder.catalogues import submissions
 from autograder.labs import Lab, get_lab
-from autograder.mistakes import catalogue
+from autograder.catalogues.mistakes import catalogue
 from over_labs import over_labs
 
 

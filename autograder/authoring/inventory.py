@@ -1,0 +1,122 @@
+"""What each lab holds: blanks, points, visible checks, hidden tests and catalogued mistakes."""
+
+from __future__ import annotations
+
+import ast
+import textwrap
+from collections import Counter
+from dataclasses import dataclass
+
+from autograder import cells
+from autograder.authoring import claims
+from autograder.labs import Lab
+from autograder.catalogues.mistakes import catalogue
+from course.checks import count
+
+CHECK_HELPERS = {"check_array", "check_close", "check_pair", "check_symmetric"}
+
+
+@dataclass(frozen=True)
+class Inventory:
+    lab: str
+    blanks: int
+    blank_points: dict[str, float]
+    """Each blank's name -> the points of its hidden test, in the notebook's order."""
+    blank_mistakes: dict[str, int]
+    """Each blank's name -> how many catalogued mistakes it has."""
+    autograded_points: float
+    written_answers: int
+    written_points: float
+    visible_checks: int
+    """Calls of the course.checks helpers in the visible-check cells."""
+    hidden_tests: int
+    """check_<blank> functions, each over several random cases."""
+    hidden_assertions: int
+    """Check-helper calls that the hidden tests make when they grade the reference."""
+    mistakes: int
+    claims: dict[str, str]
+    """Claim id -> what its check verifies, for every claim the lab's text marks."""
+
+
+def _helper_calls(code: str) -> int:
+    return sum(
+        1
+        for node in ast.walk(ast.parse(code))
+        if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in CHECK_HELPERS
+    )
+
+
+def _assertions_on_reference(lab: Lab, hidden, blanks: list[str]) -> int:
+    """Run the hidden tests on the reference, counting the check-helper calls they make."""
+    count = 0
+    originals = {name: getattr(hidden, name) for name in CHECK_HELPERS if hasattr(hidden, name)}
+
+    def counted(helper):
+        def wrapper(*args, **kwargs):
+            nonlocal count
+            count += 1
+            return helper(*args, **kwargs)
+
+        return wrapper
+
+    try:
+        for name, helper in originals.items():
+            setattr(hidden, name, counted(helper))
+        for name in blanks:
+            getattr(hidden, f"check_{name}")(getattr(lab.reference(), name))
+    finally:
+        for name, helper in originals.items():
+            setattr(hidden, name, helper)
+    return count
+
+
+def inventory(lab: Lab) -> Inventory:
+    nb = cells.read(lab.source_notebook)
+    blanks = cells.blank_names(nb)
+    points = {cells.grade_id(c): cells.meta(c)["points"] for c in nb.cells if cells.meta(c).get("grade")}
+    written = [c for c in nb.cells if cells.is_answer(c) and c.cell_type == "markdown"]
+    visible = [c for c in nb.cells if "nbgrader" in c.metadata and cells.grade_id(c).startswith("check_")]
+    hidden = lab.hidden_module("hidden_tests")
+    blank_points = {name: points[f"test_{name}"] for name in blanks}
+    mistakes = Counter(m.blank for m in catalogue(lab))
+    return Inventory(
+        lab=lab.id,
+        blanks=len(blanks),
+        blank_points=blank_points,
+        blank_mistakes={name: mistakes[name] for name in blanks},
+        autograded_points=sum(blank_points.values()),
+        written_answers=len(written),
+        written_points=sum(points[cells.grade_id(c)] for c in written),
+        visible_checks=sum(_helper_calls("\n".join(l for l in c.source.splitlines() if not l.startswith("%"))) for c in visible),
+        hidden_tests=len(blanks),
+        hidden_assertions=_assertions_on_reference(lab, hidden, blanks),
+        mistakes=sum(mistakes.values()),
+        claims={cid: c.summary for cid, c in claims.checks(lab).items()},
+    )
+
+
+def print_inventory(labs: list[Lab]) -> None:
+    """Print a summary line per lab, then each lab's blanks by name and the claims it checks."""
+    header = ("lab", "blanks", "points", "written", "visible", "hidden", "hidden", "mistakes", "claims")
+    second = ("", "", "(auto)", "answers (pt)", "checks", "tests", "asserts", "", "")
+    widths = (18, 7, 8, 13, 8, 7, 8, 9, 7)
+
+    def line(values) -> str:
+        return "".join(f"{v:<{w}}" if k == 0 else f"{v:>{w}}" for k, (v, w) in enumerate(zip(values, widths)))
+
+    print(line(header))
+    print(line(second))
+    inventories = [inventory(lab) for lab in labs]
+    for i in inventories:
+        print(line((i.lab, i.blanks, f"{i.autograded_points:g}", f"{i.written_answers} ({i.written_points:g})",
+                    i.visible_checks, i.hidden_tests, i.hidden_assertions, i.mistakes, len(i.claims))))
+    for i in inventories:
+        print(f"\nThe blanks of {i.lab}, in the notebook's order (points of the hidden test, catalogued mistakes):")
+        name_w = max(len(name) for name in i.blank_points)
+        for name, points in i.blank_points.items():
+            mistakes = i.blank_mistakes[name]
+            print(f"  {name:<{name_w}}  {points:>4g} pt  {count(mistakes, 'mistake')}")
+        print(f"Claims that {i.lab} states, each recomputed by a check (solutions/{i.lab.replace('-', '_')}/claims.py):")
+        for cid, summary in i.claims.items():
+            print(textwrap.fill(f"{cid}: {summary}", 100, initial_indent="  ", subsequent_indent="      ",
+                                break_on_hyphens=False))

@@ -1,0 +1,54 @@
+"""Helpers for the hidden tests, which run in the grader's process (autograder/pipeline/compare.py), or in
+the kernel of a source notebook run by hand, where the reference is present.
+
+Partial credit is isolated: a blank's hidden tests call the student's function with every other
+blank it uses bound to the reference, so that one mistake costs one blank's points.
+
+Warnings are failures with a message. nbgrader gives 0 to a test cell that writes to stderr, but
+Python shows a warning only the first time a line triggers it, so the score would depend on which
+cell ran first; here it is the same every time, and the student is told why.
+"""
+
+from __future__ import annotations
+
+import functools
+import types
+import warnings
+import sys
+from typing import Callable, Iterable
+
+
+def isolate(func: Callable, reference: types.ModuleType, blanks: Iterable[str], *, warnings_fail: bool = True) -> Callable:
+    """A copy of ``func`` that sees the reference's version of every other blank in ``blanks``.
+
+    The notebook's namespace is left alone: only the copy sees the reference functions. With
+    ``warnings_fail`` (the default) a warning in the copy fails with a message; a check that turns
+    warnings into failures with a more specific hint of its own passes False.
+    """
+    compare = sys.modules.get("autograder.pipeline.compare")  # imported by the grader only, not in a kernel run by hand
+    if compare is not None and isinstance(func, compare.StudentFunction):  # grading: the function is in the kernel
+        return func.isolated(reference, blanks, warnings_fail)
+    if not isinstance(func, types.FunctionType):
+        raise AssertionError(f"{func!r} should be a function defined with `def`.")
+    others = {name: getattr(reference, name) for name in blanks if name != func.__name__}
+    namespace = {**func.__globals__, **others}
+    copy = types.FunctionType(func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__)
+    copy.__kwdefaults__ = func.__kwdefaults__
+    if not warnings_fail:
+        return copy
+
+    @functools.wraps(func)
+    def without_warnings(*args, **kwargs):
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            result = copy(*args, **kwargs)
+        if caught:
+            first = caught[0]
+            raise AssertionError(
+                f"{func.__name__} gave the warning {first.category.__name__}: {first.message}. A graded function "
+                "must run without warnings: find the computation that triggers it (a log or square root of "
+                "a negative number, a division by zero, an overflow) and fix it."
+            )
+        return result
+
+    return without_warnings

@@ -1,0 +1,183 @@
+"""The scan's rules for calls: file access, getattr and friends, IPython magics and shell commands."""
+
+from __future__ import annotations
+
+import ast
+import copy
+
+from autograder.integrity.rules import (
+    CODE_MAGICS,
+    FORBIDDEN_DUNDERS,
+    MAGIC_CALLS,
+    NUMPY_READS,
+    NUMPY_WRITES,
+    OS_FILE_READS,
+    OS_FILE_WRITES,
+    PATH_GENERIC_METHODS,
+    PATH_READ_METHODS,
+    PATH_WRITE_METHODS,
+    REFERENCE_ATTRIBUTES,
+    SAFE_CELL_MAGICS,
+    SAFE_LINE_MAGICS,
+    SHARED_ATTRIBUTES,
+    benign_command,
+    path_problem,
+)
+from autograder.integrity.syntax import (
+    constant_pieces,
+    first_arg,
+    fold,
+    open_writes,
+    parse,
+    path_constructor_arg,
+    strip_magic_options,
+)
+from autograder.integrity.walker import Context, Walker
+
+
+class CallRules(Walker):
+    """Calls: files opened, attributes reached by name, IPython magics and shell commands."""
+
+    def visit_Call(self, node: ast.Call, context: Context):
+        func = node.func
+        if self.magic(node, context):
+            return False
+        if isinstance(func, ast.Name) and not self.shadowed(func.id, context):
+            name = func.id
+            if name in ("getattr", "hasattr", "setattr", "delattr") and len(node.args) >= 2:
+                self.dynamic_attribute(node, name, context)
+            elif name == "vars" and node.args and self.module_of(node.args[0]) is not None:
+                self.hit(node, "reference", f"reads the namespace of {self.module_of(node.args[0])} through vars()",
+                         context)
+            elif name == "open":
+                self.file_access(node, first_arg(node, "file"), open_writes(node, 1), context)
+            elif name in ("Path", "PurePath", "PosixPath") and node.args:
+                self.file_path_seen(node.args[0], node, context)
+        elif isinstance(func, ast.Attribute):
+            path = self.module_of(func)
+            method = func.attr
+            if path in ("io.open", "codecs.open"):
+                self.file_access(node, first_arg(node, "file"), open_writes(node, 1), context)
+            elif path is not None and path.startswith("os.") and path.count(".") == 1 and method in OS_FILE_WRITES:
+                for arg in node.args[:2]:
+                    self.file_access(node, arg, method != "open" or None, context)
+            elif path is not None and path.startswith("os.") and path.count(".") == 1 and method in OS_FILE_READS:
+                if node.args:
+                    self.file_access(node, node.args[0], False, context)
+            elif path is not None and path.startswith("shutil."):
+                for arg in node.args[:2]:
+                    self.file_access(node, arg, True, context)
+            elif path is not None and path.split(".")[0] == "numpy" and method in NUMPY_READS | NUMPY_WRITES:
+                self.file_access(node, first_arg(node, "file"), method in NUMPY_WRITES, context)
+            elif path is not None and path.startswith("sqlite3."):
+                if node.args:
+                    self.file_access(node, node.args[0], True, context)
+            elif method in ("savefig", "tofile") and node.args:
+                self.file_access(node, node.args[0], True, context)
+            elif method in PATH_READ_METHODS | PATH_WRITE_METHODS:
+                base = path_constructor_arg(func.value)
+                self.file_access(node, base, method in PATH_WRITE_METHODS, context, unknown_ok=False)
+            elif method in PATH_GENERIC_METHODS and path_constructor_arg(func.value) is not None:
+                writes = method != "open" or open_writes(node, 0)
+                self.file_access(node, path_constructor_arg(func.value), writes, context)
+            elif method == "join" and isinstance(func.value, ast.Constant):
+                self.string(node, fold(node), context)
+        return None
+
+    def dynamic_attribute(self, node: ast.Call, name: str, context: Context) -> None:
+        target, attr = node.args[0], fold(node.args[1])
+        store = name in ("setattr", "delattr")
+        if isinstance(attr, str):
+            if attr in REFERENCE_ATTRIBUTES:
+                self.hit(node, "reference", f"uses {name}(..., {attr!r}), which reaches the hidden tests' variables, "
+                                            "their code or the reference's files", context)
+            elif attr in SHARED_ATTRIBUTES or attr == "__dict__":
+                self.hit(node, "shared", f"uses {name}(..., {attr!r}) to tamper with attributes", context)
+            elif store and attr in FORBIDDEN_DUNDERS | {"__class__"}:
+                self.hit(node, "local", f"sets {attr} with {name}, which can fool the tests' comparisons", context)
+            path = self.module_of(target)
+            if path is not None:
+                self.check_path(f"{path}.{attr}", node, context, store=store)
+        elif self.module_of(target) is not None or isinstance(target, ast.Call):
+            kind = "shared" if store else "reference"
+            self.hit(node, kind, f"uses {name} with a computed attribute name on {self.module_of(target) or 'an object'}",
+                     context)
+
+    def file_path_seen(self, arg: ast.AST, node: ast.AST, context: Context) -> None:
+        folded = fold(arg)
+        if isinstance(folded, str):
+            why = path_problem(folded, writing=False)
+            if why:
+                self.hit(node, "reference", f"builds the path {folded!r}, which {why}", context)
+
+    def file_access(self, node, arg, writes, context, unknown_ok: bool = False) -> None:
+        """A file access with path expression ``arg``; ``writes`` True, False, or None (unknown)."""
+        writing = writes is not False
+        kind = "shared" if writing else "reference"
+        verb = "writes" if writes else ("reads" if writes is False else "opens")
+        if arg is None:
+            if not unknown_ok:
+                self.hit(node, kind, f"{verb} a file whose name this scan cannot see", context)
+            return
+        folded = fold(arg)
+        if isinstance(folded, str):
+            why = path_problem(folded, writing)
+            if why:
+                self.hit(node, kind, f"{verb} {folded!r}, which {why}", context)
+            return
+        pieces = constant_pieces(arg)
+        if pieces is not None and pieces:
+            for piece in pieces:
+                why = path_problem(piece, writing, fragment=True)
+                if why:
+                    self.hit(node, kind, f"{verb} a file named from {piece!r}, which {why}", context)
+                    return
+            if any(p.strip() for p in pieces):
+                return  # a name like f"fig_{i}.png" in the working folder
+        self.hit(node, kind, f"{verb} a file whose name is computed at run time", context)
+
+
+    def magic(self, node: ast.Call, context: Context) -> bool:
+        func = node.func
+        if not (isinstance(func, ast.Attribute) and func.attr in MAGIC_CALLS and isinstance(func.value, ast.Call)
+                and isinstance(func.value.func, ast.Name) and func.value.func.id == "get_ipython"
+                and all(isinstance(a, ast.Constant) and isinstance(a.value, str) for a in node.args)):
+            return False
+        args = [a.value for a in node.args]
+        if func.attr in ("system", "getoutput"):
+            command = args[0] if args else ""
+            kind = "none" if benign_command(command) else "shared"
+            self.hit(node, kind, f"runs the shell command !{command}, which grading refuses", context)
+            return True
+        name = args[0] if args else ""
+        line = args[1] if len(args) > 1 else ""
+        if func.attr == "run_line_magic" and name in ("pip", "conda", "mamba") and benign_command(f"{name} {line}"):
+            self.hit(node, "none", f"runs %{name} {line}, which grading refuses", context)
+            return True
+        if func.attr == "run_line_magic":
+            safe = (name in SAFE_LINE_MAGICS or (name == "load_ext" and line.strip() == "autoreload")
+                    or (name == "config" and line.strip().startswith("InlineBackend.")))
+            if safe:
+                if name in CODE_MAGICS:
+                    self.nested(strip_magic_options(line), node, context)
+                return True
+            self.hit(node, "shared", f"runs the IPython magic %{name} {line}".rstrip(), context)
+            return True
+        body = args[2] if len(args) > 2 else ""
+        if name in SAFE_CELL_MAGICS:
+            if name in CODE_MAGICS:
+                self.nested(strip_magic_options(line), node, context)
+            self.nested(body, node, context)
+            return True
+        self.hit(node, "shared", f"runs the IPython cell magic %%{name}", context)
+        return True
+
+    def nested(self, code: str, node: ast.AST, context: Context) -> None:
+        tree = copy.deepcopy(parse(code))
+        if tree is None:
+            return
+        for stmt in tree.body:
+            for child in ast.walk(stmt):
+                if hasattr(child, "lineno"):
+                    child.lineno = getattr(node, "lineno", 1)
+            self.visit(stmt, context)

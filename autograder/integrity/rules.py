@@ -1,0 +1,134 @@
+"""What the scan looks for: the names, modules, attributes, paths and commands that mark an attempt
+to reach the reference, tamper with the machinery that runs the tests, or fool a comparison."""
+
+from __future__ import annotations
+
+import os
+import re
+
+FORBIDDEN_DUNDERS = frozenset({
+    "__eq__", "__ne__", "__lt__", "__le__", "__gt__", "__ge__", "__bool__", "__float__", "__int__",
+    "__index__", "__complex__", "__array__", "__array_ufunc__", "__array_function__",
+    "__array_interface__", "__array_struct__", "__array_priority__", "__array_wrap__",
+    "__array_finalize__", "__instancecheck__", "__subclasscheck__", "__getattr__", "__getattribute__",
+})
+"""Methods that let a returned object fool a comparison or a conversion to an array. (Arithmetic
+ones such as ``__sub__`` are allowed: the checks convert to arrays before any arithmetic.)"""
+CONTAINER_DUNDERS = frozenset({"__getitem__", "__iter__", "__len__"})
+"""Also forbidden on subclasses of tuple, list, dict, float, int and ndarray."""
+
+BENIGN_COMMANDS = frozenset({"pip", "pip3", "conda", "mamba", "ls", "pwd", "echo", "which", "nvidia-smi", "date",
+                             "whoami", "uname", "hostname"})
+"""Shell commands an honest student leaves in a notebook: flagged, but they cost no points."""
+
+
+def benign_command(command) -> bool:
+    """Whether a shell command is one of BENIGN_COMMANDS, with no paths up or out, and no pipes,
+    redirections, substitutions or second commands."""
+    if isinstance(command, (bytes, bytearray)):
+        command = os.fsdecode(bytes(command))
+    if not isinstance(command, str):
+        try:
+            command = " ".join(os.fsdecode(part) for part in command)
+        except TypeError:
+            return False
+    words = command.split()
+    if not words or any(c in command for c in ";&|<>`$\n") or ".." in command:
+        return False
+    first = os.path.basename(words[0])
+    if first in ("python", "python3") and words[1:3] == ["-m", "pip"]:
+        first, words = "pip", words[2:]
+    return first in BENIGN_COMMANDS and not any(w.startswith(("/", "~")) for w in words[1:])
+
+
+# -- static --------------------------------------------------------------------------------------
+
+HIDDEN_PACKAGES = frozenset({"solutions", "autograder"})
+IMPORT_MACHINERY = frozenset({"importlib", "imp", "runpy", "pkgutil", "zipimport", "code", "codeop", "linecache",
+                              "tokenize", "marshal", "_imp", "_frozen_importlib", "_frozen_importlib_external"})
+SHELL_PACKAGES = frozenset({"IPython", "ipykernel", "jupyter_client", "jupyter_core", "zmq", "traitlets", "comm",
+                            "nbformat", "nbgrader", "nbclient", "nbconvert", "builtins", "__builtin__"})
+SYSTEM_PACKAGES = frozenset({"subprocess", "pty", "multiprocessing", "ctypes", "cffi", "signal", "atexit",
+                             "threading", "_thread", "concurrent", "resource", "faulthandler", "sqlite3", "dbm",
+                             "shelve", "shutil", "socket", "http", "urllib", "requests", "_posixsubprocess",
+                             "posix", "nt", "sysconfig", "site"})
+SYSTEM_SUBMODULES = frozenset({"unittest.mock", "mock"})
+
+REFERENCE_ATTRIBUTES = frozenset({
+    "f_back", "f_globals", "f_locals", "f_builtins", "f_code", "tb_frame", "gi_frame", "cr_frame", "ag_frame",
+    "_getframe", "_current_frames", "__globals__", "__closure__", "__code__", "__subclasses__", "__self__",
+    "__import__", "__loader__", "__spec__", "__file__", "__path__", "__cached__", "__wrapped__",
+})
+"""Attribute names that reach the hidden tests' variables or the reference, on any object."""
+SHARED_ATTRIBUTES = frozenset({"__builtins__", "__setattr__", "__delattr__"})
+
+MODULE_REFERENCE = {
+    "sys": {"modules", "path", "meta_path", "path_hooks", "path_importer_cache", "_getframe", "_current_frames",
+            "exc_info", "last_traceback", "last_value"},
+    "inspect": {"currentframe", "stack", "trace", "getouterframes", "getinnerframes", "getsource", "getsourcelines",
+                "getsourcefile", "getfile", "getmodule", "getclosurevars", "getmembers", "getframeinfo"},
+    "traceback": {"walk_stack", "walk_tb"},
+    "types": {"FunctionType", "CodeType", "MethodType", "LambdaType", "ModuleType"},
+    "gc": {"get_objects", "get_referrers", "get_referents"},
+}
+"""Module attributes that are routes to the reference or to the hidden tests' variables."""
+MODULE_SHARED = {
+    "sys": {"excepthook", "displayhook", "breakpointhook", "unraisablehook", "settrace", "setprofile",
+            "addaudithook", "audit", "__excepthook__", "__displayhook__"},
+    "os": {"system", "popen", "execl", "execle", "execlp", "execlpe", "execv", "execve", "execvp", "execvpe",
+           "spawnl", "spawnle", "spawnlp", "spawnlpe", "spawnv", "spawnve", "spawnvp", "spawnvpe", "posix_spawn",
+           "posix_spawnp", "fork", "forkpty", "kill", "killpg", "chdir", "fchdir", "putenv", "unsetenv", "chroot"},
+}
+"""Module attributes that tamper with the kernel or the machine."""
+OS_FILE_WRITES = frozenset({"remove", "unlink", "rename", "renames", "replace", "rmdir", "removedirs", "makedirs",
+                            "mkdir", "symlink", "link", "chmod", "chown", "lchown", "truncate", "utime", "open",
+                            "write", "mkfifo", "mknod"})
+OS_FILE_READS = frozenset({"listdir", "scandir", "walk", "fwalk", "stat", "lstat"})
+NUMPY_READS = frozenset({"load", "loadtxt", "genfromtxt", "fromfile", "memmap", "fromregex"})
+NUMPY_WRITES = frozenset({"save", "savez", "savez_compressed", "savetxt"})
+PATH_READ_METHODS = frozenset({"read_text", "read_bytes"})
+PATH_WRITE_METHODS = frozenset({"write_text", "write_bytes", "touch", "unlink", "symlink_to", "hardlink_to"})
+PATH_GENERIC_METHODS = frozenset({"open", "rename", "replace", "mkdir", "rmdir", "chmod", "iterdir", "glob", "rglob"})
+ALLOWED_MODULE_STORES = frozenset({"matplotlib.rcParams", "matplotlib.pyplot.rcParams"})
+
+SAFE_LINE_MAGICS = frozenset({"matplotlib", "xmode", "precision", "pprint", "who", "whos", "who_ls", "pinfo",
+                              "pinfo2", "psearch", "lsmagic", "magic", "time", "timeit", "autoreload", "history",
+                              "debug", "pdb", "tb", "page"})
+SAFE_CELL_MAGICS = frozenset({"time", "timeit", "capture", "debug"})
+CODE_MAGICS = frozenset({"time", "timeit", "debug"})
+MAGIC_CALLS = frozenset({"run_line_magic", "run_cell_magic", "system", "getoutput"})
+
+SPECIAL_BASES = frozenset({"tuple", "list", "dict", "float", "int", "ndarray", "str", "complex"})
+DUNDER_GLOBALS = frozenset({"__builtins__", "__import__", "__name__", "__loader__", "__spec__", "__package__",
+                            "__file__"})
+
+HIDDEN_STRING = re.compile(r"(?:^|[^A-Za-z0-9_])(solutions|autograder)(?:\.[A-Za-z_]|/|\\)|^(?:solutions|autograder)$")
+PROTECTED_PARTS = frozenset({"solutions", "autograder", "source", ".git", "submitted", "autograded", "feedback",
+                              "release"})
+PLANTED_SUFFIXES = (".py", ".pyc", ".pth", ".so", ".ipynb")
+DB_SUFFIXES = (".db", ".sqlite", ".sqlite3")
+
+
+def path_problem(path: str, writing: bool, fragment: bool = False) -> str | None:
+    """Why a (constant) path may not be used, or None for a plain file in the working folder."""
+    text = path.replace("\\", "/")
+    parts = [p for p in text.split("/") if p]
+    name = parts[-1] if parts else ""
+    if any(p in PROTECTED_PARTS for p in parts) or any(p.startswith(("solutions.", "autograder.")) for p in parts):
+        return "is part of the course's hidden material or other students' work"
+    if "gradebook" in text.lower() or name.endswith(DB_SUFFIXES):
+        return "is the gradebook"
+    if ".." in parts or (not fragment and (text.startswith(("/", "~")) or re.match(r"^[A-Za-z]:", text))):
+        return "is outside the submission's folder"
+    if fragment and ("/" in text and text.strip("/") and (text.startswith("/") or ".." in parts)):
+        return "is outside the submission's folder"
+    if writing and (name == "timestamp.txt" or (not fragment and name.endswith(PLANTED_SUFFIXES))
+                    or (fragment and text.endswith(PLANTED_SUFFIXES))):
+        return "is a file that grading reads or imports"
+    return None
+
+
+def is_check_helper(path: str) -> bool:
+    """A helper of the visible checks that the given code imports (course.checks.check_close, ...)."""
+    last = path.rsplit(".", 1)[-1]
+    return path.startswith("course.") and (last.startswith("check") or last in ("require", "passed"))

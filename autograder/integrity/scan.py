@@ -1,0 +1,234 @@
+"""Suspicious code in a submission, found before grading and flagged for the instructor's review.
+
+Grading no longer depends on it for correctness. The hidden tests compare in the grader's process
+(autograder/pipeline/compare.py), so nothing the student's kernel does can change a verdict; the sandbox
+(autograder/kernel/sandbox.py) keeps the kernel from the reference's files, the gradebook and other
+students' folders. What the scan adds is a record: an attempt to cheat is worth an instructor's
+attention even when it gained nothing, and where the OS cannot sandbox the kernel, the scan's
+findings are the defence against reading the reference's files.
+
+``static_findings(nb, lab)`` scans the syntax trees of the answer cells and of any code cell the
+student added (IPython magics included, as IPython transforms them). It finds routes to the
+reference (``import``, ``importlib``, ``__import__``, ``sys.modules``, ``sys.path``, reads of its
+files, ``exec``/``eval``/``compile``), tampering with IPython (``get_ipython``, magics,
+``sys.excepthook``), monkeypatching of modules and helpers, comparison and conversion dunders
+(``__eq__``, ``__array__``, ...) on classes a blank returns, stack-frame walking, file writes
+outside the submission's folder, shell commands, and try/except blocks that swallow every error of
+a whole cell.
+
+Each ``Finding`` names the blanks whose points it games: a trick inside one blank's answer games
+that blank; tampering with shared machinery (NumPy, the check helpers, IPython, builtins, the
+gradebook) games every blank (``None``); something suspicious that games nothing (a helper of the
+visible checks redefined, a cell wrapped in a try/except that discards every error) has ``()``:
+it is flagged for review and costs no points. ``FlagCheating`` (autograder/integrity/flag.py) zeroes
+the test cells of the blanks a finding games, and flags the submission with the reasons.
+
+Edited and deleted test cells need no detector: the sanitize step (RestoreLabCells, then
+nbgrader's OverwriteCells) restores them from the gradebook. Hard-coded answers for the visible
+cases need none either: the hidden tests use random inputs.
+"""
+
+from __future__ import annotations
+
+import ast
+import functools
+from dataclasses import dataclass
+from pathlib import Path
+from typing import TYPE_CHECKING
+
+from nbformat import NotebookNode
+
+from autograder import cells
+from autograder.integrity.rules import is_check_helper
+from autograder.integrity.syntax import bound_names, catches_everything, does_nothing, local_names, parse
+from autograder.integrity.visitor import Visitor
+from autograder.labs import Lab
+
+if TYPE_CHECKING:
+    from autograder.integrity.walker import Context
+
+
+@dataclass(frozen=True)
+class Finding:
+    """One reason to doubt a submission."""
+
+    cell: str
+    """The grade_id of the cell where it was found ("" if unknown)."""
+    blanks: tuple[str, ...] | None
+    """The blanks whose points it games; None means every autograded blank of the lab."""
+    reason: str
+    """One sentence for the instructor's review."""
+
+
+@dataclass
+class Hit:
+    cell: str
+    node: ast.AST
+    kind: str  # "reference" or "local": charge the blanks that use it; "shared": every blank; "none": no points
+    what: str
+    top: ast.stmt | None
+    owner: str | None
+
+
+def static_findings(nb: NotebookNode, lab: Lab) -> list[Finding]:
+    """Findings from the answer cells and student-added code cells of ``nb``, before execution.
+
+    Locked cells (given code, visible checks, test cells) are not scanned: nbgrader restores them
+    from the gradebook before grading, whatever the submission holds.
+    """
+    path = lab.source_notebook
+    return Scan(nb, _source_notebook(str(path), path.stat().st_mtime_ns)).findings()
+
+
+@functools.lru_cache(maxsize=16)
+def _source_notebook(path: str, mtime_ns: int) -> NotebookNode:
+    return cells.read(Path(path))
+
+
+class Scan:
+    def __init__(self, nb: NotebookNode, source_nb: NotebookNode):
+        self.blanks = cells.blank_names(source_nb)
+        known = {cells.grade_id(c): c for c in source_nb.cells if cells.meta(c).get("grade_id")}
+        self.cells: list[tuple[str, str | None, ast.Module]] = []  # (label, blank of the answer cell, tree)
+        locked_trees = []
+        for cell in source_nb.cells:
+            if cell.cell_type == "code" and not cells.is_answer(cell):
+                tree = parse(cell.source)
+                if tree is not None:
+                    locked_trees.append(tree)
+        for cell in nb.cells:
+            if cell.get("cell_type") != "code":
+                continue
+            gid = cells.meta(cell).get("grade_id", "") if isinstance(cells.meta(cell), dict) else ""
+            original = known.get(gid)
+            if original is not None and not cells.is_answer(original):
+                continue  # locked: restored by nbgrader
+            if original is not None and original.cell_type != "code":
+                continue  # a written answer turned into code: nbgrader turns it back
+            tree = parse(cell.source)
+            if tree is None:
+                continue
+            blank = gid if original is not None and gid in self.blanks else None
+            self.cells.append((gid or "", blank, tree))
+        self.modules: dict[str, str] = {}  # name bound by an import -> dotted module or object path
+        self.locked_imports: dict[str, str] = {}
+        for tree in locked_trees:
+            self._collect_imports(tree, self.locked_imports)
+        self.modules.update(self.locked_imports)
+        for _, _, tree in self.cells:
+            self._collect_imports(tree, self.modules)
+        self.defined = {node.name for _, _, tree in self.cells for node in ast.walk(tree)
+                        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))}
+        self.uses = self._top_level_uses()
+        self.hits: list[Hit] = []
+
+    # -- set-up ----------------------------------------------------------------------------------
+
+    @staticmethod
+    def _collect_imports(tree: ast.AST, into: dict[str, str]) -> None:
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import):
+                for alias in node.names:
+                    if alias.asname:
+                        into[alias.asname] = alias.name
+                    else:
+                        top = alias.name.split(".")[0]
+                        into[top] = top
+            elif isinstance(node, ast.ImportFrom) and node.module and not node.level:
+                for alias in node.names:
+                    if alias.name != "*":
+                        into[alias.asname or alias.name] = f"{node.module}.{alias.name}"
+
+    def _top_level_uses(self) -> dict[str, set[str]]:
+        """Top-level name -> the global names its definition refers to (all cells, all definitions)."""
+        uses: dict[str, set[str]] = {}
+        for _, _, tree in self.cells:
+            for stmt in tree.body:
+                names = {n.id for n in ast.walk(stmt) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+                if isinstance(stmt, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                    names -= local_names(stmt)
+                for bound in bound_names(stmt):
+                    uses.setdefault(bound, set()).update(names)
+        return uses
+
+    def _closure(self, name: str) -> set[str]:
+        """The global names a blank uses, through helpers but not through other blanks: the hidden
+        tests give each blank the reference's version of every other blank."""
+        seen, todo = set(), [name]
+        while todo:
+            current = todo.pop()
+            for used in self.uses.get(current, ()):
+                if used not in seen and used not in self.blanks:
+                    seen.add(used)
+                    todo.append(used)
+        return seen
+
+    # -- results ---------------------------------------------------------------------------------
+
+    def findings(self) -> list[Finding]:
+        for label, blank, tree in self.cells:
+            Visitor(self, label).run(tree)
+            self._swallow_all(label, tree)
+            self._rebinds_helpers(label, tree)
+        out: list[Finding] = []
+        seen = set()
+        for hit in self.hits:
+            line = getattr(hit.node, "lineno", None)
+            what = hit.what if hit.cell else f"in a cell the student added, {hit.what}"
+            reason = what[0].upper() + what[1:] + (f" (line {line})." if line else ".")
+            blank = next((b for label, b, _ in self.cells if label == hit.cell), None)
+            finding = Finding(hit.cell, self._blanks(hit, blank), reason)
+            if (finding.cell, finding.reason) not in seen:
+                seen.add((finding.cell, finding.reason))
+                out.append(finding)
+        return out
+
+    def _blanks(self, hit: Hit, cell_blank: str | None) -> tuple[str, ...] | None:
+        if hit.kind == "shared":
+            return None
+        if hit.kind == "none":
+            return ()
+        if hit.owner is not None:
+            entry = {hit.owner}
+        elif isinstance(hit.top, ast.ImportFrom) and any(a.name == "*" for a in hit.top.names):
+            return None
+        else:
+            entry = set(bound_names(hit.top)) if hit.top is not None else set()
+        if entry & set(self.blanks):
+            return tuple(b for b in self.blanks if b in entry)
+        charged = [b for b in self.blanks if self._closure(b) & entry]
+        if charged:
+            return tuple(charged)
+        if cell_blank is not None:
+            return (cell_blank,)
+        return None
+
+    def hit(self, cell: str, node: ast.AST, kind: str, what: str, context: "Context") -> None:
+        self.hits.append(Hit(cell, node, kind, what, context.top, context.owner))
+
+    # -- whole-cell rules --------------------------------------------------------------------------
+
+    def _swallow_all(self, label: str, tree: ast.Module) -> None:
+        body = [s for s in tree.body if not (isinstance(s, ast.Expr) and isinstance(s.value, ast.Constant))]
+        if len(body) != 1 or not isinstance(body[0], ast.Try):
+            return
+        for handler in body[0].handlers:
+            if catches_everything(handler) and all(does_nothing(s) for s in handler.body):
+                self.hits.append(Hit(label, body[0], "none", "wraps the whole cell in a try/except that discards "
+                                      "every error, so the cell can never fail", body[0], None))
+                return
+
+    def _rebinds_helpers(self, label: str, tree: ast.Module) -> None:
+        for stmt in tree.body:
+            if isinstance(stmt, (ast.Import, ast.ImportFrom)):
+                fresh: dict[str, str] = {}
+                self._collect_imports(stmt, fresh)
+                names = [n for n, target in fresh.items()
+                         if n in self.locked_imports and self.locked_imports[n] != target]
+            else:
+                names = [n for n in bound_names(stmt) if n in self.locked_imports]
+            names = [n for n in names if is_check_helper(self.locked_imports[n])]
+            for name in names:
+                self.hits.append(Hit(label, stmt, "none", f"redefines {name}, which the given code imports "
+                                      f"({self.locked_imports[name]}); visible checks that use it stop checking, "
+                                      "hidden tests are unaffected", stmt, None))

@@ -1,0 +1,76 @@
+"""Walking one cell's syntax tree for the scan, with the context each rule needs."""
+
+from __future__ import annotations
+
+import ast
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from autograder.integrity.scan import Scan
+
+
+@dataclass
+class Context:
+    top: ast.stmt | None = None
+    owner: str | None = None
+    params: tuple[frozenset, ...] = ()
+    allowed: frozenset = frozenset()
+
+
+class Walker:
+    """Walks one cell's tree with its context (top-level statement, enclosing def, parameters) and calls
+    a ``visit_<Node>`` method for each node; the rules (autograder/integrity/visitor.py) define them."""
+
+    def __init__(self, scan: "Scan", cell: str):
+        self.scan = scan
+        self.cell = cell
+        self.skip: set[int] = set()  # ids of nodes already handled (magic calls' get_ipython)
+        self.docstrings: set[int] = set()
+
+    def run(self, tree: ast.Module) -> None:
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.Module, ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                if node.body and isinstance(node.body[0], ast.Expr) and isinstance(node.body[0].value, ast.Constant):
+                    self.docstrings.add(id(node.body[0].value))
+        for stmt in tree.body:
+            owner = stmt.name if isinstance(stmt, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)) else None
+            self.visit(stmt, Context(top=stmt, owner=owner))
+
+    def hit(self, node, kind, what, context):
+        self.scan.hit(self.cell, node, kind, what, context)
+
+    def visit(self, node: ast.AST, context: Context) -> None:
+        if id(node) in self.skip:
+            return
+        method = getattr(self, "visit_" + type(node).__name__, None)
+        if method is not None and method(node, context) is False:
+            return
+        inner = context
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+            args = node.args
+            params = {a.arg for a in args.posonlyargs + args.args + args.kwonlyargs}
+            params |= {a.arg for a in (args.vararg, args.kwarg) if a is not None}
+            inner = Context(context.top, context.owner, context.params + (frozenset(params),), context.allowed)
+        for child in ast.iter_child_nodes(node):
+            self.visit(child, inner)
+
+    def shadowed(self, name: str, context: Context) -> bool:
+        return name in self.scan.defined or any(name in p for p in context.params)
+
+    def module_of(self, node: ast.AST) -> str | None:
+        """The dotted path an expression names, if it is rooted at an imported name (np.testing -> numpy.testing)."""
+        parts = []
+        while isinstance(node, ast.Attribute):
+            parts.append(node.attr)
+            node = node.value
+        if not isinstance(node, ast.Name):
+            return None
+        root = self.scan.modules.get(node.id)
+        if root is None:
+            root = {"np": "numpy", "plt": "matplotlib.pyplot"}.get(node.id) or (
+                node.id if node.id in ("sys", "os", "builtins", "numpy", "scipy", "math", "importlib", "inspect",
+                                       "gc", "types", "course", "solutions", "autograder", "IPython") else None)
+        if root is None:
+            return None
+        return ".".join([root] + parts[::-1])

@@ -1,0 +1,193 @@
+"""The grading kernel's manager: a Jupyter kernel started in the sandbox (autograder/kernel/sandbox.py).
+
+``SandboxedKernelManager`` is the kernel manager class for nbclient (``kernel_manager_class``). It
+chooses what a kernel may read and write, gives each kernel a private folder, and puts the
+sandbox's launcher in front of the kernel's command.
+"""
+
+from __future__ import annotations
+
+import atexit
+import os
+import shutil
+import site
+import subprocess
+import sys
+import tempfile
+import weakref
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+from jupyter_client.manager import AsyncKernelManager
+from traitlets import CaselessStrEnum, List, Unicode
+
+from autograder.labs import ROOT
+from autograder.kernel.sandbox import launcher_command, wanted_layers
+
+PRIVATE_PARENT = "/tmp"
+"""Where each kernel's private folder is made: a short path, since a Unix socket's path is at most 107 bytes."""
+
+
+def python_read_paths() -> list[str]:
+    """The Python installation this process runs on: its environment and base installation, the
+    interpreter's real path, site-packages, and every ``sys.path`` entry inside the environment
+    (each may be a link to elsewhere, which is what gets allowed)."""
+    prefixes = (sys.prefix, sys.base_prefix)
+    inside = [p for p in sys.path if p and any(_is_beneath(p, prefix) for prefix in prefixes)]
+    return _unique([*prefixes, os.path.realpath(sys.executable), *site.getsitepackages(), *inside])
+
+
+SYSTEM_READ_PATHS = (
+    "/usr/lib", "/lib", "/lib64",        # the C library and other shared libraries, the dynamic loader
+    "/etc/ld.so.cache", "/etc/ld.so.conf", "/etc/ld.so.conf.d",  # how the loader finds them
+    "/etc/localtime", "/etc/timezone",   # the local time zone
+    "/etc/locale.alias",                 # locale names (gettext)
+    "/etc/ssl/openssl.cnf",              # OpenSSL's settings, read when hashlib starts it
+    "/etc/fonts",                        # fontconfig
+    "/etc/passwd", "/etc/group", "/etc/nsswitch.conf",  # user names (getpass, pathlib.home)
+    "/etc/mime.types",                   # mimetypes
+    "/usr/share",                        # fonts, time zones
+    "/dev/urandom",
+    "/proc/self",                        # this process only
+    "/sys/devices/system/cpu",           # how many cores (NumPy, os.cpu_count)
+)
+"""The system's files every kernel may read. Of /etc, only what Python and its libraries read: a
+kernel run by root could otherwise print /etc/shadow into a feedback page."""
+SYSTEM_WRITE_PATHS = ("/dev/null",)
+"""The system's files every kernel may write."""
+
+
+@cache
+def installed_course() -> str | None:
+    """The folder a grading kernel imports ``course`` from: the kernel has no PYTHONPATH, so that is
+    the installed package (``-e .`` points at a course root's ``course/``, not necessarily this one's);
+    None if it does not import."""
+    env = {name: value for name, value in os.environ.items() if name != "PYTHONPATH"}
+    found = subprocess.run([sys.executable, "-c", "import course, os; print(os.path.dirname(os.path.realpath(course.__file__)))"],
+                           cwd="/", env=env, capture_output=True, text=True, timeout=120, check=False)
+    return found.stdout.strip() or None if found.returncode == 0 else None
+
+
+@cache
+def font_cache(read: tuple[str, ...]) -> Path | None:
+    """Matplotlib's list of fonts as a kernel that reads only beneath ``read`` sees them, made once
+    per process by Matplotlib in the sandbox and copied into each kernel's MPLCONFIGDIR, which saves
+    every kernel a second (never taken from a kernel, which could tamper with it); None when it
+    could not be made."""
+    folder = tempfile.mkdtemp(prefix="kit-fonts-", dir=PRIVATE_PARENT)
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+    command = launcher_command(list(read), [folder, *SYSTEM_WRITE_PATHS], wanted_layers())
+    subprocess.run([*command, sys.executable, "-c", "import matplotlib.font_manager"], cwd=folder,
+                   env={**os.environ, "MPLCONFIGDIR": folder, "HOME": folder, "TMPDIR": folder},
+                   capture_output=True, timeout=300, check=False)
+    return next(Path(folder).glob("fontlist-*.json"), None)
+
+
+class SandboxedKernelManager(AsyncKernelManager):
+    """A Jupyter kernel manager whose kernels run in the sandbox (see the module doc).
+
+    The kernel talks over Unix sockets (``ipc``: TCP on loopback does not cross the network
+    namespace) in a private folder made for each kernel, ``private_folder``, which also holds its
+    TMPDIR, HOME, IPYTHONDIR, MPLCONFIGDIR and Jupyter runtime files, and which is removed when the
+    kernel shuts down. The kernel may read the Python installation, the system's shared files
+    (``SYSTEM_READ_PATHS``), the course's ``course/`` package (and the installed one it imports), and
+    ``read_paths``; it may write in
+    its working directory (the submission's folder, the ``cwd`` it is started with; the private
+    folder when none is given), the private folder, ``SYSTEM_WRITE_PATHS`` and ``write_paths``.
+    A path that holds the course root is refused: the kernel does not start.
+    """
+
+    transport = CaselessStrEnum(["ipc"], default_value="ipc", config=True,
+                                help="Unix sockets only: TCP does not reach into the kernel's network namespace.")
+    read_paths = List(Unicode(), help="Further paths the kernel may read beneath.").tag(config=True)
+    write_paths = List(Unicode(), help="Further paths the kernel may read and write beneath.").tag(config=True)
+
+    _private: Path | None = None
+
+    @property
+    def private_folder(self) -> Path | None:
+        """This kernel's private folder (None before the kernel is started): short, under /tmp,
+        writable by the kernel, removed at shutdown."""
+        return self._private
+
+    def kernel_read_paths(self) -> list[str]:
+        """Every path the kernel may read beneath: the defaults that exist here, and ``read_paths``."""
+        defaults = [*python_read_paths(), *SYSTEM_READ_PATHS, str(ROOT / "course"), installed_course() or ""]
+        return _unique([*(p for p in defaults if p and os.path.exists(p)), *self.read_paths])
+
+    def kernel_write_paths(self, cwd: str) -> list[str]:
+        """Every path the kernel may write beneath: its working directory ``cwd``, its private
+        folder, ``SYSTEM_WRITE_PATHS`` and ``write_paths``."""
+        return _unique([cwd, str(self._private), *SYSTEM_WRITE_PATHS, *self.write_paths])
+
+    def _make_private_folder(self) -> Path:
+        """A new private folder with its subfolders, the connection file and ipc sockets placed in it."""
+        private = Path(tempfile.mkdtemp(prefix="kit-", dir=PRIVATE_PARENT))
+        for name in ("tmp", "home", "ipython", "matplotlib", "runtime"):
+            (private / name).mkdir()
+        weakref.finalize(self, shutil.rmtree, private, ignore_errors=True)
+        self.connection_file = str(private / "kernel.json")
+        self.ip = str(private / "ipc")
+        return private
+
+    async def _async_pre_start_kernel(self, **kw: Any) -> tuple[list[str], dict[str, Any]]:
+        """jupyter_client's preparation, then the launcher in front of the kernel's command and the
+        private folder in its environment; returns the command and the launch arguments."""
+        read = self.kernel_read_paths()
+        _refuse_course_root([*read, *self.write_paths, *([kw["cwd"]] if kw.get("cwd") else [])])
+        if self._private is None:  # a restart keeps the folder and the connection file
+            self._private = self._make_private_folder()
+        kw["cwd"] = str(Path(kw.get("cwd") or self._private).resolve())
+        write = self.kernel_write_paths(kw["cwd"])
+        fonts = font_cache(tuple(read))
+        if fonts is not None:
+            shutil.copy(fonts, self._private / "matplotlib")
+        kernel_cmd, kw = await super()._async_pre_start_kernel(**kw)
+        kw["env"].pop("PYTHONPATH", None)  # the kernel imports what is installed (course), nothing of the course root
+        kw["env"].update(
+            TMPDIR=str(self._private / "tmp"),
+            HOME=str(self._private / "home"),
+            IPYTHONDIR=str(self._private / "ipython"),
+            MPLCONFIGDIR=str(self._private / "matplotlib"),
+            JUPYTER_RUNTIME_DIR=str(self._private / "runtime"),
+        )
+        return [*launcher_command(read, write, wanted_layers()), *kernel_cmd], kw
+
+    async def _async_shutdown_kernel(self, now: bool = False, restart: bool = False) -> None:
+        """Stop the kernel at once (SIGKILL to its process group), whatever ``now`` says: it has
+        nothing to save, and its graceful shutdown looks for its child processes in /proc, which it
+        may not read, and logs the failure."""
+        await super()._async_shutdown_kernel(now=True, restart=restart)
+
+    shutdown_kernel = _async_shutdown_kernel
+
+    async def _async_cleanup_resources(self, restart: bool = False) -> None:
+        """jupyter_client's clean-up, and the private folder removed unless the kernel restarts."""
+        await super()._async_cleanup_resources(restart=restart)
+        if not restart and self._private is not None:
+            shutil.rmtree(self._private, ignore_errors=True)
+            self._private = None
+
+
+def _refuse_course_root(paths: list[str]) -> None:
+    """Raise a ValueError if one of ``paths`` is the course root or holds it: the kernel could then
+    read the reference, the gradebook and every student's work."""
+    root = os.path.realpath(ROOT)
+    for path in paths:
+        if _is_beneath(root, os.path.realpath(path)):
+            raise ValueError(f"The grading kernel would be allowed {path}, which holds the course root {root} "
+                             "(the reference, the gradebook, every student's work). Start it in the "
+                             "submission's own folder, and allow no folder that holds the course root.")
+
+
+def _is_beneath(path: str, folder: str) -> bool:
+    """Whether ``path`` is ``folder`` or inside it, by their absolute paths."""
+    path, folder = os.path.abspath(path), os.path.abspath(folder)
+    return path == folder or path.startswith(folder.rstrip(os.sep) + os.sep)
+
+
+def _unique(paths: list[str]) -> list[str]:
+    """``paths`` without repeats, in order."""
+    return list(dict.fromkeys(paths))
+

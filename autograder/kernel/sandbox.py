@@ -1,0 +1,289 @@
+"""A sandbox for the grading kernel: what it may read and write, and no network.
+
+Two layers of the Linux kernel confine the kernel process, applied by a launcher that then
+``exec``s the kernel (the process, and so its pid, stay the same):
+
+- files: a Landlock ruleset (``landlockpy``) lets the process read only beneath the read paths
+  and read and write only beneath the write paths; everything else on the filesystem is closed,
+  even to root. It also keeps the process from signalling or tracing processes outside it;
+- network: a private network namespace, whose only interface is a loopback that is down. The
+  process also gets its own user namespace where the OS allows one, so that a kernel started by
+  root holds no capability over the machine (loading kernel modules, mounting, raw devices).
+
+``python -m autograder.kernel.sandbox --read P ... --write P ... -- CMD ARGS...`` is the launcher. It never
+refuses: a layer the OS does not offer is left out, and it says so on stderr. ``status()`` says what
+this OS offers, in a sentence for the grader's output. ``SandboxedKernelManager``
+(autograder/kernel/manager.py, also importable from here) starts Jupyter kernels through the
+launcher. The launcher imports only the standard library and ``landlockpy``: it runs at every
+kernel start, and importing jupyter_client would add a third of a second to each.
+
+The environment variable ``KIT_SANDBOX`` turns layers off: ``off`` (none), or the layers to keep,
+``files`` or ``network``. Unset, or ``on``: both.
+"""
+
+from __future__ import annotations
+
+import argparse
+import contextlib
+import ctypes
+import errno
+import os
+import shutil
+import sys
+from dataclasses import dataclass
+from functools import cache
+from pathlib import Path
+from typing import Any
+
+import landlockpy
+from landlockpy import AccessFS, Scope
+
+SWITCH = "KIT_SANDBOX"
+LAYERS = ("files", "network")
+
+CLONE_NEWNET = 0x40000000
+CLONE_NEWUSER = 0x10000000
+PR_SET_NO_NEW_PRIVS = 38
+
+READ = AccessFS.READ_FILE | AccessFS.READ_DIR | AccessFS.EXECUTE
+"""What a read path allows: read files and list folders, run programs."""
+NOT_WRITABLE = AccessFS.MAKE_CHAR | AccessFS.MAKE_BLOCK | AccessFS.IOCTL_DEV
+"""Rights a write path does not give: device nodes (root could make one for a raw disk) and ioctls on devices."""
+ON_FILES = AccessFS.EXECUTE | AccessFS.WRITE_FILE | AccessFS.READ_FILE | AccessFS.TRUNCATE | AccessFS.IOCTL_DEV
+"""The rights Landlock accepts on a rule for a single file (the others are for folders)."""
+
+
+@dataclass(frozen=True)
+class SandboxStatus:
+    """What this OS offers the sandbox, and which layers a kernel started now gets."""
+
+    landlock_abi: int
+    """The Landlock ABI version of the running Linux kernel; 0 when there is none."""
+    network_namespace: bool
+    """Whether this process can make a new network namespace."""
+    files: bool
+    """Whether kernels get the files layer (Landlock), given the OS and ``KIT_SANDBOX``."""
+    network: bool
+    """Whether kernels get the network layer (a private network namespace)."""
+    summary: str
+    """One line for the grader's output and the grades record."""
+
+    @property
+    def complete(self) -> bool:
+        """True when kernels get both layers."""
+        return self.files and self.network
+
+
+def wanted_layers() -> tuple[str, ...]:
+    """The layers ``KIT_SANDBOX`` asks for (both when unset or ``on``, none when ``off``); a
+    ValueError for any other word than a layer's name."""
+    value = os.environ.get(SWITCH, "on").strip().lower()
+    if value in ("", "on"):
+        return LAYERS
+    if value == "off":
+        return ()
+    named = tuple(word.strip() for word in value.split(","))
+    unknown = [word for word in named if word not in LAYERS]
+    if unknown:
+        raise ValueError(f"{SWITCH}={value!r}: it is 'on', 'off', or the layers to keep among {', '.join(LAYERS)}.")
+    return tuple(layer for layer in LAYERS if layer in named)
+
+
+def status() -> SandboxStatus:
+    """What this OS offers (Landlock's ABI version, whether a network namespace can be made), which
+    layers kernels get given ``KIT_SANDBOX``, and a one-line summary in plain English."""
+    abi = landlock_abi()
+    netns_problem = network_namespace_problem()
+    wanted = wanted_layers()
+    files = abi > 0 and "files" in wanted
+    network = netns_problem is None and "network" in wanted
+    if "files" not in wanted:
+        files_part = f"Landlock turned off ({SWITCH}={os.environ.get(SWITCH)})"
+    elif abi == 0:
+        files_part = ("Landlock unavailable (the Linux kernel lacks it or does not enable it, or a container "
+                      "forbids it: it needs Linux 5.13 or later with landlock among its lsm= boot options)")
+    else:
+        files_part = f"Landlock ABI {abi} (files)"
+    if "network" not in wanted:
+        network_part = f"network namespace turned off ({SWITCH}={os.environ.get(SWITCH)})"
+    elif netns_problem is not None:
+        network_part = f"no network namespace ({netns_problem})"
+    else:
+        network_part = "a private network namespace (no network)"
+    if files and network:
+        summary = f"{files_part} and {network_part}"
+    elif files or network:
+        summary = (f"PARTLY SANDBOXED: {files_part} and {network_part}: the grading kernel can "
+                   + ("use the network" if files else "read every file the grader's user can"))
+    else:
+        summary = (f"NOT SANDBOXED: {files_part}, and {network_part}: the grading kernel can read every "
+                   "file the grader's user can, and use the network")
+    return SandboxStatus(abi, netns_problem is None, files, network, summary)
+
+
+def landlock_abi() -> int:
+    """The Landlock ABI version of the running kernel (``landlock_create_ruleset(NULL, 0,
+    LANDLOCK_CREATE_RULESET_VERSION)``); 0 when Landlock is unavailable."""
+    try:
+        return landlockpy.abi_version()
+    except OSError:  # refused otherwise than by a kernel without Landlock: a container's seccomp filter
+        return 0
+
+
+@cache
+def network_namespace_problem() -> str | None:
+    """None when this process can make a new network namespace (tried in a child process, which
+    exits); otherwise why not, in words."""
+    if sys.platform != "linux":
+        return "network namespaces are a Linux feature"
+    pid = os.fork()
+    if pid == 0:  # the child: try, and say how it went in its exit status
+        try:
+            enter_network_namespace()
+        except OSError as error:
+            os._exit(error.errno or 255)
+        os._exit(0)
+    _, wait_status = os.waitpid(pid, 0)
+    code = os.waitstatus_to_exitcode(wait_status)
+    return None if code == 0 else _namespace_error(code)
+
+
+def _namespace_error(code: int) -> str:
+    """Why a namespace could not be made, from the errno of the failed call."""
+    if code == errno.EPERM:
+        return ("namespaces are not allowed here: user namespaces are disabled for this user, or a "
+                "container forbids them")
+    if code == errno.ENOSPC:
+        return "the limit of user namespaces is reached (sysctl user.max_user_namespaces)"
+    if code == errno.EINVAL:
+        return "this Linux kernel was built without network or user namespaces"
+    return f"unshare failed: {os.strerror(code)}"
+
+
+@cache
+def _libc() -> ctypes.CDLL:
+    """The C library, for unshare and prctl (Python 3.11's os has neither)."""
+    return ctypes.CDLL(None, use_errno=True)
+
+
+def _check(result: int, call: str) -> None:
+    """Raise the OSError for a libc call that returned -1."""
+    if result == -1:
+        code = ctypes.get_errno()
+        raise OSError(code, f"{call}: {os.strerror(code)}")
+
+
+def enter_network_namespace() -> None:
+    """Move this process into a new network namespace. First into a new user namespace where this
+    user is itself, where the OS allows one (for root too: root inside holds no capability over the
+    machine); without the uid map, which some systems refuse, it shows as nobody and still works.
+    Raises OSError when no network namespace can be made."""
+    uid, gid = os.getuid(), os.getgid()
+    if _libc().unshare(CLONE_NEWUSER) == 0:
+        with contextlib.suppress(OSError):
+            Path("/proc/self/setgroups").write_text("deny")
+            Path("/proc/self/uid_map").write_text(f"{uid} {uid} 1")
+            Path("/proc/self/gid_map").write_text(f"{gid} {gid} 1")
+    _check(_libc().unshare(CLONE_NEWNET), "unshare(CLONE_NEWNET)")
+
+
+def set_no_new_privs() -> None:
+    """Make this process and its children unable to gain privileges (setuid programs, file
+    capabilities); raises OSError if the OS refuses."""
+    _check(_libc().prctl(PR_SET_NO_NEW_PRIVS, 1, 0, 0, 0), "prctl(PR_SET_NO_NEW_PRIVS)")
+
+
+def restrict_files(read: list[str], write: list[str]) -> list[str]:
+    """Apply a Landlock ruleset to this process: it may read (files, folders, execute) only beneath
+    ``read`` and read, write, create and remove only beneath ``write``; signals and abstract Unix
+    sockets stay inside. Rights the running ABI lacks are left out. Returns the paths that could not
+    be allowed, each with the reason (they stay closed); raises OSError when Landlock is unavailable
+    or refuses the ruleset."""
+    skipped = []
+    with landlockpy.Ruleset(handled_fs=landlockpy.fs_for_abi(landlockpy.abi_version()),
+                            handled_net=landlockpy.AccessNet.NONE,
+                            scoped=Scope.SIGNAL | Scope.ABSTRACT_UNIX_SOCKET) as ruleset:
+        for paths, access in ((read, READ), (write, ruleset.handled_fs & ~NOT_WRITABLE)):
+            for path in paths:
+                try:
+                    ruleset.allow_path(path, access if os.path.isdir(path) else access & ON_FILES)
+                except OSError as error:
+                    skipped.append(f"{path} ({error.strerror})")
+        ruleset.restrict(no_new_privs=True)
+    return skipped
+
+
+def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS) -> list[str]:
+    """Apply the sandbox's ``layers`` to this process: the network namespace, no_new_privs, then
+    Landlock. Returns what could not be applied, one sentence each (empty when all was)."""
+    if sys.platform != "linux":
+        return [f"not applied: {', '.join(layers)} confinement needs Linux"] if layers else []
+    problems = []
+    if "network" in layers:
+        try:
+            enter_network_namespace()
+        except OSError as error:
+            problems.append(f"no network namespace, the kernel has the network ({_namespace_error(error.errno)})")
+    try:
+        set_no_new_privs()
+    except OSError as error:
+        problems.append(f"no_new_privs not set ({error})")
+    if "files" in layers:
+        try:
+            skipped = restrict_files(read, write)
+        except OSError as error:
+            problems.append(f"Landlock not applied, the kernel can read every file this user can ({error})")
+        else:
+            problems += [f"not allowed, it stays closed: {path}" for path in skipped]
+    return problems
+
+
+def main(argv: list[str] | None = None) -> None:
+    """The launcher: confine this process as the arguments say, report on stderr what could not be
+    applied, and exec the command. Does not return."""
+    parser = argparse.ArgumentParser(
+        prog="python -m autograder.kernel.sandbox",
+        description="Run a command confined: it reads only beneath --read paths, writes only beneath "
+                    "--write paths, and has no network. Layers the OS lacks are left out, and said.")
+    parser.add_argument("--read", action="append", default=[], metavar="PATH", help="a path it may read beneath")
+    parser.add_argument("--write", action="append", default=[], metavar="PATH",
+                        help="a path it may read and write beneath")
+    parser.add_argument("--without", action="append", default=[], choices=LAYERS,
+                        help="a layer to leave out")
+    parser.add_argument("command", nargs=argparse.REMAINDER, help="-- CMD ARGS...")
+    args = parser.parse_args(argv)
+    command = args.command[1:] if args.command[:1] == ["--"] else args.command
+    if not command:
+        parser.error("no command to run: give it after --")
+    program = shutil.which(command[0])
+    if program is None:
+        parser.error(f"{command[0]}: no such program")
+    layers = tuple(layer for layer in LAYERS if layer not in args.without)
+    for problem in confine(args.read, args.write, layers):
+        print(f"sandbox: {problem}", file=sys.stderr)
+    sys.stderr.flush()
+    os.execv(program, command)
+
+
+def launcher_command(read: list[str], write: list[str], layers: tuple[str, ...]) -> list[str]:
+    """The launcher's command line for these paths and layers, up to ``--``: the command it
+    confines follows. It runs isolated (``-I``), so that nothing in the working directory or the
+    environment can stand in for the modules it imports."""
+    command = [sys.executable, "-I", str(Path(__file__).resolve())]
+    command += [arg for path in read for arg in ("--read", path)]
+    command += [arg for path in write for arg in ("--write", path)]
+    command += [arg for layer in LAYERS if layer not in layers for arg in ("--without", layer)]
+    return [*command, "--"]
+
+
+def __getattr__(name: str) -> Any:
+    """``SandboxedKernelManager``, imported from autograder.kernel.manager when first asked for."""
+    if name == "SandboxedKernelManager":
+        from autograder.kernel.manager import SandboxedKernelManager
+
+        return SandboxedKernelManager
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+if __name__ == "__main__":
+    main()

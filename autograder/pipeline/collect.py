@@ -1,0 +1,237 @@
+"""Intake of a course website's download through nbgrader's ``zip_collect``.
+
+An LMS download of one lab (one zip, or a folder of files named by student) goes through nbgrader's
+ZipCollectApp: its extractor unpacks the archives, and our collector, a FileNameCollectorPlugin,
+reads the LMS's name for the student (and the submission time, if the file name carries one) from
+each file's path, and maps the name to our student id with a CSV (``lms_name,student_id``). The
+result is the layout ``python -m autograder grade`` takes:
+``SUBMISSIONS/<student>/<lab>/<lab>.ipynb``, with nbgrader's ``timestamp.txt`` beside it when the
+LMS gives a submission time. Every file that is not collected is reported with the reason.
+
+Plain nbgrader works too, into the course's ``submitted/``:
+``nbgrader zip_collect <lab> --collector=autograder.pipeline.collect.StudentIdCollector
+--StudentIdCollector.students_file=students.csv``.
+"""
+
+from __future__ import annotations
+
+import csv
+import re
+import shutil
+import tempfile
+from dataclasses import dataclass
+from datetime import datetime, timezone
+from pathlib import Path
+from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
+
+from nbgrader.apps import ZipCollectApp
+from nbgrader.coursedir import CourseDirectory
+from nbgrader.plugins import FileNameCollectorPlugin
+from nbgrader.utils import capture_log
+from traitlets import Unicode
+from traitlets.config import Config
+
+from autograder.labs import ROOT, Lab, get_lab
+
+DEFAULT_PATTERN = (
+    r"(?:^|/)(?P<student_id>[^/_]+)_"
+    r"(?:(?P<timestamp>\d{4}-\d\d-\d\d[-_T ]\d\d[-:]\d\d(?:[-:]\d\d)?)_)?[^/]*\.ipynb$"
+)
+"""A file ``<lms name>_<anything>.ipynb``, or ``<lms name>_<YYYY-MM-DD-HH-MM-SS>_<anything>.ipynb``
+with the submission time, anywhere in the download."""
+STUDENT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
+"""Our student ids are folder names: letters, digits, ``_``, ``.`` and ``-``."""
+
+
+class IntakeError(RuntimeError):
+    """The download or the student list cannot be collected; the message says why."""
+
+
+def read_students(path: Path) -> dict[str, str]:
+    """The student-id mapping: a CSV with the columns ``lms_name`` and ``student_id``."""
+    with open(path, newline="") as handle:
+        reader = csv.DictReader(handle)
+        if not {"lms_name", "student_id"} <= set(reader.fieldnames or ()):
+            raise IntakeError(f"{path} must have the columns lms_name and student_id (it has {reader.fieldnames}).")
+        students: dict[str, str] = {}
+        for line, record in enumerate(reader, start=2):
+            name, student = record["lms_name"].strip(), record["student_id"].strip()
+            if not STUDENT_ID.fullmatch(student):
+                raise IntakeError(f"{path}, line {line}: {student!r} is not a valid student id (letters, digits, _ . -).")
+            if students.get(name, student) != student:
+                raise IntakeError(f"{path}, line {line}: {name!r} is mapped to both {students[name]} and {student}.")
+            students[name] = student
+    return students
+
+
+def parse_time(text: str, zone: str) -> datetime:
+    """A submission time from a file name (``2026-10-02-23-59-00``, ``2026-10-02T23:59``), read in
+    the LMS's time zone, in UTC."""
+    fields = [int(part) for part in re.findall(r"\d+", text)]
+    return datetime(*fields[:6], tzinfo=ZoneInfo(zone)).astimezone(timezone.utc)
+
+
+@dataclass
+class Collected:
+    """One file the collector matched to a student."""
+
+    path: str
+    student: str
+    time: datetime | None
+
+
+class StudentIdCollector(FileNameCollectorPlugin):
+    """nbgrader's file-name collector, mapping the LMS's name for a student to our student id.
+
+    ``named_regexp`` is searched in each file's path relative to the extracted download (``/``
+    separators); its group ``student_id`` is the LMS's name, and its optional group ``timestamp``
+    the submission time in ``timezone``. A lab has one notebook, so whatever name the student gave
+    the file, it is collected as ``<lab>.ipynb``.
+    """
+
+    named_regexp = Unicode(DEFAULT_PATTERN, help="Regular expression with the groups student_id and, optionally, timestamp.").tag(config=True)
+    students_file = Unicode("", help="CSV with the columns lms_name and student_id.").tag(config=True)
+    timezone = Unicode("UTC", help="The time zone of the submission times in file names (IANA name).").tag(config=True)
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__(**kwargs)
+        if not self.students_file:
+            raise IntakeError("StudentIdCollector needs students_file, a CSV with the columns lms_name and student_id.")
+        self.students = read_students(Path(self.students_file))
+        self.collected: list[Collected] = []
+        self.skipped: list[tuple[str, str]] = []
+        """(file, reason) for every file that is not collected."""
+
+    def _relative(self, path: str) -> str:
+        extracted = self.parent._format_collect_path(self.parent.extracted_directory)
+        return Path(path).relative_to(extracted).as_posix()
+
+    def collect(self, submitted_file: str) -> dict | None:
+        relative = self._relative(submitted_file)
+        if Path(submitted_file).suffix not in self.valid_ext:
+            self.skipped.append((relative, "not a notebook"))
+            return None
+        match = re.search(self.named_regexp, relative)
+        if not match:
+            self.skipped.append((relative, "the file name does not match the LMS pattern"))
+            return None
+        name = match.group("student_id")
+        if name not in self.students:
+            self.skipped.append((relative, f"unknown student {name!r}: not in the student list"))
+            return None
+        info = {"student_id": self.students[name], "file_id": f"{self.parent.coursedir.assignment_id}.ipynb"}
+        stamp = match.groupdict().get("timestamp")
+        time = parse_time(stamp, self.timezone) if stamp else None
+        if time:
+            info["timestamp"] = time.isoformat()
+        self.collected.append(Collected(relative, info["student_id"], time))
+        return info
+
+
+@dataclass
+class IntakeReport:
+    """What ``collect`` did: the students collected, and every file it did not collect."""
+
+    lab: str
+    students: list[str]
+    skipped: list[tuple[str, str]]
+    """(file, reason): the files not collected."""
+    superseded: list[tuple[str, str]]
+    """(file, student): a student's older file, replaced by a newer submission."""
+    missing: list[str]
+    """Students in the student list who submitted nothing."""
+    renamed: list[tuple[str, str]]
+    """(file, student): a notebook collected under the lab's name although named differently."""
+
+    def lines(self) -> list[str]:
+        out = [f"{self.lab}: collected {len(self.students)} submission(s)."]
+        out += [f"NOT COLLECTED {path}: {reason}" for path, reason in self.skipped]
+        out += [f"superseded {path}: {student} submitted a newer file" for path, student in self.superseded]
+        out += [f"renamed {path}: collected as {student}'s {self.lab}.ipynb" for path, student in self.renamed]
+        if self.missing:
+            out.append(f"no submission from: {', '.join(self.missing)}")
+        return out
+
+
+def _superseded(collected: list[Collected]) -> list[tuple[str, str]]:
+    """The files nbgrader replaced: for each student all but the newest (later files win ties, as in
+    ZipCollectApp, which sees the files in sorted order). nbgrader refuses a student's second file
+    without a time, so here every student with two files has times."""
+    kept: dict[str, Collected] = {}
+    for item in sorted(collected, key=lambda c: c.path):
+        if item.student not in kept or item.time >= kept[item.student].time:
+            kept[item.student] = item
+    return [(c.path, c.student) for c in collected if kept[c.student] is not c]
+
+
+def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: str | None = None,
+            zone: str = "UTC") -> IntakeReport:
+    """Collect an LMS download of ``lab`` (a zip or a folder) into ``out/<student>/<lab>/<lab>.ipynb``.
+
+    nbgrader's ZipCollectApp does the work in a scratch course folder whose ``submitted/`` is
+    ``out``. A student's folder in ``out`` is replaced by the newest file of this download.
+    Raises IntakeError when nbgrader refuses (e.g. two files of one student and no times to
+    choose between them).
+    """
+    if not download.exists():
+        raise IntakeError(f"There is no download {download}.")
+    read_students(students_file)  # its errors, before nbgrader starts
+    try:
+        ZoneInfo(zone)
+    except (ZoneInfoNotFoundError, ValueError):
+        raise IntakeError(f"Unknown time zone {zone!r}: give an IANA name such as Europe/London.") from None
+    out.mkdir(parents=True, exist_ok=True)
+    with tempfile.TemporaryDirectory() as scratch:
+        archive = Path(scratch) / "downloaded" / lab.id / "archive"
+        if download.is_dir():
+            shutil.copytree(download, archive)
+        else:
+            archive.mkdir(parents=True)
+            shutil.copy2(download, archive)
+        config = Config()
+        config.CourseDirectory.root = scratch
+        config.CourseDirectory.assignment_id = lab.id
+        config.CourseDirectory.release_directory = str(ROOT / "release")
+        config.CourseDirectory.submitted_directory = str(out.resolve())
+        config.ZipCollectApp.force = True
+        config.ZipCollectApp.log_level = "ERROR"  # every file not collected is in the report
+        config.ExtractorPlugin.force = True
+        config.ZipCollectApp.collector_plugin = StudentIdCollector
+        config.StudentIdCollector.students_file = str(students_file)
+        config.StudentIdCollector.timezone = zone
+        if pattern:
+            config.StudentIdCollector.named_regexp = pattern
+        app = ZipCollectApp(coursedir=CourseDirectory(config=config), config=config)
+        result = capture_log(app)
+        collector: StudentIdCollector | None = app.collector_plugin_inst
+        if not result["success"]:
+            errors = "\n".join(line for line in result.get("log", "").splitlines() if line.startswith("[ERROR]"))
+            files: dict[str, list[str]] = {}
+            for item in collector.collected if collector else []:
+                files.setdefault(item.student, []).append(item.path)
+            twice = "".join(f"\n{student}: {', '.join(paths)}" for student, paths in files.items() if len(paths) > 1)
+            raise IntakeError(f"nbgrader zip_collect could not collect {download}:\n{errors or result['error']}"
+                              + (f"\nStudents with several files and no submission times (keep one each):{twice}" if twice else ""))
+    students = sorted({c.student for c in collector.collected})
+    return IntakeReport(
+        lab.id,
+        students,
+        collector.skipped,
+        _superseded(collector.collected),
+        sorted(set(collector.students.values()) - set(students)),
+        [(c.path, c.student) for c in collector.collected if not c.path.endswith(lab.notebook_name)],
+    )
+
+
+def run_collect(lab_id: str, download: Path, students_file: Path, out: Path, pattern: str | None = None,
+                zone: str = "UTC") -> int:
+    """``python -m autograder collect``: collect and print the report. Exit status 1 if a file was
+    not collected, 2 if nothing could be collected."""
+    try:
+        report = collect(get_lab(lab_id), download, students_file, out, pattern, zone)
+    except (IntakeError, ValueError, OSError) as error:
+        print(f"collect: {error}")
+        return 2
+    print("\n".join(report.lines()))
+    print(f"Submissions: {out}. Grade them with: python -m autograder grade {out}")
+    return 1 if report.skipped else 0

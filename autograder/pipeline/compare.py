@@ -1,0 +1,272 @@
+"""Hidden tests run in the grader's process, against the student's function in the grading kernel.
+
+A graded test cell of blank ``f`` ends with a hidden block that nbgrader strips from the release::
+
+    ### BEGIN HIDDEN TESTS
+    from solutions.<module>.hidden_tests import check_f
+    check_f(f)
+    ### END HIDDEN TESTS
+
+Run by hand or by nbval on a source notebook, where the reference is legitimately present, the
+block runs as written: the check compares in-process (the local mode). In grading, the kernel never
+runs it. ``GradingExecute`` runs the cell's visible part in the kernel, then :func:`run_hidden_test`
+runs ``check_f`` here, in the grader's process, where the reference is, on a :class:`StudentFunction`:
+a stand-in whose calls go over a Unix socket to ``autograder/kernel/side.py`` in the kernel, which
+calls the student's ``f`` and sends back what it returned. The check's verdict becomes the cell's
+outputs: nothing on a pass, the check's error on a failure. Whatever the kernel does, it cannot make
+a check pass without returning the reference's values, and it never holds the reference.
+
+Partial credit stays isolated (autograder/hidden_tests/isolate.py, ``isolate``): in the kernel, the student's ``f``
+calls stand-ins for the other blanks, which the grader answers with the reference, only while this
+test runs, never for ``f`` itself, and only for blanks whose own hidden test came earlier in the
+notebook, so that no test can collect the reference's answers for a later one.
+"""
+
+from __future__ import annotations
+
+import ast
+import contextlib
+import importlib
+import io
+import os
+import re
+import shutil
+import socket
+import sys
+import tempfile
+import time
+import types
+import warnings
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Callable
+
+from nbformat import NotebookNode
+from nbformat.v4 import new_output
+
+from autograder.kernel import side
+from autograder.kernel.side import Peer, PeerGone, PeerTimeout, ProtocolError, Wire, warning_class
+
+BEGIN, END = "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS"
+HIDDEN_MODULE = re.compile(r"solutions\.[a-z0-9_]+\.hidden_tests")
+"""Where a hidden block imports its check from: ``solutions.<module>.hidden_tests``."""
+MODULE_NAME = "_kit_grading"
+"""The kernel-side module's name in the kernel's ``sys.modules``."""
+
+
+class HiddenTestFormError(ValueError):
+    """A hidden block that is not of the one form the grader runs."""
+
+
+class ReferenceUnavailable(RuntimeError):
+    """The grader's process cannot import a hidden test or the reference it compares with."""
+
+
+class KernelStopped(RuntimeError):
+    """The kernel stopped answering the hidden test: it died, or the student's code ended the connection."""
+
+
+@dataclass(frozen=True)
+class HiddenTest:
+    """The hidden test of one cell: ``check`` from ``module``, called on the student's ``blank``."""
+
+    module: str
+    check: str
+    blank: str
+
+    def load(self) -> Callable:
+        """The check function, imported in this process; ReferenceUnavailable if it cannot be."""
+        try:
+            return getattr(importlib.import_module(self.module), self.check)
+        except (ImportError, AttributeError) as error:
+            raise ReferenceUnavailable(
+                f"The grader cannot import {self.module}.{self.check} ({type(error).__name__}: {error}). Every "
+                "hidden test would fail, so nothing was graded. Run the grader from the course root (plain "
+                "nbgrader reads nbgrader_config.py there, which puts the root on the grader's path)."
+            ) from None
+
+
+def split(source: str) -> tuple[str, str | None]:
+    """A test cell's source: (the visible part, the hidden block's code or None)."""
+    if BEGIN not in source:
+        return source, None
+    before, _, rest = source.partition(BEGIN)
+    hidden, _, after = rest.partition(END)
+    return (before + after).rstrip() + "\n" if (before + after).strip() else "", hidden
+
+
+def hidden_test(code: str) -> HiddenTest:
+    """The hidden test that a hidden block's code states; HiddenTestFormError unless it is exactly
+    ``from solutions.<module>.hidden_tests import check_<f>`` then ``check_<f>(<f>)``."""
+    try:
+        body = ast.parse(code).body
+    except SyntaxError as error:
+        raise HiddenTestFormError(f"the hidden block does not parse: {error}") from None
+    if (len(body) == 2 and isinstance(body[0], ast.ImportFrom) and body[0].level == 0
+            and HIDDEN_MODULE.fullmatch(body[0].module or "") and len(body[0].names) == 1
+            and body[0].names[0].asname is None and isinstance(body[1], ast.Expr)
+            and isinstance(body[1].value, ast.Call) and isinstance(body[1].value.func, ast.Name)
+            and body[1].value.func.id == body[0].names[0].name and not body[1].value.keywords
+            and len(body[1].value.args) == 1 and isinstance(body[1].value.args[0], ast.Name)
+            and body[0].names[0].name == f"check_{body[1].value.args[0].id}"):
+        return HiddenTest(body[0].module, body[0].names[0].name, body[1].value.args[0].id)
+    raise HiddenTestFormError("the hidden block is not `from solutions.<module>.hidden_tests import check_f` then "
+                              f"`check_f(f)`:\n{code}")
+
+
+def hidden_tests(nb: NotebookNode) -> dict[int, HiddenTest]:
+    """Cell index -> hidden test, for every code cell with a hidden block."""
+    found = {}
+    for index, cell in enumerate(nb.cells):
+        if cell.cell_type == "code":
+            _, code = split(cell.source)
+            if code is not None:
+                found[index] = hidden_test(code)
+    return found
+
+
+def kernel_setup_code() -> str:
+    """Code that the grader runs silently in each new grading kernel: it defines the kernel-side
+    module (autograder/kernel/side.py, sent as source) as ``sys.modules[MODULE_NAME]``, and binds no
+    name in the notebook."""
+    source = Path(side.__file__).read_text()
+    return (f"(lambda sys, types: sys.modules.__setitem__({MODULE_NAME!r}, (lambda m: (exec(compile({source!r}, "
+            f"{side.FILENAME!r}, 'exec'), m.__dict__), m)[1])(types.ModuleType({MODULE_NAME!r}))))"
+            "(__import__('sys'), __import__('types'))")
+
+
+def serve_code(path: str, test: HiddenTest) -> str:
+    """Code that the grader runs silently in the kernel for one hidden test: serve the student's function."""
+    return f"__import__('sys').modules[{MODULE_NAME!r}].serve({path!r}, {test.blank!r})"
+
+
+class StudentFunction:
+    """The student's function in the kernel, as the check sees it: calling it calls theirs there.
+
+    ``earlier`` are the blanks whose hidden tests came before this one: the only ones the grader
+    answers for, with the reference, when the student's function calls them (see ``isolated``).
+    """
+
+    def __init__(self, peer: Peer, name: str, earlier: frozenset[str], served: dict[str, Callable] | None = None,
+                 warnings_fail: bool = False):
+        self.peer, self.__name__, self.__qualname__ = peer, name, name
+        self.earlier, self.served, self.warnings_fail = earlier, served or {}, warnings_fail
+
+    def isolated(self, reference: types.ModuleType, blanks, warnings_fail: bool) -> "StudentFunction":
+        """The same function, seeing the reference's version of the other blanks that came earlier."""
+        served = {name: getattr(reference, name) for name in blanks if name != self.__name__ and name in self.earlier}
+        return StudentFunction(self.peer, self.__name__, self.earlier, served, warnings_fail)
+
+    def __call__(self, *args, **kwargs):
+        peer = self.peer
+        peer.targets = {("served", name): function for name, function in self.served.items()}
+        buffers: list[bytes] = []
+        payload = peer.codec.encode_arguments(args, kwargs, buffers)
+        peer.wire.send({"op": "call", "target": "student", "served": sorted(self.served), **payload}, buffers)
+        header, buffers = peer.serve_until_answer()
+        print(str(header.get("stdout", "")), end="")
+        print(str(header.get("stderr", "")), end="", file=sys.stderr)
+        caught = [(str(c), str(m)) for c, m in header.get("warnings", []) if isinstance(c, str)]
+        if caught and header.get("op") == "return" and self.warnings_fail:
+            category, message = caught[0]
+            raise AssertionError(
+                f"{self.__name__} gave the warning {category}: {message}. A graded function must run without "
+                "warnings: find the computation that triggers it (a log or square root of a negative number, "
+                "a division by zero, an overflow) and fix it.")
+        result = peer.apply_answer(header, buffers, args, kwargs)
+        for category, message in caught:
+            warnings.warn(message, warning_class(category), stacklevel=2)
+        return result
+
+
+class Listener:
+    """A Unix socket that one kernel connects to, in a fresh private folder (socket paths are short)."""
+
+    def __init__(self, folder: str | os.PathLike | None = None):
+        self.folder = tempfile.mkdtemp(prefix="kit-", dir=folder or "/tmp")
+        self.path = os.path.join(self.folder, "s")
+        self.sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        self.sock.bind(self.path)
+        self.sock.listen(1)
+
+    def accept(self, deadline: float | None, gave_up: Callable[[], bool]) -> socket.socket | None:
+        """The kernel's connection, or None if ``gave_up()`` says the kernel will not connect or the deadline passes."""
+        while deadline is None or time.monotonic() < deadline:
+            self.sock.settimeout(0.05 if deadline is None else max(0.001, min(0.05, deadline - time.monotonic())))
+            try:
+                connection, _ = self.sock.accept()
+            except socket.timeout:
+                if gave_up():
+                    return None
+                continue
+            connection.settimeout(None)
+            return connection
+        return None
+
+    def close(self) -> None:
+        self.sock.close()
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+
+def error_output(ename: str, evalue: str, where: str = "") -> NotebookNode:
+    """An error output as IPython's minimal traceback shows it: one line, plus where it was raised."""
+    lines = [f"{ename}: {evalue}"] + ([f"(raised {where})"] if where else [])
+    return new_output("error", ename=ename, evalue=evalue, traceback=lines)
+
+
+def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[str]) -> list[NotebookNode]:
+    """Run ``check`` on the student's function over ``peer``; the outputs the cell gets.
+
+    Raises PeerTimeout when the kernel does not answer in time and KernelStopped when it stops
+    answering; every other failure is the student's, and becomes an error output.
+    """
+    out, err = io.StringIO(), io.StringIO()
+    outputs: list[NotebookNode] = []
+    value = None
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            value = check(StudentFunction(peer, test.blank, earlier))
+        except (PeerTimeout, KernelStopped):
+            raise
+        except PeerGone:
+            raise KernelStopped("the kernel closed the hidden test's connection") from None
+        except ProtocolError as error:
+            outputs.append(error_output("GradingError", f"The grader could not read your kernel's answer ({error})."))
+        except Exception as error:  # noqa: BLE001 (a failing check: its message is the student's feedback)
+            notes = getattr(error, "__notes__", [])
+            outputs.append(error_output(type(error).__name__, "\n".join([str(error), *notes]), getattr(error, "where", "")))
+    text = err.getvalue() + "".join(f"{w.filename}:{w.lineno}: {w.category.__name__}: {w.message}\n" for w in caught)
+    streams = [new_output("stream", name=name, text=t) for name, t in (("stdout", out.getvalue()), ("stderr", text)) if t]
+    result = []
+    if value is not None and not outputs:
+        result = [new_output("execute_result", data={"text/plain": repr(value)}, execution_count=None)]
+    return streams + outputs + result
+
+
+def connect(listener: Listener, deadline: float | None, gave_up: Callable[[], bool]) -> tuple[Peer | None, str]:
+    """Accept the kernel's connection and read its first message: (the peer, "") when the student's
+    function is ready, or (None, why not). Raises PeerTimeout if the kernel does not answer in time."""
+    tampered = "The hidden test could not reach your function: a cell of the notebook changed or removed the grader's code in the kernel."
+    connection = listener.accept(deadline, gave_up)
+    if connection is None:
+        if deadline is not None and time.monotonic() >= deadline:
+            raise PeerTimeout()
+        return None, tampered
+    wire = Wire(connection)
+    wire.deadline = deadline
+    try:
+        header, _ = wire.receive()
+    except (PeerGone, ProtocolError):
+        header = {}
+    if header.get("op") == "ready":
+        return Peer(wire), ""
+    connection.close()
+    return None, str(header["message"]) if header.get("op") == "missing" else tampered
+
+
+def stop(peer: Peer) -> None:
+    """Tell the kernel that the hidden test is over, and close the connection."""
+    with contextlib.suppress(PeerGone, OSError):
+        peer.wire.send({"op": "stop"}, [])
+    peer.wire.sock.close()

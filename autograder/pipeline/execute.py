@@ -1,0 +1,306 @@
+"""nbgrader's Execute preprocessor, made safe for a whole class.
+
+``GradingExecute`` runs a submission cell by cell, like nbgrader's Execute, and adds:
+
+- hidden tests run in the grader's process, never in the student's kernel (autograder/pipeline/compare.py):
+  a test cell's visible part runs in the kernel, then its check runs here against the student's
+  function, which the kernel only calls; the grader refuses to start if it cannot import the checks
+  and the reference they compare with (without them every hidden test would fail and nbgrader
+  would still report success);
+- caps on each kernel: address space (``memory_limit_gb``), time per cell (``timeout``, the visible
+  part and the hidden test together), time for the whole notebook (``notebook_timeout``), and
+  output kept per cell (``max_output_bytes``);
+- a kernel that does not start (on a loaded machine a start can take minutes) is started again,
+  up to ``kernel_start_attempts`` times in all, rather than nbgrader dropping the submission;
+- recovery: when the kernel dies (``os._exit``, a crash, the memory cap) or a cell times out, the
+  cell gets an error that says so, a fresh kernel replays the cells before it silently, and
+  grading goes on. nbgrader alone throws the whole submission away when its kernel dies.
+
+``nbgrader_config.py`` puts it in place of Execute, so plain ``nbgrader autograde`` gets all this.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import functools
+import os
+import shutil
+import tempfile
+import time
+
+from jupyter_core.utils import ensure_async, run_sync
+from nbclient import NotebookClient
+from nbclient.exceptions import CellTimeoutError, DeadKernelError
+from nbformat import NotebookNode
+from nbformat.v4 import new_output
+from nbgrader.preprocessors import Execute
+from traitlets import Float, Integer
+
+from autograder import cells
+from autograder.pipeline import compare
+from autograder.kernel import sandbox
+from autograder.pipeline.restore import add_grader_notes
+
+TIMEOUT_ERROR = "CellTimeoutError"
+KERNEL_DIED = "KernelDied"
+NOT_RUN = "NotRun"
+
+
+class GradingExecute(Execute):
+    """nbgrader's Execute with hidden tests in the grader's process, caps and kernel recovery."""
+
+    memory_limit_gb = Float(4.0, help="Address-space cap of each grading kernel, GiB (0: none).").tag(config=True)
+    notebook_timeout = Integer(300, help="Seconds for a whole submission; later cells are not run.").tag(config=True)
+    max_output_bytes = Integer(1_000_000, help="Text output kept per cell; the rest is dropped.").tag(config=True)
+    max_restarts = Integer(12, help="Kernel restarts per submission before the rest is not run.").tag(config=True)
+    kernel_start_attempts = Integer(3, help="Kernel starts tried before a submission is given up.").tag(config=True)
+
+    def _setup_code(self) -> list[tuple[str, str]]:
+        """(what it is, code) run silently in every new kernel before any student cell."""
+        steps = [("the grader's kernel-side module", compare.kernel_setup_code())]
+        if self.memory_limit_gb > 0:
+            cap = int(self.memory_limit_gb * 2**30)
+            steps.append(("the memory cap", f"__import__('resource').setrlimit(__import__('resource').RLIMIT_AS, ({cap}, {cap}))"))
+        return steps
+
+    async def async_start_new_kernel_client(self):
+        kc = await self._async_start_kernel_client_with_retries()
+        for what, code in self._setup_code():
+            msg_id = await ensure_async(kc.execute(code, silent=True, store_history=False))
+            reply = await self.async_wait_for_reply(msg_id)
+            if reply is None or reply["content"]["status"] != "ok":
+                await self._async_cleanup_kernel()
+                raise RuntimeError(f"{what} did not install in the grading kernel: {reply and reply['content']}")
+        return kc
+
+    async def _async_start_kernel_client_with_retries(self):
+        """nbclient's client start, tried again with a fresh kernel when the kernel does not answer."""
+        for attempt in range(1, self.kernel_start_attempts + 1):
+            try:
+                return await super().async_start_new_kernel_client()
+            except RuntimeError as error:  # nbclient: "Kernel didn't respond in 180 seconds", or it died
+                if attempt == self.kernel_start_attempts:
+                    raise
+                self.log.warning("The grading kernel did not start (%s); starting another (attempt %d of %d).",
+                                 error, attempt + 1, self.kernel_start_attempts)
+                # nbclient has shut the failed kernel down and, having made a client, dropped its manager
+                if self.km is None:
+                    self.km = self.create_kernel_manager()
+                await self.async_start_new_kernel()
+
+    # nbclient binds the synchronous twin to the base class's coroutine; bind it to ours.
+    start_new_kernel_client = run_sync(async_start_new_kernel_client)
+
+    def preprocess(self, nb: NotebookNode, resources=None, km=None):
+        """Execute every code cell, recovering from dead and stuck kernels (see the module doc)."""
+        _warn_once_if_not_sandboxed(self.log)
+        NotebookClient.__init__(self, nb, km)
+        tests = compare.hidden_tests(nb)
+        checks = {index: test.load() for index, test in tests.items()}  # ReferenceUnavailable before any kernel starts
+        self.reset_execution_trackers()
+        self._check_assign_resources(resources)
+        with _scratch_copy(self.resources):
+            return self._execute_cells(tests, checks)
+
+    def _execute_cells(self, tests: dict[int, compare.HiddenTest], checks: dict) -> tuple[NotebookNode, dict]:
+        """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""
+        earlier: set[str] = set()
+        self._output_bytes: dict[int, int] = {}
+        notes: list[str] = []
+        deadline = time.monotonic() + self.notebook_timeout
+        failed: set[int] = set()
+        restarts = 0
+        with self.setup_kernel():
+            info = self.wait_for_reply(self.kc.kernel_info())
+            self.nb.metadata["language_info"] = info["content"]["language_info"]
+            for index, cell in enumerate(self.nb.cells):
+                if cell.cell_type != "code":
+                    continue
+                if time.monotonic() > deadline or restarts > self.max_restarts:
+                    why = (f"the submission used up its time limit of {self.notebook_timeout} s"
+                           if restarts <= self.max_restarts else "the kernel had to be restarted too often")
+                    _add_error(cell, NOT_RUN, f"This cell was not run: {why}.")
+                    if not any(note.startswith("The cells from") for note in notes):
+                        notes.append(f"The cells from cell {_name(cell, index)} on were not run: {why}.")
+                    continue
+                stopped = (f"This cell ran for more than {self.timeout} s and was stopped. The grader "
+                           "restarted the kernel, re-ran the cells above, and went on without this one.")
+                try:
+                    if index in tests:
+                        self._execute_test_cell(cell, index, tests[index], checks[index], frozenset(earlier))
+                        earlier.add(tests[index].blank)
+                    else:
+                        self.execute_cell(cell, index, store_history=True)
+                except DeadKernelError:
+                    notes.append(f"The kernel died in cell {_name(cell, index)}; it was restarted and the cells "
+                                 "above it were run again.")
+                    _add_error(cell, KERNEL_DIED, "The kernel died while running this cell (it crashed, "
+                               "called os._exit, or went over the memory limit). The grader restarted it, "
+                               "re-ran the cells above, and went on without this one.")
+                except CellTimeoutError:
+                    notes.append(f"Cell {_name(cell, index)} ran for more than {self.timeout} s and was stopped.")
+                    _add_error(cell, TIMEOUT_ERROR, stopped)
+                else:
+                    timeouts = [o for o in cell.outputs if o.output_type == "error" and o.ename == TIMEOUT_ERROR]
+                    if not timeouts:
+                        continue
+                    timeouts[-1]["evalue"] = stopped
+                    timeouts[-1]["traceback"] = [f"{TIMEOUT_ERROR}: {stopped}"]
+                    # the KeyboardInterrupt that stopping it raised is the grader's doing, not the student's
+                    cell.outputs = [o for o in cell.outputs if o.get("ename") != "KeyboardInterrupt"]
+                    notes.append(f"Cell {_name(cell, index)} ran for more than {self.timeout} s and was stopped.")
+                failed.add(index)
+                restarts += 1
+                self._restart_and_replay(index, failed, deadline)
+        notes += [f"Cell {_name(self.nb.cells[i], i)} printed {n:,} characters; the grader kept the first "
+                  f"{self.max_output_bytes:,}." for i, n in sorted(self._output_bytes.items()) if n > self.max_output_bytes]
+        add_grader_notes(self.nb, notes)
+        self.set_widgets_metadata()
+        return self.nb, self.resources
+
+    def _execute_test_cell(self, cell: NotebookNode, index: int, test: compare.HiddenTest, check, earlier: frozenset[str]) -> None:
+        """Run the visible part of a test cell in the kernel, then, unless it failed, its hidden test
+        here (autograder/pipeline/compare.py); the cell gets the outputs of both. Raises CellTimeoutError or
+        DeadKernelError as ``execute_cell`` does."""
+        start = time.monotonic()
+        source = cell.source
+        cell.source = compare.split(source)[0]
+        try:
+            self.execute_cell(cell, index, store_history=True)
+        finally:
+            cell.source = source
+        if any(o.output_type == "error" for o in cell.outputs):
+            return  # the visible checks failed (or the cell was stopped): the hidden test would too
+        deadline = start + self.timeout if self.timeout else None
+        listener = compare.Listener(getattr(self.km, "private_folder", None))  # the sandbox lets the kernel reach it
+        msg_id = self.kc.execute(compare.serve_code(listener.path, test), silent=True,
+                                 store_history=False, allow_stdin=False)
+        try:
+            peer, why_not = compare.connect(listener, deadline, lambda: self._replied(msg_id))
+            if peer is None:
+                cell.outputs.append(compare.error_output("AssertionError", why_not))
+            else:
+                try:
+                    cell.outputs += compare.run_check(peer, test, check, earlier)
+                except compare.KernelStopped:
+                    if not self._finished_alive(msg_id):
+                        raise DeadKernelError("Kernel died") from None
+                    cell.outputs.append(compare.error_output(
+                        "AssertionError", f"The hidden test of {test.blank} could not finish: your code ended the "
+                        "grader's connection to the kernel (with sys.exit, or by closing sockets)."))
+                finally:
+                    compare.stop(peer)
+        except compare.PeerTimeout:
+            raise CellTimeoutError.error_from_timeout_and_cell("Cell execution timed out", self.timeout, cell) from None
+        finally:
+            listener.close()
+        self._wait_served(msg_id)
+
+    def _replied(self, msg_id: str) -> bool:
+        """Whether the kernel has finished the silent execution ``msg_id`` (then it will not connect)."""
+        async def replied() -> bool:
+            while await self.kc.shell_channel.msg_ready():
+                reply = await self.kc.shell_channel.get_msg(timeout=0)
+                if reply["parent_header"].get("msg_id") == msg_id:
+                    self._served_reply = msg_id
+                    return True
+            return False
+
+        return run_sync(replied)()
+
+    def _finished_alive(self, msg_id: str, patience_s: float = 10.0) -> bool:
+        """After the kernel closed the hidden test's connection: True once it has finished serving
+        and is alive (the student's code ended the connection), False once it is dead, or if neither
+        is known within ``patience_s`` (then it is restarted like a dead one). A dead kernel can still
+        look alive for a moment after its connection closes."""
+        deadline = time.monotonic() + patience_s
+        while time.monotonic() < deadline:
+            if not run_sync(self.km.is_alive)():
+                return False
+            if self._replied(msg_id):
+                return True
+            time.sleep(0.05)
+        return False
+
+    def _wait_served(self, msg_id: str) -> None:
+        """Wait for the kernel to finish serving the hidden test (it stops when told to)."""
+        if getattr(self, "_served_reply", None) == msg_id:
+            return
+        self.wait_for_reply(msg_id)
+
+    def _restart_and_replay(self, upto: int, failed: set[int], deadline: float) -> None:
+        """A fresh kernel that has silently run every code cell before ``upto`` that did not fail."""
+        run_sync(self._async_restart)()
+        for index, cell in enumerate(self.nb.cells[:upto]):
+            if cell.cell_type != "code" or index in failed or time.monotonic() > deadline:
+                continue
+            source = compare.split(cell.source)[0]  # a hidden test never runs in the kernel
+            msg_id = self.kc.execute(source, silent=True, store_history=False, allow_stdin=False)
+            try:
+                reply = self.wait_for_reply(msg_id, cell)
+            except (DeadKernelError, CellTimeoutError):
+                reply = None
+            if reply is None or reply["content"].get("ename") == TIMEOUT_ERROR:
+                failed.add(index)
+                run_sync(self._async_restart)()
+
+    async def _async_restart(self) -> None:
+        await self._async_cleanup_kernel()
+        self.km = self.create_kernel_manager()
+        await self.async_start_new_kernel()
+        await self.async_start_new_kernel_client()
+
+    def output(self, outs, msg, display_id, cell_index):
+        """Keep at most ``max_output_bytes`` of text output per cell, then say that the rest was cut."""
+        if msg["msg_type"] != "stream":
+            return super().output(outs, msg, display_id, cell_index)
+        used = self._output_bytes.get(cell_index, 0)
+        text = msg["content"]["text"]
+        self._output_bytes[cell_index] = used + len(text)
+        if used >= self.max_output_bytes:
+            return None
+        if used + len(text) > self.max_output_bytes:
+            msg = {**msg, "content": {**msg["content"], "text": text[: self.max_output_bytes - used]}}
+            out = super().output(outs, msg, display_id, cell_index)
+            outs.append(new_output("stream", name="stdout", text=(
+                f"\n[The grader kept the first {self.max_output_bytes:,} characters of this cell's output "
+                "and dropped the rest.]\n")))
+            return out
+        return super().output(outs, msg, display_id, cell_index)
+
+
+@contextlib.contextmanager
+def _scratch_copy(resources: dict):
+    """Run the kernel in a scratch copy of the submission's folder (its regular files), not in the
+    folder itself: nbgrader writes the graded notebook into that folder after the kernel is gone,
+    and a kernel that could write there could leave a symbolic link in the notebook's place that
+    sends nbgrader's write to the gradebook or another student's file. Yields the scratch folder."""
+    metadata = resources.setdefault("metadata", {})
+    folder = metadata.get("path")
+    with tempfile.TemporaryDirectory(prefix="kit-work-") as scratch:
+        if folder and os.path.isdir(folder):
+            for entry in os.scandir(folder):
+                if entry.is_file(follow_symlinks=False):
+                    shutil.copy2(entry.path, scratch)
+        metadata["path"] = scratch
+        try:
+            yield scratch
+        finally:
+            metadata["path"] = folder
+
+
+@functools.cache
+def _warn_once_if_not_sandboxed(log) -> None:
+    """Say once per grading process, in nbgrader's log, that the kernels are not fully sandboxed."""
+    status = sandbox.status()
+    if not status.complete:
+        log.warning("%s. See README (The grading kernel's sandbox).", status.summary)
+
+
+def _name(cell: NotebookNode, index: int) -> str:
+    """How a note names a cell: its nbgrader id, or its position."""
+    return cells.grade_id(cell) if "grade_id" in cells.meta(cell) else str(index + 1)
+
+
+def _add_error(cell: NotebookNode, ename: str, evalue: str) -> None:
+    cell.outputs.append(new_output("error", ename=ename, evalue=evalue, traceback=[f"{ename}: {evalue}"]))

@@ -1,0 +1,105 @@
+"""The feedback pages: what nbgrader's feedback shows, and three things it does not.
+
+- A written answer that nobody has graded yet says "not graded yet", not "0 / 2".
+- A test cell that earned its marks although the visible check above it failed says why: the
+  check ran the student's other blanks, the hidden tests graded this blank with the reference's.
+- Long messages wrap (the template's CSS).
+
+``FeedbackGrades`` (nbgrader's GetGrades, extended) marks the cells; the template
+``templates/kit_feedback`` shows them. ``regenerate`` rewrites every feedback page and the grades
+CSV from the gradebook after written answers were graded by hand in formgrader.
+"""
+
+from __future__ import annotations
+
+import ast
+import re
+from pathlib import Path
+
+import nbgrader
+from nbformat import NotebookNode
+from nbgrader.preprocessors import GetGrades
+
+from autograder import cells
+from course.checks import listed
+
+TEMPLATES = Path(__file__).resolve().parent / "templates"
+"""The kit's nbconvert templates."""
+TEMPLATE = "kit_feedback"
+"""The feedback template, which extends nbgrader's."""
+NBGRADER_TEMPLATES = Path(nbgrader.__file__).resolve().parent / "server_extensions" / "formgrader" / "templates"
+"""Where nbgrader keeps its feedback template (``feedback/index.html.j2``, which ours extends)."""
+TEMPLATE_PATHS = [str(NBGRADER_TEMPLATES.parent / "static" / "node_modules" / "bootstrap" / "dist" / "css"), str(NBGRADER_TEMPLATES)]
+"""Where the feedback template finds nbgrader's CSS (as GenerateFeedback sets it) and nbgrader's template."""
+
+
+def _names_in(source: str) -> set[str]:
+    """The names a cell's code uses (IPython magics and shell lines left out)."""
+    code = "\n".join(line for line in source.splitlines() if not line.lstrip().startswith(("%", "!")))
+    try:
+        return {node.id for node in ast.walk(ast.parse(code)) if isinstance(node, ast.Name)}
+    except SyntaxError:
+        return set(re.findall(r"[A-Za-z_]\w*", code))
+
+
+def _failed(cell: NotebookNode) -> bool:
+    return cell.cell_type == "code" and any(o.output_type == "error" for o in cell.get("outputs", []))
+
+
+def cross_blank_note(blank: str, others_lost: list[str]) -> str:
+    """What a test cell with full marks says when the visible check of its blank failed."""
+    if others_lost:
+        named = listed(others_lost)
+        verb = "loses its" if len(others_lost) == 1 else "lose their"
+        cause = (f"That check also ran your {named}, which {verb} marks in this notebook, "
+                 "so fix that first: this check should then pass too.")
+    else:
+        cause = "That check ran your code with the other blanks as you wrote them; read its message above."
+    return (f"The visible check of {blank} above failed, yet {blank} earns full marks here: the hidden tests "
+            f"grade each blank on its own, with the reference in place of every other blank. {cause}")
+
+
+class FeedbackGrades(GetGrades):
+    """nbgrader's GetGrades, which also marks written answers not graded yet (``needs_manual_grade``),
+    totals their points (``resources['nbgrader']['ungraded_points']``), and notes at a test cell
+    with full marks whose blank's visible check failed (``kit_note``)."""
+
+    def _get_score(self, cell: NotebookNode, resources: dict) -> None:
+        super()._get_score(cell, resources)
+        grade = self.gradebook.find_grade(cell.metadata["nbgrader"]["grade_id"], self.notebook_id,
+                                          self.assignment_id, self.student_id)
+        cell.metadata.nbgrader["needs_manual_grade"] = bool(grade.needs_manual_grade)
+
+    def preprocess(self, nb: NotebookNode, resources: dict) -> tuple[NotebookNode, dict]:
+        nb, resources = super().preprocess(nb, resources)
+        graded = [c for c in nb.cells if cells.meta(c).get("grade")]
+        resources["nbgrader"]["ungraded_points"] = sum(
+            c.metadata.nbgrader.get("points") or 0 for c in graded if c.metadata.nbgrader.get("needs_manual_grade"))
+        tests = {cells.grade_id(c).removeprefix("test_"): c for c in graded if cells.grade_id(c).startswith("test_")}
+        lost = [blank for blank, c in tests.items()
+                if (c.metadata.nbgrader.get("score") or 0) < c.metadata.nbgrader.get("points", 0)]
+        for cell in nb.cells:
+            grade_id = cells.meta(cell).get("grade_id", "")
+            blank = grade_id.removeprefix("check_")
+            test = tests.get(blank) if grade_id.startswith("check_") else None
+            if test is None or not _failed(cell) or blank in lost:
+                continue
+            uses = _names_in(cell.source)
+            test.metadata.nbgrader["kit_note"] = cross_blank_note(blank, [b for b in lost if b != blank and b in uses])
+        return nb, resources
+
+
+def regenerate(workdir: Path, out_csv: Path | None = None) -> list:
+    """Rewrite every feedback page in ``workdir/feedback/`` and the grades CSV (default
+    ``workdir/grades.csv``) from the gradebook, without grading anything again: run it after
+    grading written answers in formgrader. Returns the grade rows."""
+    from nbgrader.converters import GenerateFeedback
+
+    from autograder.pipeline import grades, nbgrader_apps
+
+    labs = grades.all_graded_labs(workdir)
+    for lab in labs:
+        nbgrader_apps.run_checked(GenerateFeedback, workdir, lab)
+    rows = grades.read_grades(workdir, labs)
+    grades.write_grades(rows, out_csv or workdir / "grades.csv")
+    return rows

@@ -1,0 +1,149 @@
+"""Reading the grades back from the gradebook, and writing grades.csv with the record of the
+grading environment beside it."""
+
+from __future__ import annotations
+
+import csv
+import re
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import nbformat
+from nbgrader.api import Gradebook, MissingEntry
+from nbgrader.coursedir import CourseDirectory
+
+from autograder import cells
+from autograder.integrity.flag import FLAG
+from autograder.labs import ROOT, Lab
+from autograder.pipeline import versions
+from autograder.pipeline.nbgrader_apps import course_config
+from autograder.pipeline.restore import grader_notes
+
+
+def all_graded_labs(workdir: Path) -> list[Lab]:
+    """The labs with submissions in ``workdir/submitted``."""
+    names = sorted({p.name for p in (workdir / "submitted").glob("*/*") if p.is_dir()})
+    return [Lab(name) for name in names if (ROOT / "source" / name).is_dir()]
+
+
+def submitted_students(workdir: Path, lab: Lab) -> list[str]:
+    """The students with a submission of ``lab`` in ``workdir/submitted``."""
+    return sorted(p.parent.name for p in (workdir / "submitted").glob(f"*/{lab.id}"))
+
+
+@dataclass(frozen=True)
+class GradeRow:
+    """One student's grade on one lab. ``cells`` maps grade cell id -> score (None: not graded yet)."""
+
+    student: str
+    lab: str
+    cells: dict[str, float | None]
+    max_cells: dict[str, float]
+    autograded: frozenset[str]
+    late_penalty: float = 0.0
+    """Points taken for a late submission (nbgrader's AssignLatePenalties, autograder/pipeline/late.py)."""
+    notes: tuple[str, ...] = ()
+    """What the grader changed before grading (the grader's note in the feedback)."""
+    reasons: dict[str, str] = field(default_factory=dict)
+    """Why each autograded cell short of full marks lost them: its error, or its stderr output."""
+
+    @property
+    def total(self) -> float:
+        return max(0.0, sum(score for score in self.cells.values() if score is not None) - self.late_penalty)
+
+    @property
+    def auto_score(self) -> float:
+        return sum(self.cells[c] or 0.0 for c in self.autograded)
+
+    @property
+    def auto_max(self) -> float:
+        return sum(self.max_cells[c] for c in self.autograded)
+
+    @property
+    def flags(self) -> list[str]:
+        """Why the submission is flagged for review (integrity findings); empty if it is not."""
+        return [note.removeprefix(FLAG).strip() for note in self.notes if note.startswith(FLAG)]
+
+    @property
+    def lost(self) -> list[str]:
+        """Autograded cells short of full marks."""
+        return [c for c in self.cells if c in self.autograded and (self.cells[c] or 0.0) < self.max_cells[c]]
+
+
+def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = None) -> list[GradeRow]:
+    """Read every graded submission of these labs from ``workdir``'s gradebook."""
+    rows = []
+    with Gradebook(CourseDirectory(config=course_config(workdir)).db_url) as gb:
+        for lab in labs:
+            for student in students or submitted_students(workdir, lab):
+                autograded = workdir / "autograded" / student / lab.id / lab.notebook_name
+                try:
+                    submission = gb.find_submission_notebook(lab.id, lab.id, student)
+                except MissingEntry:
+                    continue
+                if not autograded.exists():  # nbgrader failed part-way: reported as not graded
+                    continue
+                cells, maxima, auto = {}, {}, set()
+                for grade in sorted(submission.grades, key=lambda g: g.cell.id):
+                    cells[grade.name] = grade.score if not grade.needs_manual_grade else None
+                    maxima[grade.name] = grade.max_score
+                    if grade.cell.cell_type == "code":
+                        auto.add(grade.name)
+                order = [c.name for c in gb.find_notebook(lab.id, lab.id).grade_cells]
+                notes, reasons = _notes_and_reasons(autograded)
+                rows.append(
+                    GradeRow(
+                        student,
+                        lab.id,
+                        {c: cells[c] for c in order},
+                        {c: maxima[c] for c in order},
+                        frozenset(auto),
+                        submission.late_submission_penalty or 0.0,
+                        notes,
+                        {c: reasons[c] for c in order if c in reasons and (cells[c] or 0.0) < maxima[c]},
+                    )
+                )
+    return rows
+
+
+ANSI = re.compile(r"\x1b\[[0-9;]*m")
+
+
+def _notes_and_reasons(autograded: Path) -> tuple[tuple[str, ...], dict[str, str]]:
+    """The grader's notes of an autograded notebook, and for each graded cell its first error or
+    its stderr output (the reasons nbgrader gives a cell 0)."""
+    nb = nbformat.read(autograded, as_version=4)
+    reasons = {}
+    for cell in nb.cells:
+        if cell.cell_type != "code" or not cells.meta(cell).get("grade"):
+            continue
+        errors = [o for o in cell.outputs if o.output_type == "error"]
+        stderr = [o for o in cell.outputs if o.output_type == "stream" and o.name == "stderr"]
+        if errors:
+            reasons[cells.grade_id(cell)] = ANSI.sub("", f"{errors[0].ename}: {errors[0].evalue}")
+        elif stderr:
+            first = ANSI.sub("", stderr[0].text).strip().splitlines()[0]
+            reasons[cells.grade_id(cell)] = f"the cell wrote to stderr, which nbgrader scores 0 ({first})"
+    return tuple(grader_notes(nb)), reasons
+
+
+def write_grades(rows: list[GradeRow], path: Path) -> None:
+    """grades.csv (``write_csv``) and the record of the grading environment beside it (``versions.record``)."""
+    write_csv(rows, path)
+    versions.record(path)
+
+
+def write_csv(rows: list[GradeRow], path: Path) -> None:
+    """One row per student and lab, one column per graded cell (empty: not in this lab, or not
+    graded by hand yet), the late penalty, the total so far (less the penalty), and the total possible."""
+    columns: list[str] = []
+    for row in rows:
+        columns += [c for c in row.cells if c not in columns]
+    with open(path, "w", newline="") as handle:
+        writer = csv.writer(handle)
+        writer.writerow(["student", "lab", *columns, "late_penalty", "total", "max_score", "flagged", "notes"])
+        for row in rows:
+            scores = ["" if row.cells.get(c) is None else f"{row.cells[c]:g}" for c in columns]
+            notes = [n for n in row.notes if not n.startswith(FLAG)] + [f"{c}: {why}" for c, why in row.reasons.items()]
+            writer.writerow([row.student, row.lab, *scores, f"{row.late_penalty:g}", f"{row.total:g}",
+                             f"{sum(row.max_cells.values()):g}", " | ".join(row.flags), " | ".join(notes)])

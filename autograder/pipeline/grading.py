@@ -1,0 +1,124 @@
+"""Grading a class: ``python -m autograder grade``. Refuses to start unless this process can import
+the hidden tests, sets up the course folder, takes the submissions in, autogrades them with
+nbgrader one per process at a time, writes feedback, grades.csv and the summary table.
+"""
+
+from __future__ import annotations
+
+import multiprocessing
+import sys
+from concurrent.futures import ProcessPoolExecutor, as_completed
+from pathlib import Path
+
+from nbgrader.converters import Autograde, GenerateFeedback
+from tqdm import tqdm
+
+from autograder import cells, default_jobs
+from autograder.kernel import sandbox
+from autograder.labs import ROOT, Lab
+from autograder.pipeline import compare, late
+from autograder.pipeline.grades import GradeRow, all_graded_labs, read_grades, write_grades
+from autograder.pipeline.intake import import_submissions
+from autograder.pipeline.nbgrader_apps import course_config, feedback_page, generate_release, run_app
+from autograder.pipeline.table import print_table
+from course.checks import count
+
+
+def check_reference_available(labs: list[Lab]) -> None:
+    """Refuse to grade unless this process, where the hidden tests compare, imports every hidden test
+    of these labs and the reference they use.
+
+    Raises ReferenceUnavailable (from autograder.pipeline.compare) if it cannot.
+    """
+    course_config()  # loading it puts the course root on this process's path, as for plain nbgrader
+    for lab in labs:
+        for test in compare.hidden_tests(cells.read(lab.source_notebook)).values():
+            test.load()
+
+
+def sandbox_line() -> str:
+    """What confines the grading kernels on this machine, as the grader's output says it (loudly if
+    they are not fully sandboxed)."""
+    status = sandbox.status()
+    if status.complete:
+        return f"Grading kernels are sandboxed: {status.summary}."
+    return (f"WARNING: {status.summary}. The hidden tests still compare outside the kernel, so no answer can be "
+            "forged, but see README (The grading kernel's sandbox) for what a kernel can reach here.")
+
+
+def _grade_student(workdir: Path, lab_id: str, student: str) -> str:
+    """Autograde, then write the feedback of, one student's submission of a lab; nbgrader's log."""
+    log = []
+    for app_class in (Autograde, GenerateFeedback):
+        result = run_app(app_class, workdir, Lab(lab_id), student)
+        log.append(result.get("log", "") + result.get("error", ""))
+    return "".join(log)
+
+
+def autograde(by_lab: dict[str, list[str]], workdir: Path, jobs: int | None = None) -> dict[str, str]:
+    """``nbgrader autograde`` and feedback for the submissions in ``workdir``: lab id -> students.
+
+    With ``jobs > 1`` (default: one per core) the submissions are graded that many at a time in
+    separate processes, which all write to the one gradebook (SQLite waits for its lock; a database
+    server handles it natively). A progress bar (tqdm, on stderr) counts the graded submissions.
+    nbgrader goes on past a submission it cannot grade; that is not raised here, so that one bad
+    file does not stop a class: the caller finds the submissions missing from the gradebook.
+    Returns nbgrader's log of each lab.
+    """
+    jobs = jobs or default_jobs()
+    tasks = [(lab_id, student) for lab_id, students in by_lab.items() for student in students]
+    logs: dict[tuple[str, str], str] = {}
+    with tqdm(total=len(tasks), desc="Grading", unit="submission", file=sys.stderr, dynamic_ncols=True) as bar:
+        if jobs <= 1 or len(tasks) <= 1:
+            for lab_id, student in tasks:
+                logs[lab_id, student] = _grade_student(workdir, lab_id, student)
+                bar.update()
+        else:
+            with ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn")) as pool:
+                futures = {pool.submit(_grade_student, workdir, lab_id, student): (lab_id, student)
+                           for lab_id, student in tasks}
+                for future in as_completed(futures):
+                    logs[futures[future]] = future.result()
+                    bar.update()
+    return {lab_id: "".join(logs[lab_id, student] for student in students) for lab_id, students in by_lab.items()}
+
+
+def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int | None = None) -> list[GradeRow]:
+    """Autograde ``submissions/<student>/<lab>/<lab>.ipynb`` in the course ``workdir``.
+
+    Refuses to start unless this process can import the hidden tests and the reference. Grades only the
+    submissions given (with ``jobs`` processes), so that regrading one student leaves everyone
+    else's grades as they were. Writes feedback HTML to ``workdir/feedback/`` and the grades of
+    every graded submission in the course to ``out_csv`` (default ``workdir/grades.csv``), prints
+    the table, and returns the rows.
+    """
+    workdir.mkdir(parents=True, exist_ok=True)
+    known = {p.parent.name for p in (ROOT / "source").glob("*/*.ipynb")}
+    for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
+        print(f"Skipped {folder}: there is no lab called {folder.name}.")
+    labs = [Lab(lab_id) for lab_id in sorted(known & {p.name for p in submissions.glob("*/*") if p.is_dir()})]
+    check_reference_available(labs)
+    print(sandbox_line())
+    print(f"Setting up the course folder {workdir} for {count(len(labs), 'lab')} (nbgrader generate_assignment).")
+    generate_release(labs, workdir)
+    late.set_due_dates(labs, course_config(workdir))
+    by_lab = import_submissions(submissions, workdir, labs)
+    logs = autograde(by_lab, workdir, jobs)
+    rows = read_grades(workdir, all_graded_labs(workdir))
+    graded = {(row.student, row.lab) for row in rows}
+    failures = {lab.id: [s for s in by_lab[lab.id] if (s, lab.id) not in graded] for lab in labs}
+    for lab in labs:
+        pages = [s for s in by_lab[lab.id] if (s, lab.id) in graded and not feedback_page(workdir, lab.id, s).exists()]
+        if failures[lab.id] or pages:
+            log_path = workdir / f"autograde-{lab.id}.log"
+            log_path.write_text(logs[lab.id])
+        if failures[lab.id]:
+            print(f"{count(len(failures[lab.id]), 'submission')} of {lab.id} could not be graded; "
+                  f"nbgrader's log is in {log_path}.")
+        if pages:
+            print(f"No feedback page was written for {count(len(pages), 'graded submission')} of {lab.id}; "
+                  f"nbgrader's log is in {log_path}.")
+    write_grades(rows, out_csv or workdir / "grades.csv")
+    print_table(rows, failures)
+    print(f"Grades: {out_csv or workdir / 'grades.csv'}. Feedback: {workdir / 'feedback'}.")
+    return rows

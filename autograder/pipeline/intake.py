@@ -1,0 +1,71 @@
+"""Taking a class's submissions into the course folder: ``SUBMISSIONS/<student>/<lab>/<lab>.ipynb``
+becomes nbgrader's ``submitted/<student>/<lab>/``, each file read defensively."""
+
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import nbformat
+from nbformat import NotebookNode
+
+from autograder import cells
+from autograder.labs import Lab
+from autograder.pipeline.restore import add_grader_notes, forget_grader_notes
+
+
+def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
+    """The notebook in a student's ``folder`` for ``lab``, and notes on anything wrong with it.
+
+    A notebook under another name is taken if it is the only one. A file that is not a readable
+    notebook (not JSON, truncated, invalid) is replaced by the blank release notebook, so that it
+    is graded as an empty submission, with the reason in its notes. A grader's note that arrives
+    inside the file becomes an ordinary cell of the student's: only the grader writes notes.
+    """
+    expected = folder / lab.notebook_name
+    found = sorted(folder.glob("*.ipynb"))
+    if expected.exists():
+        path, notes = expected, []
+    elif len(found) == 1:
+        path, notes = found[0], [f"It was submitted as {found[0].name} and graded as {lab.notebook_name}."]
+    else:
+        listed = ", ".join(p.name for p in found) or "none"
+        return cells.read(lab.release_notebook), [
+            f"No notebook named {lab.notebook_name} was found (notebooks there: {listed}); "
+            "it was graded as an empty submission."
+        ]
+    try:
+        nb = nbformat.read(path, as_version=4)
+        nbformat.validate(nb)
+    except Exception as error:  # not JSON, truncated, not a notebook: any of nbformat's errors
+        reason = " ".join(str(error).split())[:160] or type(error).__name__
+        return cells.read(lab.release_notebook), notes + [
+            f"{path.name} could not be read as a notebook ({type(error).__name__}: {reason}); "
+            "it was graded as an empty submission."
+        ]
+    forget_grader_notes(nb)
+    return nb, notes
+
+
+def import_submissions(submissions: Path, workdir: Path, labs: list[Lab]) -> dict[str, list[str]]:
+    """Put ``submissions/<student>/<lab>/<lab>.ipynb`` into ``workdir/submitted/``, for these labs.
+
+    Each file goes through ``read_submission``; its notes become a grader's note at the top of the
+    notebook, which the feedback shows. A ``timestamp.txt`` beside the notebook (nbgrader's
+    submission time) is copied too, so that late penalties apply. Returns lab id -> students.
+    """
+    by_lab: dict[str, list[str]] = {lab.id: [] for lab in labs}
+    for lab in labs:
+        for folder in sorted(p for p in submissions.glob(f"*/{lab.id}") if p.is_dir()):
+            student = folder.parent.name
+            nb, notes = read_submission(folder, lab)
+            add_grader_notes(nb, notes)
+            target = workdir / "submitted" / student / lab.id
+            if target.exists():
+                shutil.rmtree(target)
+            target.mkdir(parents=True)
+            nbformat.write(nb, target / lab.notebook_name)
+            if (folder / "timestamp.txt").exists():
+                shutil.copy2(folder / "timestamp.txt", target / "timestamp.txt")
+            by_lab[lab.id].append(student)
+    return by_lab

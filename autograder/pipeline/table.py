@@ -1,0 +1,60 @@
+"""The summary table that ``grade`` prints: one line per submission, then why each lost cell lost
+its points, at most 100 columns wide."""
+
+from __future__ import annotations
+
+import shutil
+import textwrap
+
+from autograder.pipeline.grades import GradeRow
+
+TABLE_WIDTH = 100
+"""The widest the summary table gets, in characters (narrower if the terminal is)."""
+
+
+def _lost_lines(row: GradeRow) -> list[str]:
+    """Each lost cell once, with why it lost its points; cells that lost them for the same reason share a line."""
+    by_reason: dict[str, list[str]] = {}
+    for cell in row.lost:
+        by_reason.setdefault(row.reasons.get(cell, "no reason was recorded"), []).append(cell)
+    return [f"{', '.join(lost)}: {reason}" for reason, lost in by_reason.items()]
+
+
+def format_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None, width: int | None = None) -> str:
+    """The summary table: one line per submission (student, lab, autograded score, what happened),
+    then the grader's notes and each lost cell with its reason, wrapped to ``width`` columns
+    (default: the terminal's, at most TABLE_WIDTH); a line cut short ends in an ellipsis."""
+    width = width or min(shutil.get_terminal_size((TABLE_WIDTH, 24)).columns, TABLE_WIDTH)
+    names = [r.student for r in rows] + [s for students in (failures or {}).values() for s in students]
+    student_w = min(max([len(n) for n in names] + [7]), 40)
+    lab_w = max([len(r.lab) for r in rows] + [len(lab) for lab in failures or {}] + [3])
+    lines = [f"{'student':<{student_w}}  {'lab':<{lab_w}}  {'score':>9}  result", "-" * width]
+    indent = " " * 4
+
+    def line(student: str, lab: str, score: str, result: str) -> list[str]:
+        if len(student) > student_w:  # a long name on a line of its own
+            return [student, f"{'':<{student_w}}  {lab:<{lab_w}}  {score:>9}  {result}"]
+        return [f"{student:<{student_w}}  {lab:<{lab_w}}  {score:>9}  {result}"]
+
+    for row in rows:
+        if row.flags:
+            result = "flagged for review"
+        elif not row.lost:
+            result = "full marks"
+        else:
+            result = f"lost {len(row.lost)} of {len(row.autograded)} cells"
+        lines += line(row.student, row.lab, f"{row.auto_score:g}/{row.auto_max:g}", result)
+        for text in [*row.notes, *_lost_lines(row)]:
+            lines += textwrap.wrap(" ".join(text.split()), width, initial_indent=indent, subsequent_indent=indent + "  ",
+                                   max_lines=3, placeholder=" ...", break_on_hyphens=False)
+    for lab_id, students in (failures or {}).items():
+        for student in students:
+            lines += line(student, lab_id, "-", "not graded: see the log")
+    lines.append("-" * width)
+    lines += textwrap.wrap("Scores count the autograded cells only: written answers are graded by hand in formgrader.", width)
+    return "\n".join(lines)
+
+
+def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None) -> None:
+    """Print ``format_table``."""
+    print(format_table(rows, failures))

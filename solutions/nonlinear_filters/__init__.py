@@ -1,0 +1,1 @@
+"""The hidden code of the nonlinear-filters lab: ``reference``, ``hidden_tests``, ``mistakes``, ``claims``."""

@@ -1,0 +1,326 @@
+"""Hidden tests of the nonlinear-filters lab: each ``check_<blank>`` compares a student's blank with
+``solutions.nonlinear_filters.reference`` on seeded random cases of several sizes.
+
+Point sets are compared as sets (any order of the points is right). The filter steps are compared
+on random nonlinear f and h (a linear f and h make them the Kalman filter, and the reference is
+exactly that). The particle filter step is random; its checks are exact where the step is
+determined (weights, which runs resample, systematic resampling's offspring counts, with a
+negligible process noise), and one statistical check tests the process noise. Its false-fail
+probability for a correct step is at most 5 x 1e-7 = 5e-7 (five chi-square tails, see
+``_check_pf_noise``).
+"""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from scipy import stats
+
+import solutions.nonlinear_filters.reference as ref
+from autograder.hidden_tests.diagnosis import diagnosed
+from autograder.hidden_tests.isolate import isolate
+from autograder.labs import lab_of
+from course import cut
+from course.checks import check_array, check_close, check_pair, random_spd
+
+BLANKS = lab_of(__name__).blanks()
+"""The lab's blanks, from its notebook: each check isolates the student's function with them."""
+
+
+def _sorted_rule(Z: np.ndarray, w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    order = np.lexsort(np.round(Z, 9).T[::-1])
+    return Z[order], w[order]
+
+
+def _check_rule(result, reference: tuple[np.ndarray, np.ndarray], label: str) -> None:
+    Z, w = check_pair(result, label, "Z", "w")
+    Zr, wr = reference
+    Z = check_array(Z, f"Z from {label}", Zr.shape, "Z has one row per point and one column per state.")
+    w = check_array(w, f"w from {label}", wr.shape, "w has one weight per point.")
+    check_close(w.sum(), 1.0, f"the sum of the weights from {label}", "Weights of a rule for a probability sum to 1.",
+                show_expected=False)
+    (Z, w), (Zr, wr) = _sorted_rule(Z, w), _sorted_rule(Zr, wr)
+    check_close(Z, Zr, f"the points from {label} (compared in any order)", show_expected=False)
+    check_close(w, wr, f"the weights from {label} (matched to the points)", show_expected=False)
+
+
+@diagnosed
+def check_cubature_points(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    for n in range(1, 7):
+        _check_rule(func(n), ref.cubature_points(n), f"cubature_points({n})")
+
+
+@diagnosed
+def check_unscented_points(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    _check_rule(func(4), ref.unscented_points(4), "unscented_points(4) (kappa left at its default)")
+    for n, kappa in zip(range(1, 7), (2.0, 1.0, 0.5, 3.0, 1.0, 2.5)):
+        _check_rule(func(n, kappa), ref.unscented_points(n, kappa), f"unscented_points({n}, kappa={kappa})")
+
+
+@diagnosed
+def check_cut4_points(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    for n in range(3, 7):
+        _check_rule(func(n), ref.cut4_points(n), f"cut4_points({n})")
+
+
+@diagnosed
+def check_moment_error(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1501)
+    cases = [(ref.cut4_points(4), d) for d in (2, 4, 6)] + [(cut.cut8_points(), 8), (ref.unscented_points(2), 4)]
+    for n, N, degree in [(1, 3, 1), (1, 5, 4), (2, 6, 3), (3, 7, 2), (4, 9, 5), (5, 11, 4), (6, 8, 3)]:
+        cases.append(((rng.standard_normal((N, n)), rng.dirichlet(np.ones(N))), degree))
+    for (Z, w), degree in cases:
+        label = f"moment_error on a rule of {len(w)} points in {Z.shape[1]} dimensions, degree {degree}"
+        value = func(Z.copy(), w.copy(), degree)
+        try:
+            value = float(value)
+        except (TypeError, ValueError):
+            raise AssertionError(f"{label} should return one number (a float), not {type(value).__name__}.") from None
+        check_close(value, ref.moment_error(Z, w, degree), label, rtol=1e-8, atol=1e-11, show_expected=False)
+
+
+def _random_map(rng: np.random.Generator, n: int, p: int) -> Callable:
+    """A smooth nonlinear map of the last axis, R^n -> R^p, that works on stacks of points."""
+    A, B, c = rng.standard_normal((p, n)), 0.3 * rng.standard_normal((p, n)), rng.standard_normal(p)
+    return lambda X: np.sin(X) @ A.T + (X**2) @ B.T + c
+
+
+def _rules_for(n: int) -> list[tuple[str, tuple[np.ndarray, np.ndarray]]]:
+    rules = [("cubature", ref.cubature_points(n)), ("unscented", ref.unscented_points(n))]
+    if n >= 3:
+        rules.append(("CUT4", ref.cut4_points(n)))
+    if n == 5:
+        rules.append(("CUT8", cut.cut8_points()))
+    return rules
+
+
+SQRT_HINT = ("Did you place the points with S = symmetric_sqrt(P)? A Cholesky factor also has S S^T = P and gives "
+             "an equally valid rule of the same degree, but with other points, so a nonlinear model gives another "
+             "mean and covariance; this lab, like the authors' sqrtm, fixes the symmetric root so that answers can "
+             "be compared.")
+
+
+def _check_mean_cov(result, reference, n: int, label: str, hint: str = "") -> None:
+    m, P = check_pair(result, label, "m", "P")
+    check_close(check_array(m, f"the mean from {label}", (n,)), reference[0], f"the mean from {label}", hint,
+                show_expected=False)
+    check_close(check_array(P, f"the covariance from {label}", (n, n)), reference[1], f"the covariance from {label}",
+                hint, rtol=1e-7, atol=1e-9, show_expected=False)
+
+
+@diagnosed
+def check_sigma_point_predict(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1502)
+    for n in range(1, 7):
+        m, P, Q = rng.standard_normal(n), 0.5 * random_spd(rng, n), random_spd(rng, n)
+        f = _random_map(rng, n, n)
+        for name, (Z, w) in _rules_for(n):
+            label = f"sigma_point_predict with {name} points, n = {n}, a random nonlinear f"
+            _check_mean_cov(func(m.copy(), P.copy(), f, Z.copy(), w.copy(), Q.copy()),
+                            ref.sigma_point_predict(m, P, f, Z, w, Q), n, label, SQRT_HINT)
+
+
+def _bearing_case(rng: np.random.Generator) -> tuple:
+    """A target almost due west of a radar: its predicted bearings straddle the cut at +-pi."""
+    m = np.array([-3000.0, -40.0, 10.0])
+    P = np.diag([100.0**2, 300.0**2, 4.0])
+    h = lambda X: np.stack((np.hypot(X[..., 0], X[..., 1]) + X[..., 2], np.arctan2(X[..., 1], X[..., 0])), axis=-1)  # noqa: E731
+    y = np.array([3005.0, np.pi - 0.02 + 0.01 * rng.standard_normal()])
+    return m, P, y, h, np.diag([25.0, 0.02**2])
+
+
+@diagnosed
+def check_sigma_point_update(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1503)
+    for n, p in [(1, 1), (2, 1), (3, 2), (4, 3), (5, 2), (6, 3)]:
+        m, P, R, y = rng.standard_normal(n), 0.5 * random_spd(rng, n), random_spd(rng, p), rng.standard_normal(p)
+        h = _random_map(rng, n, p)
+        for name, (Z, w) in _rules_for(n):
+            label = f"sigma_point_update with {name} points, n = {n}, p = {p}, a random nonlinear h"
+            _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, R.copy(), Z.copy(), w.copy()),
+                            ref.sigma_point_update(m, P, y, h, R, Z, w), n, label, SQRT_HINT)
+    m, P, y, h, R = _bearing_case(rng)
+    for name, (Z, w) in _rules_for(3):
+        label = (f"sigma_point_update with {name} points for a target due west (bearings near +-pi, angles=(1,)): "
+                 "are the bearing differences wrapped to (-pi, pi]?")
+        _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, R.copy(), Z.copy(), w.copy(), (1,)),
+                        ref.sigma_point_update(m, P, y, h, R, Z, w, (1,)), 3, label)
+
+
+@diagnosed
+def check_ekf_update(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1504)
+    for n, p in [(1, 1), (2, 1), (3, 2), (4, 3), (5, 2), (6, 3)]:
+        m, P, R, y = rng.standard_normal(n), random_spd(rng, n), random_spd(rng, p), rng.standard_normal(p)
+        A, B, c = rng.standard_normal((p, n)), 0.3 * rng.standard_normal((p, n)), rng.standard_normal(p)
+        h = lambda x, A=A, B=B, c=c: np.sin(x) @ A.T + (x**2) @ B.T + c  # noqa: E731
+        H_jacobian = lambda x, A=A, B=B: A * np.cos(x) + 2 * B * x  # noqa: E731
+        label = f"ekf_update with n = {n}, p = {p}, a random nonlinear h"
+        _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, H_jacobian, R.copy()),
+                        ref.ekf_update(m, P, y, h, H_jacobian, R), n, label)
+    m, P, y, h, R = _bearing_case(rng)
+    H_jacobian = lambda x: np.array([[x[0] / np.hypot(x[0], x[1]), x[1] / np.hypot(x[0], x[1]), 1.0],  # noqa: E731
+                                     [-x[1] / (x[0] ** 2 + x[1] ** 2), x[0] / (x[0] ** 2 + x[1] ** 2), 0.0]])
+    label = "ekf_update for a target due west (bearing near +-pi, angles=(1,)): is the bearing innovation wrapped?"
+    _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, H_jacobian, R.copy(), (1,)),
+                    ref.ekf_update(m, P, y, h, H_jacobian, R, (1,)), 3, label)
+
+
+# --- the particle filter step ------------------------------------------------------------------
+
+PF_N = 2000
+TINY_Q = 1e-20 * np.eye(3)
+"""A process noise so small (1e-10 per state) that the propagated particles are f(X) to rounding."""
+NOISE_N = 100_000
+NOISE_ALPHA = 1e-7
+"""Each of the five chi-square checks of the process noise fails a correct step with probability NOISE_ALPHA."""
+
+
+def _pf_model(rng: np.random.Generator):
+    A = 0.9 * np.eye(3) + 0.05 * rng.standard_normal((3, 3))
+    f = lambda X: X @ A.T + 0.1 * np.sin(X)  # noqa: E731
+    h = lambda X: np.stack((X[..., 0] + 0.5 * X[..., 2], np.arctan2(X[..., 1], X[..., 0])), axis=-1)  # noqa: E731
+    return f, h
+
+
+def _pf_particles(rng: np.random.Generator, N: int) -> np.ndarray:
+    """Particles west of the radar, so that their bearings straddle +-pi."""
+    return np.column_stack((-1000 + 50 * rng.standard_normal(N), 60 * rng.standard_normal(N), rng.standard_normal(N)))
+
+
+def _normalised(logw: np.ndarray) -> np.ndarray:
+    return logw - np.logaddexp.reduce(logw)
+
+
+def _pf_call(func: Callable, X, logw, y, rng, f, h, Q, R, ess_fraction: float, label: str):
+    result = func(X.copy(), logw.copy(), y.copy(), rng, f, h, Q.copy(), R.copy(), (1,), ess_fraction)
+    X_new, logw_new = check_pair(result, label, "X", "logw")
+    X_new = check_array(X_new, f"the particles from {label}", X.shape, "Return the particles as an (N, n) array.")
+    logw_new = check_array(logw_new, f"the log-weights from {label}", logw.shape, "Return one log-weight per particle.")
+    return X_new, logw_new
+
+
+def _check_pf_weights(func: Callable) -> None:
+    """Exact: without resampling (ess_fraction = 0), the particles are f(X) and the log-weights the reference's."""
+    rng = np.random.default_rng(1505)
+    f, h = _pf_model(rng)
+    X = _pf_particles(rng, PF_N)
+    logw = _normalised(rng.standard_normal(PF_N))
+    y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([30.0**2, 0.05**2])
+    label = "bootstrap_pf_step with ess_fraction=0 (no resampling) and bearings near +-pi"
+    X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(1), f, h, TINY_Q, R, 0.0, label)
+    check_close(X_new, f(X), f"the particles from {label}",
+                "With a negligible Q, each particle should move to f(x) and keep its place in the array.",
+                rtol=1e-9, atol=1e-6, show_expected=False)
+    _, want = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(1), f, h, TINY_Q, R, (1,), 0.0)
+    check_close(np.logaddexp.reduce(logw_new), 0.0, f"log(sum of the weights) from {label}",
+                "Return normalised log-weights: subtract the log of the sum of the weights.", atol=1e-9,
+                show_expected=False)
+    check_close(logw_new, want, f"the log-weights from {label}",
+                "w_new is proportional to w_old p(y | x): check the likelihood, R^-1, and the wrapping of the bearing.",
+                rtol=1e-7, atol=1e-6, show_expected=False)
+
+
+def _check_pf_no_resampling(func: Callable) -> None:
+    """Exact: when the effective sample size stays above the threshold, nothing is resampled."""
+    rng = np.random.default_rng(1506)
+    f, h = _pf_model(rng)
+    X = _pf_particles(rng, PF_N)
+    logw = _normalised(0.3 * rng.standard_normal(PF_N))
+    y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([1e8, 1e2])
+    label = "bootstrap_pf_step with weights whose effective sample size stays above 0.7 N"
+    X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(2), f, h, TINY_Q, R, 0.7, label)
+    check_close(X_new, f(X), f"the particles from {label}",
+                "Resample only when the effective sample size 1/sum(w^2) falls below ess_fraction * N.",
+                rtol=1e-9, atol=1e-6, show_expected=False)
+    _, want = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(2), f, h, TINY_Q, R, (1,), 0.7)
+    check_close(logw_new, want, f"the log-weights from {label}", "Without resampling the weights are kept.",
+                rtol=1e-7, atol=1e-6, show_expected=False)
+
+
+def _check_pf_resampling(func: Callable) -> None:
+    """Exact: systematic resampling gives parent i floor(N w_i) or ceil(N w_i) offspring, and equal weights."""
+    rng = np.random.default_rng(1507)
+    f, h = _pf_model(rng)
+    X = _pf_particles(rng, PF_N)
+    logw = _normalised(np.zeros(PF_N))
+    y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([20.0**2, 0.03**2])
+    _, logw_ref = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(3), f, h, TINY_Q, R, (1,), 0.0)
+    w = np.exp(logw_ref)
+    assert 1.0 / np.sum(w**2) < 0.7 * PF_N, "test set-up: this case must need resampling"
+    label = "bootstrap_pf_step with weights whose effective sample size falls below 0.7 N"
+    X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(3), f, h, TINY_Q, R, 0.7, label)
+    check_close(logw_new, np.full(PF_N, -np.log(PF_N)), f"the log-weights after resampling from {label}",
+                "After resampling every particle has weight 1/N, so log-weight -log(N).", atol=1e-9, show_expected=False)
+    moved = f(X)
+    # each new particle is a copy of one propagated particle: find its parent
+    parent = np.argmin(np.abs(X_new[:, None, 0] - moved[None, :, 0]) + np.abs(X_new[:, None, 1] - moved[None, :, 1]),
+                       axis=1)
+    check_close(X_new, moved[parent], f"the resampled particles from {label}",
+                "Each resampled particle should be a copy of one propagated particle f(x_i).", rtol=1e-9, atol=1e-6,
+                show_expected=False)
+    counts = np.bincount(parent, minlength=PF_N)
+    low, high = np.floor(PF_N * w - 1e-6), np.ceil(PF_N * w + 1e-6)
+    bad = int(np.sum((counts < low) | (counts > high)))
+    if bad:
+        raise AssertionError(
+            f"{label}: {bad} particles got a number of copies that systematic resampling cannot give (it gives "
+            "particle i either floor(N w_i) or ceil(N w_i) copies). Use systematic_resample with the normalised "
+            "weights, not multinomial resampling or unnormalised weights."
+        )
+
+
+def _chi2_outside(value: float, dof: int, alpha: float) -> bool:
+    """Whether a chi-square(dof) statistic falls outside its central 1 - alpha interval."""
+    return not (stats.chi2.ppf(alpha / 2, dof) <= value <= stats.chi2.isf(alpha / 2, dof))
+
+
+def _check_pf_noise(func: Callable, seeds: tuple[int, int] = (1508, 4)) -> None:
+    """Statistical: x_new - f(x) ~ N(0, Q) for every particle (flat likelihood, no resampling).
+
+    u = L^-1 (x_new - f(x)), with Q = L L^T, is N(0, I) for a correct step. Five chi-square checks,
+    each failing a correct step with probability NOISE_ALPHA = 1e-7: sum |u|^2 ~ chi2(N n), N |mean u|^2
+    ~ chi2(n), and sum (d . u)^2 ~ chi2(N) for three fixed unit directions d. Together they fail a
+    correct step with probability at most 5e-7. ``seeds`` draw the case and the step's noise; grading
+    uses the default, and tests/test_nonlinear_filters_reference.py runs the reference on 21 others.
+    """
+    rng = np.random.default_rng(seeds[0])
+    A = np.array([[1.5, 0.4, 0.0], [-0.3, 0.8, 0.2], [0.1, 0.0, 1.2]])
+    f = lambda X: X @ A.T  # noqa: E731
+    h = lambda X: np.stack((X[..., 0], np.arctan2(X[..., 1], X[..., 0])), axis=-1)  # noqa: E731
+    Q = random_spd(rng, 3)
+    L = np.linalg.cholesky(Q)
+    X = _pf_particles(rng, NOISE_N)
+    logw = np.full(NOISE_N, -np.log(NOISE_N))
+    label = "bootstrap_pf_step's process noise (a flat likelihood, no resampling)"
+    X_new, _ = _pf_call(func, X, logw, np.array([-1000.0, np.pi]), np.random.default_rng(seeds[1]), f, h, Q,
+                        np.diag([1e12, 1e12]), 0.0, label)
+    u = np.linalg.solve(L, (X_new - f(X)).T).T
+    directions = np.array([[1.0, 1.0, 0.0], [0.0, 1.0, -1.0], [1.0, -1.0, 1.0]])
+    directions /= np.linalg.norm(directions, axis=1, keepdims=True)
+    checks = [(np.sum(u**2), NOISE_N * 3, "the total variance"), (NOISE_N * np.sum(u.mean(axis=0) ** 2), 3, "the mean")]
+    checks += [(np.sum((u @ d) ** 2), NOISE_N, f"the variance along the direction {np.round(d, 3)}") for d in directions]
+    for value, dof, what in checks:
+        if _chi2_outside(value, dof, NOISE_ALPHA):
+            raise AssertionError(
+                f"{label}: {what} of the noise x_new - f(x), whitened by Q, is not that of N(0, Q) "
+                f"(a correct step fails this with probability 1e-7). Add v ~ N(0, Q) after f: "
+                "v = standard normals @ L.T with Q = L L^T."
+            )
+
+
+@diagnosed
+def check_bootstrap_pf_step(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    _check_pf_weights(func)
+    _check_pf_no_resampling(func)
+    _check_pf_resampling(func)
+    _check_pf_noise(func)

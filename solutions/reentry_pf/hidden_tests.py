@@ -1,0 +1,569 @@
+"""Hidden tests of the reentry-pf lab: each ``check_<blank>`` tests a student's blank against
+``solutions.reentry_pf.reference``, with every other blank bound to the reference. run_particle_filter is
+also run with another innovation_std and with the given bootstrap step.
+
+The deterministic blanks (tracking_dynamics, simulate_radar, initial_cloud, credibility_interval,
+run_particle_filter) are compared with the reference on seeded random inputs of several sizes.
+``pf_step`` is stochastic, so its test is statistical (the second half of this module): weights
+normalised and following step (d), the diagnostics it reports in ``info`` (exact), resampling
+following the fitness weights (chi-square), the spread and centre of the artificial process noise
+(the handout's "innovation") for the default and another ``innovation_std``, and the posterior of beta after a whole run against an ensemble of
+reference runs. Each statistical check states its false-fail probability for a correct step,
+derived from its statistic's distribution; together they stay below ``FALSE_FAIL_TOTAL`` = 1e-6.
+tests/test_reentry_pf_reference.py shows the reference passing every check and every catalogued
+pf_step mistake failing on each of 21 seeds, and the posterior statistic Gaussian over 200 seeds.
+"""
+
+from __future__ import annotations
+
+import functools
+import math
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+
+import numpy as np
+from scipy import stats
+
+import solutions.reentry_pf.reference as ref
+from autograder.hidden_tests.diagnosis import diagnosed
+from autograder.hidden_tests.isolate import isolate
+from autograder.labs import lab_of
+from course import falling_object
+from course.checks import check_array, check_close, check_pair, count
+from course.falling_object import DT, INNOVATION_STD, SIGMA, FilterHistory
+
+BLANKS = lab_of(__name__).blanks()
+"""The lab's blanks, from its notebook: each check isolates the student's function with them."""
+PF_STEP_SEED = 4004
+"""The fixed seed of pf_step's statistical test: grading is reproducible."""
+
+# =============================================================================================
+# The deterministic blanks: compared with the reference on seeded random inputs
+# =============================================================================================
+def _random_states(rng: np.random.Generator, count: int) -> np.ndarray:
+    """States (3, count) across the lab's range: h 0-80 km, v 100-4000 m/s, beta 5000-40000."""
+    return np.vstack([rng.uniform(0.0, 80_000.0, count), rng.uniform(100.0, 4000.0, count), rng.uniform(5_000.0, 40_000.0, count)])
+
+
+@diagnosed
+def check_tracking_dynamics(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(4001)
+    for N in (1, 7, 1000):
+        x = _random_states(rng, N)
+        label = f"tracking_dynamics(t, x) for a cloud x of shape (3, {N})"
+        f = check_array(func(float(rng.uniform(0.0, 30.0)), x.copy()), label, (3, N),
+                        "Return one column of derivatives per particle: rows dh/dt, dv/dt, dbeta/dt.")
+        check_close(f, ref.tracking_dynamics(0.0, x), label, "Check the signs of (1) and (2) and rho(h) = gamma exp(-eta h).",
+                    rtol=1e-10, atol=1e-9, show_expected=False)
+    for x in _random_states(rng, 5).T:
+        label = "tracking_dynamics(t, x) for one state x of shape (3,)"
+        f = check_array(func(float(rng.uniform(0.0, 30.0)), x.copy()), label, (3,))
+        check_close(f, ref.tracking_dynamics(0.0, x), label, rtol=1e-10, atol=1e-9, show_expected=False)
+
+
+def simulate_radar_cases(seed: int = 4002) -> list[tuple[np.ndarray, np.ndarray, float, int]]:
+    """(x0, t, sigma, rng seed) of the hidden test: lab-like starts and grids of 2 to 301 times, with
+    steps of 0.1-0.2 s that do not start at 0. The long ones reach the dense air, where a loose
+    tolerance shows; the object stays above 1 km."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for n, step in ((2, 0.1), (40, 0.2), (160, 0.15), (301, 0.1)):
+        x0 = np.array([rng.uniform(60_000.0, 70_000.0), rng.uniform(2_500.0, 3_200.0), rng.uniform(12_000.0, 30_000.0)])
+        t = rng.uniform(0.0, 5.0) + step * np.arange(n)
+        cases.append((x0, t, float(rng.uniform(100.0, 800.0)), int(rng.integers(2**31))))
+    return cases
+
+
+@diagnosed
+def check_simulate_radar(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    tolerance_hint = ("The truth should be accurate to well under 1 m: set solve_ivp's rtol and atol "
+                      "(the default rtol = 1e-3 is off by about 20 m).")
+    for x0, t, sigma, seed in simulate_radar_cases():
+        n = t.shape[0]
+        case = f"a random start, {count(n, 'time')} from t = {t[0]:.2f} s, sigma = {sigma:.0f} m"
+        x_true, b = check_pair(func(x0.copy(), t.copy(), sigma, np.random.default_rng(seed)),
+                               "simulate_radar(x0, t, sigma, rng)", "x_true", "b")
+        x_true = check_array(x_true, f"x_true for {case}", (3, n), "One column per time t_j; rows h, v, beta.")
+        b = check_array(b, f"b for {case}", (n,), "One reading per time t_j.")
+        want_x, want_b = ref.simulate_radar(x0, t, sigma, np.random.default_rng(seed))
+        check_close(x_true[0], want_x[0], f"the true altitude for {case}", tolerance_hint, rtol=0.0, atol=1.0, show_expected=False)
+        check_close(x_true[1], want_x[1], f"the true speed for {case}", tolerance_hint, rtol=0.0, atol=0.25, show_expected=False)
+        check_close(x_true[2], want_x[2], f"the true beta for {case}", "beta' = 0: beta stays at x0[2].",
+                    rtol=1e-9, atol=1e-6, show_expected=False)
+        check_close(b - x_true[0], want_b - want_x[0], f"the radar noise b - h for {case}",
+                    "Draw e = rng.standard_normal(len(t)) in one call and add sigma * e to the true altitude.",
+                    rtol=1e-9, atol=1e-6, show_expected=False)
+
+
+@diagnosed
+def check_initial_cloud(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(4003)
+    for N in (1, 5, 2000):
+        b0, seed = float(rng.uniform(50_000.0, 70_000.0)), int(rng.integers(2**31))
+        x, w = check_pair(func(b0, N, np.random.default_rng(seed)), f"initial_cloud(b0, {N}, rng)", "x", "w")
+        x = check_array(x, f"the prior cloud with N = {N}", (3, N), "One column per particle: rows h, v, beta.")
+        w = check_array(w, f"the prior weights with N = {N}", (N,))
+        want_x, want_w = ref.initial_cloud(b0, N, np.random.default_rng(seed))
+        check_close(x, want_x, f"the prior cloud for a random b0 and N = {N}",
+                    "Draw rng.standard_normal((3, N)) in one call; scale row i by the prior standard deviation of "
+                    "variable i and add the prior mean [b0, v_init, beta_init].", rtol=1e-12, atol=1e-9, show_expected=False)
+        check_close(w, want_w, f"the prior weights for N = {N}", "Equal weights 1/N.", rtol=1e-12, atol=0.0, show_expected=False)
+
+
+def credibility_cases(seed: int = 4005) -> list[tuple[np.ndarray, np.ndarray, float | np.ndarray]]:
+    """(samples, weights, p) of the hidden test: N from 1 to 5000, weights from flat to a few heavy
+    ones, some exactly zero, and p single numbers or arrays. Random weights put no cumulative weight
+    exactly on a quantile's order, so the interval is unambiguous."""
+    rng = np.random.default_rng(seed)
+    cases = []
+    for N, concentration in ((1, 1.0), (2, 1.0), (7, 0.3), (50, 1.0), (300, 0.05), (2000, 1.0), (5000, 5.0)):
+        samples = rng.normal(rng.uniform(-1e4, 1e4), rng.uniform(1.0, 1e3), N)
+        weights = rng.dirichlet(np.full(N, concentration)) if N > 1 else np.ones(1)
+        if N >= 50:
+            weights[rng.choice(N, N // 5, replace=False)] = 0.0  # particles with no weight left
+        weights = weights * rng.uniform(0.5, 2.0)  # not normalised: the function normalises
+        for p in (90.0, 50.0, float(rng.uniform(1.0, 99.0)), np.array([0.0, 50.0, 90.0]), np.array([100.0, 5.0])):
+            cases.append((samples, weights, p))
+    return cases
+
+
+@diagnosed
+def check_credibility_interval(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    for samples, weights, p in credibility_cases():
+        N = samples.shape[0]
+        shape = np.shape(p)
+        label = f"credibility_interval(samples, weights, {np.round(p, 2).tolist()}) for {N} weighted samples"
+        lo, hi = check_pair(func(samples.copy(), weights.copy(), np.copy(p) if shape else p), label, "lo", "hi")
+        got = np.stack([check_array(lo, f"lo of {label}", shape, "lo and hi have the shape of p."),
+                        check_array(hi, f"hi of {label}", shape, "lo and hi have the shape of p.")])
+        check_close(got, np.stack(ref.credibility_interval(samples, weights, p)), label,
+                    "Sort the samples and carry their weights along (weights[order]); the quantile of order a is the "
+                    "first sorted sample whose normalised cumulative weight reaches a; the orders are (1 -+ p/100) / 2.",
+                    rtol=0.0, atol=0.0, show_expected=False)
+
+
+RUN_HINTS = {
+    "mean": "the weighted mean sum_l w_l x_l of each variable at every t_j",
+    "median": "the weighted median of each variable, credibility_interval(x[i], w, 0), at every t_j",
+    "lo50": "the 50% intervals from credibility_interval(x[i], w, 50)",
+    "hi50": "the 50% intervals from credibility_interval(x[i], w, 50)",
+    "lo90": "the 90% intervals from credibility_interval(x[i], w, 90)",
+    "hi90": "the 90% intervals from credibility_interval(x[i], w, 90)",
+    "ess": "the effective sample size 1 / sum_l w_l^2 of the weights the step returned, at every t_j",
+    "ess_resample": "info['ess'] from the step (N at t_0)",
+    "parents": "the number of distinct indices in info['parents'] (N at t_0)",
+    "roots": "the number of distinct particles of t_0 with descendants: root = root[info['parents']] after each step",
+}
+
+
+@diagnosed
+def check_run_particle_filter(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(4006)
+    bootstrap = functools.partial(falling_object.bootstrap_step, dynamics=ref.tracking_dynamics)
+    cases = ((1, 50, {}), (6, 200, {}), (25, 1000, {}),
+             (12, 300, {"innovation_std": np.array([30.0, 20.0, 40.0])}),
+             (12, 300, {"step": bootstrap, "innovation_std": np.array([10.0, 10.0, 50.0])}))
+    for n_times, N, options in cases:
+        t = DT * np.arange(n_times)
+        b = rng.uniform(55_000.0, 65_000.0) - rng.uniform(2_500.0, 3_500.0) * t + SIGMA * rng.standard_normal(n_times)
+        seed = int(rng.integers(2**31))
+        history = func(b.copy(), N, np.random.default_rng(seed), **options)
+        if not isinstance(history, FilterHistory):
+            raise AssertionError(f"run_particle_filter should return a FilterHistory, not {type(history).__name__}.")
+        want = ref.run_particle_filter(b, N, np.random.default_rng(seed), **options)
+        case = f"{n_times} random readings, N = {N}" + "".join(f", {key}={'bootstrap_step' if key == 'step' else value}"
+                                                                for key, value in options.items())
+        for name, hint in RUN_HINTS.items():
+            shape = getattr(want, name).shape
+            got = check_array(getattr(history, name), f"history.{name} for {case}", shape,
+                              "Fill every entry: one column per reading time t_j.")
+            check_close(got, getattr(want, name), f"history.{name} for {case}",
+                        f"It should hold {hint}. Start from initial_cloud(b[0], N, rng) at t_0, then call the step "
+                        "(pf_step unless step is given) once with each later reading b_j, passing innovation_std and "
+                        "info, using the rng you were given.",
+                        rtol=1e-9, atol=1e-9, show_expected=False)
+
+# =============================================================================================
+# pf_step: statistical checks
+# =============================================================================================
+# The test bed ("families"): K = 3 families of particles. All members of a family share one
+# state (so they share one propagated candidate x^ and one fitness), and the families' ballistic
+# coefficients are 5000 apart, 1000 innovation standard deviations, so every new particle names
+# its parent's family without doubt (beta does not change in the propagation). The prior weights
+# are random within a family, with fixed family totals, and the particles come in a seeded random
+# order. Two readings are used: one near the cloud (the fitness shapes the resampling), and one
+# 40 sigma below every particle, where exp(-(h - b)^2 / (2 sigma^2)) underflows to zero for all
+# of them unless the step works with log-weights.
+
+PfStep = Callable[[np.ndarray, np.ndarray, float, np.random.Generator], tuple[np.ndarray, np.ndarray]]
+
+# --- false-fail budget (probability that a correct pf_step fails) -----------------------------
+ALPHA_RESAMPLING = 3e-7
+"""Chi-square tests of the resampling counts: two tests (near and far reading), 1.5e-7 each."""
+RESAMPLING_NOMINAL_TAIL = 1.25e-7
+"""The chi-square(2) tail at the resampling threshold. The exact multinomial tail of Pearson's
+statistic at that threshold is a little larger (1.26e-7 and 1.29e-7 for the two readings, by
+exact enumeration in tests/), and below the 1.5e-7 each test is allowed."""
+ALPHA_INNOVATION = 3e-7
+"""Innovation spread and centre: 24 one-sided tails (2 settings of innovation_std x 3 coordinates
+x mean and sum of squares x 2 sides), 1.25e-8 each."""
+INNOVATION_TAILS = 24
+OTHER_INNOVATION_STD = np.array([40.0, 250.0, 2.0])
+"""A second setting of the keyword innovation_std for the innovation check (beta's stays far below
+the 5000 between the families)."""
+ALPHA_POSTERIOR = 3e-7
+"""Posterior of beta after a whole run, against an ensemble of reference runs."""
+TIE_BOUND = 1e-15
+"""Bound on the probability that two fresh innovations coincide exactly (see check_innovation)."""
+FALSE_FAIL_TOTAL = ALPHA_RESAMPLING + ALPHA_INNOVATION + ALPHA_POSTERIOR + TIE_BOUND
+"""check_weights and check_info are exact (false-fail probability 0), so this bounds all the checks together."""
+
+# --- the test bed ------------------------------------------------------------------------------
+FAMILY_BETA = np.array([15_000.0, 20_000.0, 25_000.0])  # [kg/(m s^2)], 5000 apart
+FAMILY_WEIGHT = np.array([0.2, 0.3, 0.5])  # total prior weight of each family
+FAMILY_SIZE = 4000  # particles per family, so N = 12000
+FAMILY_SPEED = 3000.0  # [m/s]
+READING = 20_000.0  # b_{j+1} [m]: low enough that the drag changes v by 20-30 m/s in a step
+NEAR_OFFSETS = np.array([-300.0, 200.0, 700.0])  # x^_1 - b_{j+1} of each family [m]
+FAR_OFFSETS = 40 * SIGMA + np.array([0.0, 15.0, 30.0])  # [m]: 40 sigma away, a few sigma^2/(2 D) apart
+
+_STDS = ", ".join(f"{s:g}" for s in INNOVATION_STD)
+
+POSTERIOR_PARTICLES = 1000
+POSTERIOR_RUNS = 30
+
+
+@dataclass(frozen=True)
+class FamilyCase:
+    """One test-bed input for pf_step and what a correct step does with it.
+
+    x (3, N), w (N,) and b_next are the input; family (N,) gives each particle's family;
+    x_hat (3, K) is each family's propagated candidate (a), and p (K,) the probability that a
+    resampled index falls in each family, from the fitness weights (b).
+    """
+
+    x: np.ndarray
+    w: np.ndarray
+    b_next: float
+    family: np.ndarray
+    x_hat: np.ndarray
+    p: np.ndarray
+    name: str
+
+
+def family_case(offsets: np.ndarray, seed: int, name: str) -> FamilyCase:
+    """The K = 3 family test bed with propagated altitudes b_next + offsets, shuffled by ``seed``."""
+    f = ref.tracking_dynamics
+    rng = np.random.default_rng([seed, 7])
+    K = FAMILY_BETA.shape[0]
+    # family states chosen so that the Forward Euler candidate x^_1 = h - dt v lands at b + offset
+    states = np.vstack([READING + offsets + DT * FAMILY_SPEED, np.full(K, FAMILY_SPEED), FAMILY_BETA])
+    x_hat = states + DT * f(0.0, states)
+    family = rng.permutation(np.repeat(np.arange(K), FAMILY_SIZE))
+    # random weights within each family, scaled so that family g carries FAMILY_WEIGHT[g]
+    raw = rng.uniform(0.5, 1.5, size=family.shape[0])
+    totals = np.bincount(family, weights=raw, minlength=K)
+    w = raw * (FAMILY_WEIGHT / totals)[family]
+    w /= np.sum(w)
+    # p_g = W_g exp(-|x^_1g - b|^2 / (2 sigma^2)) / sum(...), in logarithms
+    log_p = np.log(FAMILY_WEIGHT) - (x_hat[0] - READING) ** 2 / (2 * SIGMA**2)
+    p = np.exp(log_p - log_p.max())
+    return FamilyCase(states[:, family], w, READING, family, x_hat, p / p.sum(), name)
+
+
+def near_case(seed: int) -> FamilyCase:
+    return family_case(NEAR_OFFSETS, seed, "a reading within 2 sigma of the cloud")
+
+
+def far_case(seed: int) -> FamilyCase:
+    return family_case(FAR_OFFSETS, seed, "a reading 40 sigma below every particle")
+
+
+def _run_step(pf_step: PfStep, case: FamilyCase, rng: np.random.Generator, **options: object) -> tuple[np.ndarray, np.ndarray]:
+    """Call pf_step on a copy of the case (with the keyword ``options``); turn warnings and bad
+    output into clear failures."""
+    N = case.w.shape[0]
+    underflow_hint = (
+        " With a reading far from every particle, exp(-(h - b)^2 / (2 sigma^2)) is 0 for all of them; "
+        "work with log-weights and subtract the largest one before you exponentiate."
+    )
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        try:
+            result = pf_step(case.x.copy(), case.w.copy(), case.b_next, rng, **options)
+        except Exception as error:
+            numeric = [w for w in caught if issubclass(w.category, RuntimeWarning)]
+            if not numeric:
+                raise
+            raise AssertionError(
+                f"pf_step gave the warning '{numeric[0].message}' and then failed with "
+                f"{type(error).__name__}: {error} (input: {case.name}).{underflow_hint}"
+            ) from error
+    for warning in caught:
+        if issubclass(warning.category, RuntimeWarning):
+            raise AssertionError(f"pf_step gave the warning '{warning.message}' for {case.name}.{underflow_hint}")
+    x_new, w_new = check_pair(result, "pf_step", "x", "w")
+    hint = f"(input: {case.name}, N = {N})."
+    x_new = check_array(x_new, "The new particles x", (3, N), hint)
+    w_new = check_array(w_new, "The new weights w", (N,), hint + underflow_hint)
+    return x_new, w_new
+
+
+def _parent_family(case: FamilyCase, x_new: np.ndarray) -> np.ndarray:
+    """The family of each new particle, read off its beta (innovation std 5, families 5000 apart)."""
+    distance = np.abs(x_new[2][:, None] - FAMILY_BETA[None, :])
+    family = np.argmin(distance, axis=1)
+    worst = float(np.max(distance[np.arange(family.shape[0]), family]))
+    if worst > 1000.0:
+        raise AssertionError(
+            f"A new particle's beta is {worst:.0f} away from every candidate's beta ({case.name}). "
+            "Each new particle should be a resampled candidate plus an innovation with standard "
+            f"deviations ({_STDS}) (the beta innovation is only 5)."
+        )
+    return family
+
+
+def _rng(seed: int, stream: int) -> np.random.Generator:
+    return np.random.default_rng([seed, stream])
+
+
+def _cases(seed: int, readings: tuple[str, ...]) -> list[tuple[FamilyCase, int]]:
+    """The requested test-bed inputs ("near", "far") with their rng stream numbers."""
+    builders = {"near": (near_case, 0), "far": (far_case, 1)}
+    return [(builders[r][0](seed), builders[r][1]) for r in readings]
+
+
+def check_weights(pf_step: PfStep, seed: int = 0, readings: tuple[str, ...] = ("near", "far")) -> None:
+    """The returned weights are finite, non-negative, sum to 1, and follow step (d).
+
+    Exact check (false-fail probability 0): given the new particles, step (d) fixes the weights,
+    w(l) proportional to exp(-(|x_new_1(l) - b|^2 - |x^_1(k_l) - b|^2) / (2 sigma^2)), with x^(k_l)
+    the parent's propagated candidate before the innovation. Both readings are tried; the far one
+    overflows or underflows a step that does not work with log-weights.
+    """
+    for case, stream in _cases(seed, readings):
+        x_new, w_new = _run_step(pf_step, case, _rng(seed, 1 + stream))
+        if np.any(w_new < 0):
+            raise AssertionError(f"Some weights are negative ({case.name}).")
+        total = float(np.sum(w_new))
+        if abs(total - 1.0) > 1e-9:
+            raise AssertionError(f"The weights should sum to 1, but they sum to {total:.6g} ({case.name}). Normalise them.")
+        parent_h = case.x_hat[0, _parent_family(case, x_new)]
+        # (d) in logarithms, normalised: the oracle for the weights
+        log_w = -((x_new[0] - case.b_next) ** 2 - (parent_h - case.b_next) ** 2) / (2 * SIGMA**2)
+        expected = np.exp(log_w - log_w.max())
+        expected /= expected.sum()
+        error = np.abs(w_new - expected)
+        if np.any(error > 1e-6 * expected + 1e-12 * expected.max()):
+            worst = int(np.argmax(error / (expected + 1e-300)))
+            raise AssertionError(
+                f"The weights do not follow step (d) ({case.name}): particle {worst} has weight "
+                f"{w_new[worst]:.4g}, step (d) gives {expected[worst]:.4g}. In (d) compare the new "
+                "particle's altitude with its parent's propagated altitude x^_1(k_l) before the "
+                "innovation; do not multiply by the old or the fitness weights (resampling used them)."
+            )
+
+
+def chi2_counts(counts: np.ndarray, p: np.ndarray) -> float:
+    """Pearson's statistic sum_g (n_g - N p_g)^2 / (N p_g) of family counts n against p."""
+    expected = counts.sum() * p
+    return float(np.sum((counts - expected) ** 2 / expected))
+
+
+def resampling_threshold(alpha: float = RESAMPLING_NOMINAL_TAIL, df: int = 2) -> float:
+    """The chi-square threshold with tail probability alpha: for df = 2 it is -2 log(alpha)."""
+    return float(stats.chi2.isf(alpha, df))
+
+
+def check_resampling(pf_step: PfStep, seed: int = 0, readings: tuple[str, ...] = ("near", "far")) -> None:
+    """Resampling draws parents with the fitness weights (b) and with replacement.
+
+    For a correct step the family counts (n_1, n_2, n_3) of the N = 12000 new particles are
+    Multinomial(N, p), p from (b) (the families' weights are 0.2/0.3/0.5 before the fitness; near:
+    p = (0.26, 0.44, 0.30), far: p = (0.60, 0.27, 0.13)). Pearson's statistic is then chi-square
+    with 2 degrees of freedom (asymptotically; every expected count is over 1500), whose tail
+    is exp(-c/2). Each of the two readings uses the threshold with chi-square tail 1.25e-7
+    (c = 31.8); the exact multinomial probability of exceeding it, enumerated in tests/, is
+    below 1.5e-7 for both p, so the false-fail probability is below 3e-7.
+    """
+    K = FAMILY_BETA.shape[0]
+    threshold = resampling_threshold()
+    for case, stream in _cases(seed, readings):
+        x_new, _ = _run_step(pf_step, case, _rng(seed, 3 + stream))
+        counts = np.bincount(_parent_family(case, x_new), minlength=K)
+        statistic = chi2_counts(counts, case.p)
+        if statistic > threshold:
+            expected = np.round(counts.sum() * case.p).astype(int)
+            raise AssertionError(
+                f"Resampling does not follow the fitness weights ({case.name}): the three groups of "
+                f"particles were drawn {counts.tolist()} times, but step (b) gives about {expected.tolist()} "
+                f"(chi-square {statistic:.1f} > {threshold:.1f}; a correct step exceeds it with probability "
+                "below 1.5e-7). Draw N indices with replacement with probabilities w^ = w exp(-(x^_1 - b)^2 / "
+                "(2 sigma^2)) / sum, using the propagated altitudes x^_1 and the old weights w."
+            )
+
+
+def innovation_bounds(n: int, alpha: float = ALPHA_INNOVATION / INNOVATION_TAILS) -> tuple[float, float, float]:
+    """(lower, upper) bounds on a chi-square(n) sum of squares, and the bound on |N(0,1)|, each
+    with one-sided tail alpha."""
+    return float(stats.chi2.ppf(alpha, n)), float(stats.chi2.isf(alpha, n)), float(stats.norm.isf(alpha))
+
+
+def check_info(pf_step: PfStep, seed: int = 0) -> None:
+    """With info={}, the step reports the ESS of its resampling weights and the parents it drew.
+
+    Exact check (false-fail probability 0): the ESS of the fitness weights (b) follows from the
+    input alone, and each reported parent must belong to the family that the new particle's beta
+    names.
+    """
+    case = near_case(seed)
+    info: dict = {}
+    x_new, _ = _run_step(pf_step, case, _rng(seed, 7), info=info)
+    missing = [key for key in ("ess", "parents") if key not in info]
+    if missing:
+        raise AssertionError(f"pf_step(..., info=info) should store {missing} in the dict info: "
+                             "info['ess'] = 1 / sum(w_hat**2) and info['parents'] = k.")
+    # (b) for every particle, in logarithms: the oracle of the resampling weights
+    log_w_hat = np.log(case.w) - (case.x_hat[0, case.family] - case.b_next) ** 2 / (2 * SIGMA**2)
+    w_hat = np.exp(log_w_hat - log_w_hat.max())
+    w_hat /= w_hat.sum()
+    check_close(float(np.asarray(info["ess"])), 1.0 / np.sum(w_hat**2), "info['ess']",
+                "It is the effective sample size 1 / sum w^2 of the fitness weights w^ of step (b), the weights the "
+                "resampling draws with (not of the old weights, nor of the new ones).", rtol=1e-9, atol=0.0, show_expected=False)
+    parents = check_array(info["parents"], "info['parents']", (case.w.shape[0],), "One parent index k_l per new particle.")
+    if not np.all((parents >= 0) & (parents < case.w.shape[0]) & (parents == np.round(parents))):
+        raise AssertionError("info['parents'] should hold the indices k_l, integers from 0 to N - 1.")
+    if np.any(case.family[parents.astype(int)] != _parent_family(case, x_new)):
+        raise AssertionError("info['parents'] does not name the particles the new ones were copied from: store the "
+                             "indices k that you used in x_hat[:, k].")
+
+
+def check_innovation(pf_step: PfStep, seed: int = 0, innovation_std: np.ndarray | None = None) -> None:
+    """New particles are the parents' propagated candidates plus fresh N(0, D) innovations.
+
+    With z = (x_new - x^(k_l)) / D^(1/2) per coordinate, a correct step gives N independent
+    N(0, 1) values in each of the 3 coordinates, so the scatter sum (z - mean z)^2 is exactly
+    chi-square(N - 1) and, independently, sum z / sqrt(N) exactly N(0, 1). The check runs with the
+    handout's default and with innovation_std=OTHER_INNOVATION_STD; each of the 24 one-sided tails
+    has probability 1.25e-8, 3e-7 in all. This catches a missing or wrongly scaled innovation (variance for standard
+    deviation) and a missing or wrong propagation (a) (v dt = 300 m in h, 20-30 m/s in v).
+    It also requires all N new particles to differ: an innovation added before resampling
+    repeats the copies of each parent exactly. For a correct step a repeat needs two independent
+    normal draws to agree to the last bit in all three coordinates; even if two draws agreed with
+    probability 2^-32 (a generous bound for 53-bit doubles), the union over the N^2/2 = 7.2e7
+    pairs is below 7.2e7 x 2^-96 < 1e-15 (for each of the two runs; TIE_BOUND covers both).
+    """
+    case = near_case(seed)
+    if innovation_std is None:  # the default: the handout's setting
+        std, options, stream = INNOVATION_STD, {}, 5
+    else:
+        std, options, stream = np.asarray(innovation_std, dtype=float), {"innovation_std": np.array(innovation_std)}, 8
+    stds = ", ".join(f"{value:g}" for value in std)
+    x_new, _ = _run_step(pf_step, case, _rng(seed, stream), **options)
+    N = x_new.shape[1]
+    distinct = np.unique(x_new, axis=1).shape[1]
+    if distinct < N:
+        raise AssertionError(
+            f"Only {distinct} of the {N} new particles are different: some are exact copies. Add a fresh "
+            "innovation D^(1/2) w to each particle after resampling, not before."
+        )
+    z = (x_new - case.x_hat[:, _parent_family(case, x_new)]) / std[:, None]
+    lower, upper, z_max = innovation_bounds(N - 1)
+    for i, name in enumerate(falling_object.STATE_NAMES):
+        # spread about the sample mean: sum (z - mean z)^2 ~ chi-square(N - 1), independent of the mean
+        scatter = float(np.sum((z[i] - np.mean(z[i])) ** 2))
+        if not lower <= scatter <= upper:
+            spread = math.sqrt(scatter / (N - 1)) * std[i]
+            raise AssertionError(
+                f"The innovation in {name} has standard deviation about {spread:.4g}; it should be "
+                f"{std[i]:g} (the innovation is D^(1/2) w with D^(1/2) = diag(innovation_std), here diag({stds}), "
+                "w ~ N(0, I_3), one fresh draw per new particle; use the keyword argument innovation_std)."
+            )
+        centre = float(np.sum(z[i]) / np.sqrt(N))
+        if abs(centre) > z_max:
+            mean_offset = float(np.mean(z[i]) * std[i])
+            raise AssertionError(
+                f"The new particles' {name} is off its parent's propagated candidate x^ by {mean_offset:.3g} "
+                f"on average; it should be 0 (z = {centre:.1f}, limit {z_max:.1f}). Propagate with Forward Euler, "
+                "x^ = x + dt f(x) with dt = DT, and resample the propagated candidates."
+            )
+
+
+def final_beta_mean(pf_step: PfStep, b: np.ndarray, N: int, rng: np.random.Generator) -> float:
+    """Run the filter over the readings b with the reference prior cloud and pf_step; return the
+    weighted posterior mean of beta at the last reading."""
+    x, w = ref.initial_cloud(b[0], N, rng)
+    for j in range(1, b.shape[0]):
+        x, w = pf_step(x, w, b[j], rng)
+    return float(np.asarray(x)[2] @ np.asarray(w))
+
+
+@functools.lru_cache(maxsize=4)
+def reference_ensemble(n_runs: int = POSTERIOR_RUNS, N: int = POSTERIOR_PARTICLES) -> np.ndarray:
+    """Final posterior means of beta from n_runs reference runs on the shipped data (own seeds)."""
+    b = falling_object.load().b
+    runs = [final_beta_mean(ref.pf_step, b, N, np.random.default_rng([2019, 12, r])) for r in range(n_runs)]
+    result = np.array(runs)
+    result.setflags(write=False)
+    return result
+
+
+def posterior_threshold(n_runs: int = POSTERIOR_RUNS, alpha: float = ALPHA_POSTERIOR) -> float:
+    """Bound on |m - mean| / (std sqrt(1 + 1/R)): Student's t with R - 1 degrees of freedom,
+    two-sided tail alpha."""
+    return float(stats.t.isf(alpha / 2, n_runs - 1))
+
+
+def check_posterior(pf_step: PfStep, seed: int = 0) -> float:
+    """After a run over the shipped data, the posterior mean of beta agrees with the reference's.
+
+    The student's run (N = 1000, all 300 steps, the reference prior cloud, seed-derived rng) gives
+    m; R = 30 reference runs with their own seeds give the ensemble mean m_R and standard
+    deviation s_R. For a correct step m and the ensemble are independent draws of one
+    distribution; the particle filter's central limit theorem (Chopin 2004) makes it Gaussian,
+    so (m - m_R) / (s_R sqrt(1 + 1/R)) follows Student's t with R - 1 = 29 degrees of freedom,
+    and the threshold with two-sided tail 3e-7 (6.7 ensemble standard deviations) fails a
+    correct step with probability 3e-7. tests/ checks the Gaussian shape on 200 seeds.
+    Returns m.
+    """
+    ensemble = reference_ensemble()
+    b = falling_object.load().b
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        m = final_beta_mean(pf_step, b, POSTERIOR_PARTICLES, _rng(seed, 6))
+    for warning in caught:
+        if issubclass(warning.category, RuntimeWarning):
+            raise AssertionError(f"pf_step gave the warning '{warning.message}' while filtering the shipped data.")
+    centre, spread = float(ensemble.mean()), float(ensemble.std(ddof=1))
+    tolerance = posterior_threshold() * spread * np.sqrt(1 + 1 / ensemble.shape[0])
+    if not np.isfinite(m) or abs(m - centre) > tolerance:
+        raise AssertionError(
+            f"After filtering the shipped data with N = {POSTERIOR_PARTICLES} particles, the posterior mean "
+            f"of beta is {m:.0f}; reference runs give {centre:.0f} +- {tolerance:.0f} (a correct step "
+            "falls outside with probability 3e-7). Check the whole step (a)-(d)."
+        )
+    return m
+
+
+def statistical_checks(pf_step: PfStep, seed: int) -> None:
+    """Every statistical check, cheapest first. A correct step fails with probability below
+    FALSE_FAIL_TOTAL."""
+    check_weights(pf_step, seed)
+    check_info(pf_step, seed)
+    check_resampling(pf_step, seed)
+    check_innovation(pf_step, seed)
+    check_innovation(pf_step, seed, OTHER_INNOVATION_STD)
+    check_posterior(pf_step, seed)
+
+
+@diagnosed
+def check_pf_step(func: Callable, seed: int = PF_STEP_SEED) -> None:
+    """The statistical test of pf_step, with the reference tracking_dynamics."""
+    # the statistical checks turn warnings into failures with a hint about log-weights
+    statistical_checks(isolate(func, ref, BLANKS, warnings_fail=False), seed)

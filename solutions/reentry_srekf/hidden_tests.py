@@ -1,0 +1,223 @@
+"""Hidden tests of the reentry-srekf lab: each ``check_<blank>`` compares a student's blank with
+``solutions.reentry_srekf.reference`` on seeded random states, random upper-triangular square roots of
+sizes 2 to 7 and random index sets (head, tail, segment, non-contiguous, non-ascending).
+
+Square roots are compared through S^T S on the correlation scale (``check_square_root``): the sign
+of each row of an upper-triangular square root is free, so the tests are invariant to it."""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+from matplotlib.figure import Figure
+
+import solutions.reentry_srekf.reference as ref
+from autograder.hidden_tests.diagnosis import diagnosed
+from autograder.hidden_tests.isolate import isolate
+from autograder.labs import lab_of
+from course.checks import check_array, check_close, check_pair
+from course.starship import check_band_plot, check_square_root
+
+BLANKS = lab_of(__name__).blanks()
+"""The lab's blanks, from its notebook: each check isolates the student's function with them."""
+SIZES = (2, 3, 4, 5, 6, 7)
+
+
+def _random_states(rng: np.random.Generator, count: int = 12) -> np.ndarray:
+    """States [h, v, c] over the lower atmosphere, falling (v < 0, as equation (10) assumes), some c < 0."""
+    h = rng.uniform(0.0, 25_000.0, count)
+    v = rng.uniform(-900.0, -20.0, count)
+    c = rng.uniform(-2e-4, 3e-3, count)
+    return np.column_stack([h, v, c])
+
+
+def _random_sqrt(rng: np.random.Generator, n: int) -> np.ndarray:
+    """A random upper-triangular square root with columns scaled over six decades."""
+    S = np.linalg.qr(rng.standard_normal((n, n)) + n * np.eye(n), mode="r")
+    return S * 10.0 ** rng.uniform(-3.0, 3.0, n)[None, :]
+
+
+def _index_sets(rng: np.random.Generator, n: int) -> list[tuple[str, np.ndarray]]:
+    """Index sets of 1 to n - 1 entries (so that a complement is left for conditioning)."""
+    k = int(rng.integers(1, n))
+    k2 = min(max(k, 2), n - 1)
+    perm = rng.permutation(n)
+    start = int(rng.integers(0, n - k + 1))
+    return [
+        ("a head", np.arange(k)),
+        ("a tail", np.arange(k, n)),
+        ("a segment", np.arange(start, start + k)),
+        ("a non-contiguous set", np.sort(perm[:k2])),
+        ("a non-ascending set", np.sort(perm[:k2])[::-1]),
+        ("a shuffled set", perm[:k2]),
+    ]
+
+
+def _check_state_function(func: Callable, name: str, reference: Callable, shape: tuple[int, ...], seed: int,
+                          hint: str) -> None:
+    func = isolate(func, ref, BLANKS)
+    for x in _random_states(np.random.default_rng(seed)):
+        label = f"{name}(x) at x = [{x[0]:.1f}, {x[1]:.1f}, {x[2]:.3g}]"
+        value = check_array(func(x.copy()), label, shape, hint)
+        check_close(value, reference(x), label, hint, rtol=1e-9, atol=1e-12 * (1 + np.max(np.abs(reference(x)))),
+                    show_expected=False)
+
+
+@diagnosed
+def check_ballistic_dynamics(func: Callable) -> None:
+    _check_state_function(func, "ballistic_dynamics", ref.ballistic_dynamics, (3,), 3301,
+                          "f = [v, d - g, 0] with the drag d of equation (10).")
+
+
+@diagnosed
+def check_ballistic_jacobian(func: Callable) -> None:
+    _check_state_function(func, "ballistic_jacobian", ref.ballistic_jacobian, (3, 3), 3302,
+                          "Row i holds the derivatives of f_i with respect to h, v and c.")
+
+
+@diagnosed
+def check_radar_predict(func: Callable) -> None:
+    _check_state_function(func, "radar_predict", ref.radar_predict, (1,), 3303,
+                          "The range of equation (13), as an array of shape (1,).")
+
+
+@diagnosed
+def check_radar_jacobian(func: Callable) -> None:
+    _check_state_function(func, "radar_jacobian", ref.radar_jacobian, (1, 3), 3304,
+                          "The derivatives of the range with respect to h, v and c, shape (1, 3).")
+
+
+@diagnosed
+def check_marginal(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(3305)
+    for n in SIZES:
+        S, mu = _random_sqrt(rng, n), rng.standard_normal(n)
+        for what, idx in _index_sets(rng, n):
+            case = f"the marginal of {what} idx = {idx.tolist()} of a random Gaussian with n = {n}"
+            mu_I, S_I = check_pair(func(mu.copy(), S.copy(), idx.copy()), "marginal(mu, S, idx)", "mu_I", "S_I")
+            want_mu, want_S = ref.marginal(mu, S, idx)
+            check_close(check_array(mu_I, f"mu_I for {case}", (idx.size,)), want_mu, f"mu_I for {case}",
+                        "The entries of mu_I come in the order of idx.", show_expected=False)
+            check_square_root(check_array(S_I, f"S_I for {case}", (idx.size, idx.size)), want_S.T @ want_S,
+                              f"S_I for {case}", "Take a Q-less QR of the columns S[:, idx].", rtol=1e-8,
+                              show_expected=False)
+
+
+@diagnosed
+def check_conditional(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(3306)
+    for n in SIZES:
+        S, mu = _random_sqrt(rng, n), rng.standard_normal(n)
+        std = np.sqrt(np.sum(S**2, axis=0))
+        mu = mu * std
+        for what, idx_b in _index_sets(rng, n):
+            idx_a = rng.permutation(np.setdiff1d(np.arange(n), idx_b))
+            x_b = mu[idx_b] + std[idx_b] * rng.standard_normal(idx_b.size)
+            case = f"x[{idx_a.tolist()}] given x[{idx_b.tolist()}] ({what}) with n = {n}"
+            mu_c, S_c = check_pair(func(mu.copy(), S.copy(), idx_a.copy(), idx_b.copy(), x_b.copy()),
+                                   "conditional(mu, S, idx_a, idx_b, x_b)", "mu_c", "S_c")
+            want_mu, want_S = ref.conditional(mu, S, idx_a, idx_b, x_b)
+            check_close(check_array(mu_c, f"mu_c for {case}", (idx_a.size,)), want_mu, f"mu_c for {case}",
+                        "mu_A + R2^T R1^-T (x_B - mu_B), equation (31).", rtol=1e-8,
+                        atol=1e-8 * float(np.max(std[idx_a])), show_expected=False)
+            check_square_root(check_array(S_c, f"S_c for {case}", (idx_a.size, idx_a.size)), want_S.T @ want_S,
+                              f"S_c for {case}", "S_c = R3 of the QR of [S[:, idx_b], S[:, idx_a]].", rtol=1e-8,
+                              show_expected=False)
+
+
+def _update_cases(rng: np.random.Generator) -> list[tuple[str, np.ndarray, np.ndarray, float]]:
+    """(what, mu, S, ratio): well-conditioned and badly conditioned Gaussians of sizes 2 to 7.
+
+    ``ratio`` sets how much larger the prior is than the noise in the updates (1 for a
+    well-conditioned case, up to 1e5 for a badly conditioned one, where the covariance form loses
+    about ten digits and the square-root form none).
+    """
+    cases = []
+    for n in SIZES:
+        S = _random_sqrt(rng, n)
+        cases.append((f"a well-conditioned Gaussian with n = {n}", rng.standard_normal(n), S, 1.0))
+        # columns over twelve decades and one nearly dependent column: P is badly conditioned
+        S_bad = np.linalg.qr(rng.standard_normal((n, n)) + n * np.eye(n), mode="r")
+        S_bad[:, -1] = S_bad[:, 0] + 1e-7 * S_bad[:, -1]
+        S_bad = np.linalg.qr(S_bad, mode="r") * 10.0 ** rng.uniform(-6.0, 6.0, n)[None, :]
+        cases.append((f"a badly conditioned Gaussian with n = {n}", rng.standard_normal(n), S_bad, 1e5))
+    return cases
+
+
+@diagnosed
+def check_sqrt_time_update(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(3308)
+    for what, mu, S, ratio in _update_cases(rng):
+        n = mu.size
+        for q in sorted({n, int(rng.integers(1, n + 2))}):
+            A = np.eye(n) + 0.3 * rng.standard_normal((n, n))
+            B = rng.standard_normal((n, q)) * np.sqrt(np.sum(S**2, axis=0)).max() / ratio
+            J = np.hstack([A, B])
+            S_Q = np.triu(rng.standard_normal((q, q))) + np.eye(q)
+            S_Q[0, :] = 0.0  # a noise component of variance zero, like the altitude's in Q
+            offset = rng.standard_normal(n)
+
+            def f_and_jacobian(x, A=A, J=J, offset=offset):
+                x = np.asarray(x, dtype=float)
+                return A @ x + 0.1 * np.sin(x) + offset, J.copy()
+
+            case = f"the step of {what}, with {q} noise input{'s' if q > 1 else ''}"
+            mu_next, S_next = check_pair(func(mu.copy(), S.copy(), f_and_jacobian, S_Q.copy()),
+                                         "sqrt_time_update(mu, S, f_and_jacobian, S_Q)", "mu", "S")
+            want_mu, want_S = ref.sqrt_time_update(mu, S, f_and_jacobian, S_Q)
+            check_close(check_array(mu_next, f"the predicted mean for {case}", (n,)), want_mu,
+                        f"the predicted mean for {case}", "Return the mean that f_and_jacobian(mu) gives.",
+                        rtol=1e-12, atol=0.0, show_expected=False)
+            check_square_root(check_array(S_next, f"S for {case}", (n, n)), want_S.T @ want_S, f"S for {case}",
+                              "S+ is the R factor of a Q-less QR of blkdiag(S, S_Q) @ J.T (J's columns are [x; w]).",
+                              rtol=1e-8, show_expected=False)
+
+
+@diagnosed
+def check_sqrt_measurement_update(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(3309)
+    for what, mu, S, ratio in _update_cases(rng):
+        n = mu.size
+        for m in sorted({1, int(rng.integers(1, n + 1))}):
+            H = rng.standard_normal((m, n))
+            offset = rng.standard_normal(m)
+            spread = np.sqrt(np.diag(H @ S.T @ S @ H.T))
+            S_R = (np.triu(rng.standard_normal((m, m))) + 2 * np.eye(m)) * (spread / ratio)[None, :]
+            S_R = np.linalg.qr(S_R, mode="r")
+
+            def h_and_jacobian(x, H=H, offset=offset):
+                x = np.asarray(x, dtype=float)
+                return H @ x + offset, H.copy()
+
+            y = H @ mu + offset + spread * rng.standard_normal(m)
+            case = f"{m} measurement{'s' if m > 1 else ''} of {what}"
+            mu_post, S_post = check_pair(func(mu.copy(), S.copy(), y.copy(), h_and_jacobian, S_R.copy()),
+                                         "sqrt_measurement_update(mu, S, y, h_and_jacobian, S_R)", "mu", "S")
+            want_mu, want_S = ref.sqrt_measurement_update(mu, S, y, h_and_jacobian, S_R)
+            std_post = np.sqrt(np.sum(want_S**2, axis=0))
+            check_close(check_array(mu_post, f"the updated mean for {case}", (n,)), want_mu,
+                        f"the updated mean for {case}",
+                        "Condition the joint of [y; x], with mean [h(mu); mu], on y with your conditional.",
+                        rtol=1e-8, atol=1e-6 * float(np.min(std_post)), show_expected=False)
+            check_square_root(check_array(S_post, f"S for {case}", (n, n)), want_S.T @ want_S, f"S for {case}",
+                              "The joint square root of [y; x] is the R factor of the QR of [[S @ H.T, S], [S_R, 0]].",
+                              rtol=1e-8, show_expected=False)
+
+
+@diagnosed
+def check_plot_ballistic_coefficient(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(3307)
+    for size in (7, 40):
+        t = np.cumsum(rng.uniform(0.05, 0.2, size)) - 0.05
+        c_true = 1e-3 + 5e-5 * rng.standard_normal(size)
+        c_mean = c_true + 2e-4 * rng.standard_normal(size)
+        c_std = rng.uniform(1e-5, 5e-4, size)
+        ax = Figure().subplots()
+        returned = func(ax, t.copy(), c_true.copy(), c_mean.copy(), c_std.copy())
+        check_band_plot(ax, returned, t, c_true, c_mean, c_std, "plot_ballistic_coefficient")

@@ -1,0 +1,1 @@
+"""The hidden code of the train-kf lab: ``reference``, ``hidden_tests``, ``mistakes``, ``claims``."""

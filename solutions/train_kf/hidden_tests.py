@@ -1,0 +1,111 @@
+"""Hidden tests of the train-kf lab: each ``check_<blank>`` compares a student's blank with
+``solutions.train_kf.reference`` on seeded random cases of several state and observation sizes."""
+
+from __future__ import annotations
+
+from typing import Callable
+
+import numpy as np
+
+import solutions.train_kf.reference as ref
+from autograder.hidden_tests.diagnosis import diagnosed
+from autograder.hidden_tests.isolate import isolate
+from autograder.labs import lab_of
+from course.checks import check_array, check_close, check_pair, count, random_spd
+
+BLANKS = lab_of(__name__).blanks()
+"""The lab's blanks, from its notebook: each check isolates the student's function with them."""
+SIZES = ((1, 1), (2, 2), (3, 1), (4, 2), (5, 3))
+"""(n, m): state and observation dimensions of the random cases."""
+
+
+def _gain_cases(rng: np.random.Generator):
+    for n, m in SIZES:
+        yield n, m, random_spd(rng, n), rng.standard_normal((m, n)), random_spd(rng, m)
+
+
+def _check_gain(func: Callable, name: str, reference: Callable, seed: int) -> None:
+    func = isolate(func, ref, BLANKS)
+    for n, m, B, H, R in _gain_cases(np.random.default_rng(seed)):
+        K = check_array(func(B.copy(), H.copy(), R.copy()), f"{name}(B, H, R) with n = {n}, m = {m}", (n, m),
+                        "K maps an innovation (m,) to a state correction (n,), so it is n x m.")
+        check_close(K, reference(B, H, R), f"{name} on a random case with n = {n}, m = {m}", show_expected=False)
+
+
+@diagnosed
+def check_gain_information_form(func: Callable) -> None:
+    _check_gain(func, "gain_information_form", ref.gain_information_form, seed=1101)
+
+
+@diagnosed
+def check_gain_covariance_form(func: Callable) -> None:
+    _check_gain(func, "gain_covariance_form", ref.gain_covariance_form, seed=1102)
+
+
+@diagnosed
+def check_process_noise(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1103)
+    for sigma, dt_min in zip(rng.uniform(0.5, 30.0, 5), (1.0, 1.0, 0.5, 2.0, 5.0)):
+        label = f"process_noise({sigma:.3f}, dt_min={dt_min})"
+        Q = check_array(func(float(sigma), dt_min=dt_min), label, (2, 2))
+        check_close(Q, ref.process_noise(sigma, dt_min), label, show_expected=False)
+
+
+@diagnosed
+def check_predict(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1104)
+    for n, _ in SIZES:
+        x, B, A, Q = rng.standard_normal(n), random_spd(rng, n), rng.standard_normal((n, n)), random_spd(rng, n)
+        x_f, B_f = check_pair(func(x.copy(), B.copy(), A.copy(), Q.copy()), "predict(x, B, A, Q)", "x_f", "B_f")
+        want_x, want_B = ref.predict(x, B, A, Q)
+        check_close(check_array(x_f, f"x_f with n = {n}", (n,)), want_x, f"x_f on a random case with n = {n}",
+                    show_expected=False)
+        check_close(check_array(B_f, f"B_f with n = {n}", (n, n)), want_B, f"B_f on a random case with n = {n}",
+                    show_expected=False)
+
+
+@diagnosed
+def check_kupdate(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1105)
+    for n, m in SIZES:
+        x_f, B_f, H, R = rng.standard_normal(n), random_spd(rng, n), rng.standard_normal((m, n)), random_spd(rng, m)
+        y = rng.standard_normal(m)
+        x_a, B_a = check_pair(func(x_f.copy(), B_f.copy(), y.copy(), H.copy(), R.copy()),
+                              "kupdate(x_f, B_f, y, H, R)", "x_a", "B_a")
+        want_x, want_B = ref.kupdate(x_f, B_f, y, H, R)
+        case = f"a random case with n = {n}, m = {m}"
+        check_close(check_array(x_a, f"x_a with n = {n}", (n,)), want_x, f"x_a on {case}", show_expected=False)
+        check_close(check_array(B_a, f"B_a with n = {n}", (n, n)), want_B, f"B_a on {case}", show_expected=False)
+
+
+@diagnosed
+def check_run_filter(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1106)
+    for (n, m), T in zip(SIZES, (1, 5, 12, 30, 60)):
+        x0, B0, Q, R = rng.standard_normal(n), random_spd(rng, n), random_spd(rng, n), random_spd(rng, m)
+        A = np.eye(n) + 0.1 * rng.standard_normal((n, n))
+        H, y = rng.standard_normal((m, n)), rng.standard_normal((T, m))
+        xs, Bs = check_pair(func(y.copy(), x0.copy(), B0.copy(), A, Q, H, R), "run_filter(...)", "x_a", "B_a")
+        want_x, want_B = ref.run_filter(y, x0, B0, A, Q, H, R)
+        case = f"{count(T, 'random observation')} with n = {n}, m = {m}"
+        check_close(check_array(xs, f"the estimates for {case}", (T, n)), want_x, f"the estimates for {case}",
+                    show_expected=False)
+        check_close(check_array(Bs, f"the covariances for {case}", (T, n, n)), want_B,
+                    f"the covariances for {case}", show_expected=False)
+
+
+@diagnosed
+def check_nees(func: Callable) -> None:
+    func = isolate(func, ref, BLANKS)
+    rng = np.random.default_rng(1107)
+    for n, T in zip((1, 2, 3, 4, 5), (1, 7, 20, 3, 60)):
+        errors = rng.standard_normal((T, n))
+        covariances = np.stack([random_spd(rng, n) for _ in range(T)])
+        value = check_array(func(errors.copy(), covariances.copy()), f"nees(errors, covariances) with T = {T}, n = {n}",
+                            (T,), "One NEES value per time: errors (T, n) and covariances (T, n, n) give shape (T,).")
+        check_close(value, ref.nees(errors, covariances), f"the NEES of {count(T, 'random error')} with n = {n}",
+                    show_expected=False)
