@@ -21,8 +21,8 @@ from nbclient import NotebookClient
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from autograder import submissions  # noqa: E402
-from autograder.pipeline import grading, nbgrader_apps
+from autograder.catalogues import submissions  # noqa: E402
+from autograder.pipeline import grading, nbgrader_apps  # noqa: E402
 from autograder.labs import all_labs, get_lab  # noqa: E402
 
 

@@ -26,8 +26,8 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from autograder import synthetic_class  # noqa: E402
-from autograder.pipeline import grading
+from autograder.catalogues import synthetic_class  # noqa: E402
+from autograder.pipeline import grading  # noqa: E402
 from autograder.labs import all_labs, get_lab  # noqa: E402
 
 

@@ -21,7 +21,7 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from autograder import compare  # noqa: E402
+from autograder.pipeline import compare  # noqa: E402
 from autograder.kernel.manager import SandboxedKernelManager  # noqa: E402
 
 REPEATS = 200

@@ -25,7 +25,8 @@ from jupyter_client.manager import AsyncKernelManager
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from autograder.kernel.sandbox import SandboxedKernelManager, status  # noqa: E402
+from autograder.kernel.manager import SandboxedKernelManager  # noqa: E402
+from autograder.kernel.sandbox import status  # noqa: E402
 
 FIRST_CELL = """
 import numpy, scipy.linalg, matplotlib

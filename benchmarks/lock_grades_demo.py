@@ -25,18 +25,18 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from autograder import submissions  # noqa: E402
+from autograder.catalogues import submissions  # noqa: E402
 from autograder.labs import all_labs, get_lab  # noqa: E402
 
 GRADE = """
 import sys
 from pathlib import Path
-from autograder.pipeline import grading
+from autograder.pipeline import grading  # noqa: E402
 grading.grade(Path(sys.argv[1]), Path(sys.argv[2]), jobs=2)
 """
 
 CHECK_LOCK = """
-from autograder.pipeline import versions
+from autograder.pipeline import versions  # noqa: E402
 differ = versions.differences_from_lock(versions.LOCK)
 assert not differ, f"the environment made from environment.lock differs from it: {differ}"
 """
