@@ -78,14 +78,14 @@ def test_solved_notebook_scores_full_marks(graded, lab: Lab) -> None:
     points = {cells.grade_id(c): cells.meta(c)["points"] for c in cells.read(lab.source_notebook).cells
               if cells.is_autograded_test(c)}
     assert row.max_cells.keys() >= points.keys() and {c: row.max_cells[c] for c in points} == points
-    assert row.auto_score == row.auto_max == sum(points.values()), row.lost
+    assert row.auto_score == row.auto_max == sum(points.values()), (row.lost, row.reasons)
 
 
 def test_each_mistake_loses_its_blank_and_only_its_blank(graded, lab: Lab) -> None:
     for mistake in catalogue(lab):
         row = graded[0][(mistake.student_id(lab), lab.id)]
         test = f"test_{mistake.blank}"
-        assert row.lost == [test], f"{mistake.student_id(lab)} lost {row.lost}"
+        assert row.lost == [test], f"{mistake.student_id(lab)} lost {row.lost}, because {row.reasons}"
         assert row.cells[test] == 0
         assert row.auto_score == row.auto_max - row.max_cells[test]
         assert row.reasons.get(test), f"{mistake.student_id(lab)}: no reason given for {test}"
