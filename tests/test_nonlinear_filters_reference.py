@@ -13,7 +13,7 @@ from scipy.integrate import quad_vec, solve_ivp
 
 import solutions.nonlinear_filters.reference as ref
 from autograder.release import data
-from autograder.hidden_tests import nonlinear_filters as checks
+from solutions.nonlinear_filters import hidden_tests as checks
 from course import air_traffic, cut
 from course.checks import random_spd
 from random_draws import random_draws

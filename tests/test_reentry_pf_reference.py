@@ -24,11 +24,11 @@ from scipy.integrate import solve_ivp
 from scipy.special import gammaln
 
 from autograder.hidden_tests.diagnosis import mistake_function
-from autograder.hidden_tests import reentry_pf as checks
+from solutions.reentry_pf import hidden_tests as checks
 from solutions.reentry_pf.mistakes import MISTAKES
 from course import falling_object as fo
 from random_draws import random_draws
-from solutions import reentry_pf as ref
+from solutions.reentry_pf import reference as ref
 
 ROOT = Path(__file__).resolve().parent.parent
 GAUSSIAN_SEEDS = range(200)

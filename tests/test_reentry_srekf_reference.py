@@ -25,7 +25,7 @@ from course import starship  # noqa: E402
 from random_draws import random_draws  # noqa: E402
 from course.starship import G, L, M, P0, R, RADAR_R1, RADAR_R2, SIGMA_RANGE, T0  # noqa: E402
 from solutions.reentry_srekf.hidden_tests import BLANKS  # noqa: E402
-from solutions import reentry_srekf as ref  # noqa: E402
+from solutions.reentry_srekf import reference as ref  # noqa: E402
 
 ROOT = Path(__file__).resolve().parents[1]
 

@@ -15,7 +15,7 @@ import numpy as np
 
 from autograder.authoring.claims import claim, rate_at_least
 from course import falling_object as fo
-from solutions import reentry_pf as ref
+from solutions.reentry_pf import reference as ref
 
 HANDOUT = {N: fo.TuningSetting("auxiliary", N, fo.HANDOUT_STD) for N in (500, 2000, 5000)}
 CHOSEN = {N: fo.TuningSetting("auxiliary", N, fo.CHOSEN) for N in (500, 2000)}

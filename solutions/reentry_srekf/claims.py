@@ -18,7 +18,7 @@ from scipy.stats import norm
 from autograder.authoring.claims import claim, rate_at_least
 from course import starship
 from course.starship import G, L, M, P0, R, RADAR_R2, T0
-from solutions import reentry_srekf as ref
+from solutions.reentry_srekf import reference as ref
 
 FALL_SEEDS = range(7100, 7140)
 """Seeds of the simulated falls, the notebook's (40 falls; one takes about 0.25 s to simulate and filter)."""
