@@ -39,6 +39,14 @@ class Lab:
         tests, the catalogued mistakes, the checks of the lab's claims)."""
         return ROOT / "solutions" / self.module
 
+    @property
+    def draft(self) -> Path:
+        """``solutions/<module>/draft.py``: the notebook as text, in jupytext's percent format, from which
+        ``python -m autograder build`` makes the source notebook (labs made before drafts have none). It
+        holds the model answers and hidden tests, so it is kept with the hidden code, never in ``source/``,
+        whose other files nbgrader copies into the student release."""
+        return self.hidden_folder / "draft.py"
+
     def hidden_module(self, name: str) -> ModuleType:
         """One module of the lab's hidden code: ``solutions.<module>.<name>`` (``reference``,
         ``hidden_tests``, ``mistakes`` or ``claims``)."""
