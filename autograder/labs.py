@@ -9,6 +9,8 @@ from types import ModuleType
 
 ROOT = Path(__file__).resolve().parent.parent
 """The course root: the repository, and nbgrader's course directory."""
+DUE_DATES = ROOT / "due_dates.toml"
+"""Each lab's due date (``autograder/pipeline/late.py`` reads them)."""
 
 
 @dataclass(frozen=True)

@@ -19,6 +19,7 @@ from pathlib import Path
 
 import pytest
 
+from autograder.authoring.new import refusals
 from autograder.labs import ROOT
 
 NOT_COPIED = {".git", ".venv", "demo", "submitted", "autograded", "feedback", "gradebook.db", "nbgrader.log",
@@ -72,20 +73,29 @@ def test_new_writes_a_lab_that_build_turns_into_one_that_passes_the_tests_of_a_l
     assert " passed" in summary and "deselected" in summary and "failed" not in summary, summary
 
 
-@pytest.mark.parametrize("arguments, says", [
-    (("train-kf",), "The lab train-kf exists already"),
-    ((NEW,), f"The lab {NEW} exists already"),
-    (("Scalar_KF",), "'Scalar_KF' is not a lab id"),
-    (("2d-kf",), "'2d-kf' is not a lab id"),
-    (("import",), "'import' is not a lab id"),
-    (("other-lab", "--topic", "train"), "course/train.py exists already"),
-    (("other-lab", "--topic", "Train"), "'Train' cannot name a Python module"),
+@pytest.mark.parametrize("lab, topic, says", [
+    ("train-kf", "train_kf", "The lab train-kf exists already"),
+    ("Scalar_KF", "scalar_kf", "'Scalar_KF' is not a lab id"),
+    ("2d-kf", "kf", "'2d-kf' is not a lab id"),
+    ("import", "imports", "'import' is not a lab id"),
+    ("other-lab", "train", "course/train.py exists already"),
+    ("other-lab", "Train", "'Train' cannot name a Python module"),
+    ("scalar-kf2", "scalar_kf2", None),
 ])
-def test_new_refuses_a_lab_that_exists_and_a_name_that_cannot_be_one(course, arguments, says):
-    before = sorted(p for p in course.rglob("*") if "__pycache__" not in p.parts)
-    refused = run(course, "-m", "autograder", "new", *arguments)
-    assert refused.returncode == 1 and says in refused.stderr, refused.stderr
-    assert sorted(p for p in course.rglob("*") if "__pycache__" not in p.parts) == before
+def test_new_refuses_a_lab_that_exists_and_a_name_that_cannot_be_one(lab, topic, says):
+    found = refusals(lab, topic)
+    assert (says in " ".join(found)) if says else found == [], found
+
+
+def test_new_refuses_a_lab_it_has_added_and_writes_nothing(course):
+    before = {p: p.stat().st_mtime_ns for p in course.rglob("*") if "__pycache__" not in p.parts}
+    refused = run(course, "-m", "autograder", "new", NEW)
+    assert refused.returncode == 1
+    assert refused.stderr.strip() == (f"new: The lab {NEW} exists already (source/{NEW}/, solutions/parcel_scales/ or "
+                                      "tests/test_parcel_scales_reference.py). "
+                                      f"due_dates.toml or README's table of the labs has {NEW} already. course/parcel_scales.py "
+                                      "exists already: name the new lab's course module with --topic.")
+    assert {p: p.stat().st_mtime_ns for p in course.rglob("*") if "__pycache__" not in p.parts} == before
 
 
 def test_build_names_each_cell_that_fails_by_its_line_in_the_draft(tmp_path):
@@ -96,7 +106,8 @@ def test_build_names_each_cell_that_fails_by_its_line_in_the_draft(tmp_path):
     line = draft.read_text().splitlines().index('# %% nbgrader={"grade_id": "check_fuse", "locked": true}') + 1
     built = run(course, "-m", "autograder", "build", NEW)
     assert built.returncode == 1
-    assert ("1 problem in the cells of solutions/parcel_scales/draft.py" in built.stdout
+    assert ("2 problems in the cells of solutions/parcel_scales/draft.py" in built.stdout
             and f"  line {line}, cell check_fuse: AssertionError: x for fuse(10, 1, 20, 4) is not right: expected 13 "
-                "but got 12." in built.stdout), built.stdout
+                "but got 12." in built.stdout
+            and "cell test_fuse: AssertionError: fuse does not pass its visible checks yet." in built.stdout), built.stdout
     assert not (course / "release" / NEW).exists(), "a notebook that fails is not released"

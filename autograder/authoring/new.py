@@ -17,8 +17,7 @@ from pathlib import Path
 
 import jinja2
 
-from autograder.labs import ROOT, Lab
-from autograder.pipeline import late
+from autograder.labs import DUE_DATES, ROOT, Lab
 
 TEMPLATES = Path(__file__).parent / "template"
 LAB_ID = re.compile(r"[a-z][a-z0-9]*(?:-[a-z0-9]+)*")
@@ -32,6 +31,8 @@ DUE_AFTER = timedelta(weeks=2)
 SUMMARY = "the template lab: a parcel's mass from readings of two scales, fused by their precisions"
 """The new lab's topic in README's table, until the maintainer writes the lab's own."""
 NO_HANDOUT = "none: an original lab"
+TEMPLATE = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES), undefined=jinja2.StrictUndefined,
+                              keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True)
 
 
 def readme_labs() -> list[str]:
@@ -43,7 +44,7 @@ def readme_labs() -> list[str]:
 
 def _due_dates() -> dict[str, datetime]:
     """Lab id -> due date, as ``due_dates.toml`` has them (labs not built yet too)."""
-    return tomllib.loads(late.DUE_DATES.read_text())["due"]
+    return tomllib.loads(DUE_DATES.read_text())["due"]
 
 
 def refusals(lab_id: str, topic: str) -> list[str]:
@@ -52,8 +53,10 @@ def refusals(lab_id: str, topic: str) -> list[str]:
         return [f"'{lab_id}' is not a lab id: lower-case words of letters and digits joined by hyphens, starting "
                 "with a letter, such as scalar-kf."]
     lab, found = Lab(lab_id), []
-    if lab.source_notebook.parent.exists() or lab.hidden_folder.exists():
-        found.append(f"The lab {lab_id} exists already (source/{lab_id}/ or solutions/{lab.module}/).")
+    reference_tests = ROOT / "tests" / f"test_{lab.module}_reference.py"
+    if lab.source_notebook.parent.exists() or lab.hidden_folder.exists() or reference_tests.exists():
+        found.append(f"The lab {lab_id} exists already (source/{lab_id}/, solutions/{lab.module}/ or "
+                     f"{reference_tests.relative_to(ROOT)}).")
     if lab_id in _due_dates() or lab_id in readme_labs():
         found.append(f"due_dates.toml or README's table of the labs has {lab_id} already.")
     if not topic.isidentifier() or not topic.islower() or keyword.iskeyword(topic):
@@ -63,21 +66,15 @@ def refusals(lab_id: str, topic: str) -> list[str]:
     return found
 
 
-def _render(template: str, lab: Lab, topic: str, data: bool) -> str:
-    environment = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES), undefined=jinja2.StrictUndefined,
-                                     keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True)
-    return environment.get_template(template).render(lab=lab.id, module=lab.module, topic=topic, data=data)
-
-
 def _add_due_date(lab: Lab) -> None:
     """Give the lab a due date in ``due_dates.toml``, DUE_AFTER after the last one, in its time zone."""
     due = f"{lab.id} = {(max(_due_dates().values()) + DUE_AFTER).isoformat()}\n"
-    lines = late.DUE_DATES.read_text().splitlines(keepends=True)
+    lines = DUE_DATES.read_text().splitlines(keepends=True)
     start = lines.index("[due]\n") + 1
     end = next((i for i in range(start, len(lines)) if lines[i].startswith("[")), len(lines))
     while end > start and not lines[end - 1].strip():
         end -= 1
-    late.DUE_DATES.write_text("".join(lines[:end] + [due] + lines[end:]))
+    DUE_DATES.write_text("".join(lines[:end] + [due] + lines[end:]))
 
 
 def _add_readme_row(lab: Lab) -> None:
@@ -107,7 +104,7 @@ def new_lab(lab_id: str, topic: str | None = None, data: bool = False) -> list[P
         files[ROOT / "tests" / f"test_{lab.module}_reference.py"] = "test_reference.py.j2"
     lab.hidden_folder.mkdir(parents=True)
     for path, template in files.items():
-        path.write_text(_render(template, lab, topic, data))
+        path.write_text(TEMPLATE.get_template(template).render(lab=lab.id, module=lab.module, topic=topic, data=data))
     _add_due_date(lab)
     _add_readme_row(lab)
-    return [*files, late.DUE_DATES, README]
+    return [*files, DUE_DATES, README]
