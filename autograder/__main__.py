@@ -16,17 +16,6 @@ def build_parser() -> argparse.ArgumentParser:
     """The command line: one subcommand per step of the pipeline, each argument with its help."""
     parser = argparse.ArgumentParser(prog="python -m autograder", description=__doc__)
     commands = parser.add_subparsers(dest="command", required=True)
-    new = commands.add_parser("new", help="write the files of a new lab from the template lab, which passes every "
-                              "test once built: its draft notebook and hidden code (solutions/<module>/), its course "
-                              "module, its due date and its row in README's table of the labs")
-    new.add_argument("lab", help="the new lab's id: lower-case words joined by hyphens, e.g. scalar-kf")
-    new.add_argument("--topic", help="name its course module course/TOPIC.py for what it holds (default: the lab's "
-                     "module name, e.g. scalar_kf)")
-    new.add_argument("--data", action="store_true", help="the lab ships data: a seeded build (write_data) in its "
-                     "reference, load() in its course module, and a test that the shipped data are a fresh build")
-    build = commands.add_parser("build", help="make a lab's source notebook from its draft (solutions/<module>/draft.py), "
-                                "run it, name each cell that fails, release it and list what it holds")
-    build.add_argument("lab", help="the lab's id, e.g. scalar-kf")
     commands.add_parser("labs", help="list each lab's blanks by name with their points and catalogued mistakes, and the claims the lab checks")
     commands.add_parser("release", help="generate release/<lab>/ for every lab with nbgrader, then check it for leaks")
     bundle = commands.add_parser("bundle", help="write the solution-free tree that students get, and check it for leaks")
@@ -59,6 +48,17 @@ def build_parser() -> argparse.ArgumentParser:
     similarity.add_argument("folder", type=Path, help="a SUBMISSIONS folder, or a course folder that has submitted/")
     similarity.add_argument("--threshold", type=float, default=0.8, help="list pairs scoring at least this (1 = identical; default 0.8)")
     similarity.add_argument("--out", type=Path, default=None, help="also write the pairs to this CSV")
+    new = commands.add_parser("new", help="write the files of a new lab from the template lab, which passes every "
+                              "test once built: its draft notebook and hidden code (solutions/<module>/), its course "
+                              "module, its due date and its row in README's table of the labs")
+    new.add_argument("lab", help="the new lab's id: lower-case words joined by hyphens, e.g. scalar-kf")
+    new.add_argument("--topic", help="name its course module course/TOPIC.py for what it holds (default: the lab's "
+                     "module name, e.g. scalar_kf)")
+    new.add_argument("--data", action="store_true", help="the lab ships data: a seeded build (write_data) in its "
+                     "reference, load() in its course module, and a test that the shipped data are a fresh build")
+    build = commands.add_parser("build", help="make a lab's source notebook from its draft (solutions/<module>/draft.py), "
+                                "run it, name each cell that fails, release it and list what it holds")
+    build.add_argument("lab", help="the lab's id, e.g. scalar-kf")
     return parser
 
 

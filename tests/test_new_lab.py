@@ -66,6 +66,9 @@ def test_new_writes_a_lab_that_build_turns_into_one_that_passes_the_tests_of_a_l
     assert (course / "course" / "data" / "parcel_data.csv").exists() and (course / "tests" / "test_parcel_data_reference.py").exists()
     due = tomllib.loads((course / "due_dates.toml").read_text())["due"]
     assert due[WITH_DATA] > due[NEW] > due["nonlinear-filters"]
+    stale = run(course, "-c", "from autograder.labs import Lab; from autograder.release import data; "
+                f"print(data.stale_files([Lab('{NEW}'), Lab('{WITH_DATA}')]))")
+    assert stale.stdout.strip() == "[]", stale.stdout + stale.stderr  # data are optional; the shipped file is fresh
     tested = run(course, "-m", "pytest", "-q", "-p", "no:randomly", "--lab", NEW, "--lab", WITH_DATA, *LAB_TESTS,
                  "tests/test_parcel_data_reference.py", f"source/{NEW}", f"source/{WITH_DATA}", "--nbval-lax")
     assert tested.returncode == 0, tested.stdout[-5000:]
