@@ -38,9 +38,8 @@ def pytest_generate_tests(metafunc):
 
 def _chosen(request) -> tuple[list, list]:
     """The module's CASES and HONEST, of the labs that ``pytest --lab`` chose."""
-    config = request.config
-    return ([(lab, cheat) for lab, cheat in request.module.CASES if chosen(config, lab)],
-            [lab for lab in request.module.HONEST if chosen(config, lab)])
+    return ([(lab, cheat) for lab, cheat in request.module.CASES if chosen(request.config, [lab])],
+            chosen(request.config, request.module.HONEST))
 
 
 def _write(cases, honest, folder):

@@ -2,6 +2,8 @@
 ``pytest --lab`` (conftest.py at the root): a fixture that grades labs grades only the ``chosen``
 ones, and ``about`` marks a test that concerns labs without being parametrized by one."""
 
+from collections.abc import Iterable
+
 import pytest
 
 from autograder.labs import Lab, all_labs
@@ -10,10 +12,10 @@ LABS = all_labs()
 over_labs = pytest.mark.parametrize("lab", LABS, ids=[lab.id for lab in LABS])
 
 
-def chosen(config: pytest.Config, lab: Lab) -> bool:
-    """Whether ``pytest --lab`` chose ``lab`` (without --lab, every lab is chosen)."""
+def chosen(config: pytest.Config, labs: Iterable[Lab]) -> list[Lab]:
+    """The labs of ``labs`` that ``pytest --lab`` chose (without --lab, all of them)."""
     wanted = config.getoption("lab")
-    return not wanted or lab.id in wanted
+    return [lab for lab in labs if not wanted or lab.id in wanted]
 
 
 def about(*labs: Lab) -> pytest.MarkDecorator:

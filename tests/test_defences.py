@@ -126,8 +126,8 @@ def runs(course: Path, listening, pytestconfig) -> dict[str, NotebookNode | Exce
     """Every notebook these tests need (of the labs that ``pytest --lab`` chose), graded once by the
     execute step, two at a time."""
     jobs: dict[str, tuple[NotebookNode, Lab]] = {}
-    train = chosen(pytestconfig, TRAIN)
-    for lab in (lab for lab in LABS if chosen(pytestconfig, lab)):
+    train = chosen(pytestconfig, [TRAIN])
+    for lab in chosen(pytestconfig, LABS):
         solved = sanitized(submissions.solved(lab), lab, course)
         if lab == TRAIN:
             solved.cells.append(nbformat.v4.new_code_cell(REACH.replace("ROOT", str(ROOT)).replace("COURSE", str(course)).replace("PORT", str(listening[0]))))
@@ -135,8 +135,9 @@ def runs(course: Path, listening, pytestconfig) -> dict[str, NotebookNode | Exce
         jobs[f"blank/{lab.id}"] = trimmed(sanitized(cells.read(lab.release_notebook), lab, course), lab), lab
     for cheat in DEFEATED if train else ():
         jobs[f"cheat/{cheat.name}/{TRAIN.id}"] = trimmed(sanitized(cheat.notebook(TRAIN), TRAIN, course), TRAIN), TRAIN
-    for lab, name in (case for case in OTHER_LAB_CASES if chosen(pytestconfig, case[0])):
-        jobs[f"cheat/{name}/{lab.id}"] = trimmed(sanitized(cheats.get(name).notebook(lab), lab, course), lab), lab
+    for lab, name in OTHER_LAB_CASES:
+        if chosen(pytestconfig, [lab]):
+            jobs[f"cheat/{name}/{lab.id}"] = trimmed(sanitized(cheats.get(name).notebook(lab), lab, course), lab), lab
     for cheat in OVERWRITE_CHEATS if train else ():
         jobs[f"overwrite/{cheat.name}"] = trimmed(sanitized(cheat.notebook(TRAIN), TRAIN, course), TRAIN), TRAIN
     before = (course / "gradebook.db").read_bytes()
