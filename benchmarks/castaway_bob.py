@@ -29,7 +29,7 @@ if str(ROOT) not in sys.path:  # run as a script from anywhere
     sys.path.insert(0, str(ROOT))
 
 from course import ocean  # noqa: E402
-from solutions import castaway_bob as ref  # noqa: E402
+from solutions.castaway_bob import reference as ref  # noqa: E402
 from solutions.castaway_bob import flow as castaway_bob_flow  # noqa: E402
 
 SEED = 2024

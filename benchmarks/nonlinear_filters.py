@@ -13,7 +13,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from course import air_traffic  # noqa: E402
-from solutions import nonlinear_filters as ref  # noqa: E402
+from solutions.nonlinear_filters import reference as ref  # noqa: E402
 
 
 def _time(runs: int, filters: tuple[str, ...]) -> tuple[float, float]:

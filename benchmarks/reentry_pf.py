@@ -35,7 +35,7 @@ if str(ROOT) not in sys.path:  # run as a script from anywhere
 
 from course import falling_object  # noqa: E402
 from course.falling_object import DT, ETA, GAMMA, INNOVATION_STD, SIGMA, G  # noqa: E402
-from solutions import reentry_pf  # noqa: E402
+from solutions.reentry_pf import reference as reentry_pf  # noqa: E402
 
 Step = Callable[[np.ndarray, np.ndarray, float, np.random.Generator], tuple[np.ndarray, np.ndarray]]
 

@@ -13,7 +13,7 @@ from pathlib import Path
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from course import starship  # noqa: E402
-from solutions import reentry_srekf as ref  # noqa: E402
+from solutions.reentry_srekf import reference as ref  # noqa: E402
 
 
 def main(repeats: int = 5) -> float:

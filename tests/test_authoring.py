@@ -84,7 +84,8 @@ def test_a_notebook_that_differs_from_its_draft_is_named_by_cell(tmp_path):
     assert draft_differences(draft, nb) == []
     nb.cells[2].source = nb.cells[2].source.replace("2 * x", "x + x")
     cells.meta(nb.cells[3])["points"] = 3
-    assert draft_differences(draft, nb) == ["cell double differs", "cell test-double differs"]
+    nb.metadata.kernelspec.name = "python2"
+    assert draft_differences(draft, nb) == ["the kernel is not python3", "cell double differs", "cell test-double differs"]
     del nb.cells[0]
-    assert draft_differences(draft, nb) == [
+    assert draft_differences(draft, nb) == ["the kernel is not python3",
         "the draft has the cells ['cell-0', 'setup', 'double', 'test-double'], the notebook ['setup', 'double', 'test-double']"]
