@@ -48,13 +48,45 @@ def build_parser() -> argparse.ArgumentParser:
     similarity.add_argument("folder", type=Path, help="a SUBMISSIONS folder, or a course folder that has submitted/")
     similarity.add_argument("--threshold", type=float, default=0.8, help="list pairs scoring at least this (1 = identical; default 0.8)")
     similarity.add_argument("--out", type=Path, default=None, help="also write the pairs to this CSV")
+    new = commands.add_parser("new", help="write the files of a new lab from the template lab, which passes every "
+                              "test once built: its draft notebook and hidden code (solutions/<module>/), its course "
+                              "module, its due date and its row in README's table of the labs")
+    new.add_argument("lab", help="the new lab's id: lower-case words joined by hyphens, e.g. scalar-kf")
+    new.add_argument("--topic", help="name its course module course/TOPIC.py for what it holds (default: the lab's "
+                     "module name, e.g. scalar_kf)")
+    new.add_argument("--data", action="store_true", help="the lab ships data: a seeded build (write_data) in its "
+                     "reference, load() in its course module, and a test that the shipped data are a fresh build")
+    build = commands.add_parser("build", help="make a lab's source notebook from its draft (solutions/<module>/draft.py), "
+                                "run it, name each cell that fails, release it and list what it holds")
+    build.add_argument("lab", help="the lab's id, e.g. scalar-kf")
     return parser
 
 
 def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
 
-    if args.command == "labs":
+    if args.command == "new":
+        from autograder.authoring.new import new_lab
+
+        try:
+            written = new_lab(args.lab, args.topic, args.data)
+        except ValueError as error:
+            print(f"new: {error}", file=sys.stderr)
+            return 1
+        print("\n".join(f"wrote {path.relative_to(ROOT)}" for path in written))
+        print(f"Next: `python -m autograder build {args.lab}`, then edit the lab (its draft first: "
+              f"solutions/{args.lab.replace('-', '_')}/draft.py), build it again and run `python -m pytest --lab "
+              f"{args.lab}` (docs/adding-a-lab.md).")
+    elif args.command == "build":
+        from autograder.authoring.build import build_lab
+        from autograder.labs import Lab
+
+        try:
+            return 0 if build_lab(Lab(args.lab)) else 1
+        except FileNotFoundError as error:
+            print(f"build: {error}", file=sys.stderr)
+            return 1
+    elif args.command == "labs":
         from autograder.authoring.inventory import print_inventory
         from autograder.labs import all_labs
 

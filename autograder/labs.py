@@ -9,6 +9,8 @@ from types import ModuleType
 
 ROOT = Path(__file__).resolve().parent.parent
 """The course root: the repository, and nbgrader's course directory."""
+DUE_DATES = ROOT / "due_dates.toml"
+"""Each lab's due date (``autograder/pipeline/late.py`` reads them)."""
 
 
 @dataclass(frozen=True)
@@ -38,6 +40,14 @@ class Lab:
         """``solutions/<module>/``: the lab's hidden code, edited together (the reference, its hidden
         tests, the catalogued mistakes, the checks of the lab's claims)."""
         return ROOT / "solutions" / self.module
+
+    @property
+    def draft(self) -> Path:
+        """``solutions/<module>/draft.py``: the notebook as text, in jupytext's percent format, from which
+        ``python -m autograder build`` makes the source notebook (labs made before drafts have none). It
+        holds the model answers and hidden tests, so it is kept with the hidden code, never in ``source/``,
+        whose other files nbgrader copies into the student release."""
+        return self.hidden_folder / "draft.py"
 
     def hidden_module(self, name: str) -> ModuleType:
         """One module of the lab's hidden code: ``solutions.<module>.<name>`` (``reference``,

@@ -7,7 +7,8 @@ Each cheat earns nothing for the blanks it games, and each that the integrity ch
 flagged with its reason, on its feedback page too; the honest submissions keep full marks; and a
 sample of the cheats graded again in a new course comes out the same in every field. A test file
 sets ``CASES`` ((lab, cheat) pairs) and ``HONEST`` (labs whose solved notebook is graded alongside),
-and imports everything here (``__all__``).
+marks its tests ``about`` those labs (tests/over_labs.py), and imports everything here (``__all__``).
+With ``pytest --lab`` only the chosen labs' submissions are graded.
 """
 
 from __future__ import annotations
@@ -20,6 +21,7 @@ import pytest
 from autograder.pipeline import grading, nbgrader_apps
 from autograder.catalogues import submissions, synthetic_class
 from autograder.integrity.flag import FLAG
+from over_labs import chosen
 
 __all__ = ["graded", "pytest_generate_tests", "test_the_honest_submission_keeps_full_marks_and_is_not_flagged",
            "test_a_cheat_earns_nothing_for_what_it_games_and_is_flagged_when_caught",
@@ -34,6 +36,12 @@ def pytest_generate_tests(metafunc):
         metafunc.parametrize("lab", metafunc.module.HONEST, ids=[lab.id for lab in metafunc.module.HONEST])
 
 
+def _chosen(request) -> tuple[list, list]:
+    """The module's CASES and HONEST, of the labs that ``pytest --lab`` chose."""
+    return ([(lab, cheat) for lab, cheat in request.module.CASES if chosen(request.config, [lab])],
+            chosen(request.config, request.module.HONEST))
+
+
 def _write(cases, honest, folder):
     for lab in honest:
         submissions.write(submissions.solved(lab), folder, submissions.SOLVED, lab)
@@ -45,7 +53,7 @@ def _write(cases, honest, folder):
 def graded(request, tmp_path_factory):
     """The module's class graded two at a time: (student, lab) -> GradeRow, and the course folder."""
     class_dir = tmp_path_factory.mktemp("class")
-    _write(request.module.CASES, request.module.HONEST, class_dir)
+    _write(*_chosen(request), class_dir)
     workdir = tmp_path_factory.mktemp("course")
     rows = grading.grade(class_dir, workdir, jobs=2)
     return {(row.student, row.lab): row for row in rows}, workdir
@@ -65,7 +73,7 @@ def test_the_feedback_shows_each_flag_as_written(graded, request):
     rows, workdir = graded
     flagged = [row for row in rows.values() if row.flags]
     assert flagged
-    if any(cheat.name == "dunder-import-reference" for _, cheat in request.module.CASES):
+    if any(cheat.name == "dunder-import-reference" for _, cheat in _chosen(request)[0]):
         assert any("__import__" in flag for row in flagged for flag in row.flags)
     for row in flagged:
         page = nbgrader_apps.feedback_page(workdir, row.lab, row.student).read_text()
@@ -78,7 +86,7 @@ def test_regrading_cheats_gives_every_field_again(graded, request, tmp_path):
     """One cheat of each way of being caught (the static scan, the grader's comparison, the sandbox,
     the sanitize step, the hidden tests), graded again in a new course: every field of its row
     (cells, penalty, notes with the flags, reasons) is the same."""
-    cases = request.module.CASES
+    cases = _chosen(request)[0]
     ways = sorted({way for _, cheat in cases for way in cheat.caught_by})
     again_cases = []
     for way in ways:  # the first cheat caught that way, preferring one caught only that way

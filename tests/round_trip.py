@@ -9,7 +9,8 @@ every feedback page hides the hidden tests, and regrading gives every cell again
 The labs are dealt into two halves of about as many submissions each (so that a new lab lands in
 one of them without an edit), so that `pytest -n 2 --dist loadfile` grades the two halves on two
 workers at once. A test file sets ``HALF`` and imports everything here (``__all__``): the tests,
-the ``graded`` fixture, and the hook that parametrizes ``lab`` over its half.
+the ``graded`` fixture, and the hook that parametrizes ``lab`` over its half; it marks its tests
+``about(*HALF)`` (tests/over_labs.py), and with ``pytest --lab`` the fixtures grade the chosen labs only.
 """
 
 from __future__ import annotations
@@ -28,7 +29,7 @@ from autograder.labs import Lab
 from autograder.catalogues.mistakes import catalogue
 from course.checks import NOT_WRITTEN
 from gradebook_sql import csv_disagreements, read_csv, sheets
-from over_labs import LABS
+from over_labs import LABS, chosen
 
 
 
@@ -58,11 +59,11 @@ def pytest_generate_tests(metafunc):
 
 @pytest.fixture(scope="module")
 def graded(request, tmp_path_factory) -> tuple[dict[tuple[str, str], GradeRow], Path]:
-    """The demo class of the module's half of the labs, graded two at a time as `demo` does:
-    (student, lab) -> GradeRow, and the course folder."""
+    """The demo class of the module's half of the labs (those of them that ``pytest --lab`` chose),
+    graded two at a time as `demo` does: (student, lab) -> GradeRow, and the course folder."""
     folder = tmp_path_factory.mktemp("round-trip")
     class_dir, workdir = folder / "class", folder / "course"
-    submissions.write_class(request.module.HALF, class_dir)
+    submissions.write_class(chosen(request.config, request.module.HALF), class_dir)
     rows = grading.grade(class_dir, workdir, jobs=2)
     return {(row.student, row.lab): row for row in rows}, workdir
 
@@ -122,7 +123,7 @@ def test_feedback_shows_messages_but_not_hidden_tests(graded) -> None:
 def test_regrading_gives_every_cell_again(graded, request, tmp_path) -> None:
     """The solved notebook and one catalogued mistake of each lab, graded again in a new course:
     every field of every row (cells, maxima, penalty, notes, reasons) comes out the same."""
-    rows, labs, class_dir = graded[0], request.module.HALF, tmp_path / "class"
+    rows, labs, class_dir = graded[0], chosen(request.config, request.module.HALF), tmp_path / "class"
     picked = {(submissions.SOLVED, lab): submissions.solved(lab) for lab in labs}
     picked |= {(m.student_id(lab), lab): submissions.with_mistake(lab, m) for lab in labs for m in catalogue(lab)[:1]}
     for (student, lab), nb in picked.items():

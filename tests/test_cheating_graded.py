@@ -4,7 +4,9 @@ tests/cheating_graded.py; the other labs' cheats are graded in tests/test_cheati
 from autograder.catalogues import cheats
 from autograder.labs import get_lab
 from cheating_graded import *  # noqa: F401,F403 (the tests, the graded fixture, the parametrization)
+from over_labs import about
 
 TRAIN = get_lab("train-kf")
 CASES = [(TRAIN, cheat) for cheat in cheats.catalogue(TRAIN)]
 HONEST = [TRAIN]
+pytestmark = about(TRAIN)

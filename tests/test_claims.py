@@ -8,11 +8,13 @@ whose sentence was deleted, or a sentence whose check was never written, fails h
 import pytest
 
 from autograder.authoring import claims
-from autograder.labs import ROOT, all_labs
+from autograder.labs import ROOT, Lab, all_labs
+from over_labs import about
 
 LABS = {lab.id: lab for lab in all_labs()}
 CHECKS = {cid: c for lab in LABS.values() for cid, c in claims.checks(lab).items()}
 MARKERS = claims.all_markers()
+pytestmark = about(*LABS.values())
 
 
 def test_every_claims_module_belongs_to_a_lab():
@@ -47,11 +49,12 @@ def test_every_check_says_what_it_verifies():
     assert not silent, f"claim checks without a docstring: {silent}"
 
 
-@pytest.mark.parametrize("claim_id", sorted(CHECKS))
-def test_claim_holds(claim_id):
+@pytest.mark.parametrize("lab, claim_id", [(Lab(CHECKS[cid].lab), cid) for cid in sorted(CHECKS)], ids=sorted(CHECKS))
+def test_claim_holds(lab, claim_id):
     CHECKS[claim_id].check()
 
 
+@about()
 def test_the_marker_pattern_and_the_rate_helper():
     text = "The band narrows. <!-- claim: train-kf/band-narrows --> And <!--claim:reentry-pf/x-2-->."
     assert claims.markers_in(text) == ["train-kf/band-narrows", "reentry-pf/x-2"]

@@ -34,7 +34,7 @@ from autograder import cells
 from autograder.catalogues import cheats, submissions
 from autograder.labs import ROOT, Lab, get_lab
 from defended_runs import graded_run, sanitized
-from over_labs import LABS, over_labs
+from over_labs import LABS, about, chosen, over_labs
 
 TRAIN = get_lab("train-kf")
 DEFEATED = [c for c in cheats.catalogue(TRAIN) if c.caught_by & {cheats.GRADER, cheats.SANDBOX}]
@@ -131,20 +131,23 @@ def course(tmp_path_factory) -> Path:
 
 
 @pytest.fixture(scope="module")
-def runs(course: Path, listening) -> dict[str, NotebookNode | Exception]:
-    """Every notebook these tests need, graded once by the execute step, two at a time."""
+def runs(course: Path, listening, pytestconfig) -> dict[str, NotebookNode | Exception]:
+    """Every notebook these tests need (of the labs that ``pytest --lab`` chose), graded once by the
+    execute step, two at a time."""
     jobs: dict[str, tuple[NotebookNode, Lab]] = {}
-    for lab in LABS:
+    train = chosen(pytestconfig, [TRAIN])
+    for lab in chosen(pytestconfig, LABS):
         solved = sanitized(submissions.solved(lab), lab, course)
         if lab == TRAIN:
             solved.cells.append(nbformat.v4.new_code_cell(REACH.replace("ROOT", str(ROOT)).replace("COURSE", str(course)).replace("PORT", str(listening[0]))))
         jobs[f"solved/{lab.id}"] = solved, lab
         jobs[f"blank/{lab.id}"] = trimmed(sanitized(cells.read(lab.release_notebook), lab, course), lab), lab
-    for cheat in DEFEATED:
+    for cheat in DEFEATED if train else ():
         jobs[f"cheat/{cheat.name}/{TRAIN.id}"] = trimmed(sanitized(cheat.notebook(TRAIN), TRAIN, course), TRAIN), TRAIN
     for lab, name in OTHER_LAB_CASES:
-        jobs[f"cheat/{name}/{lab.id}"] = trimmed(sanitized(cheats.get(name).notebook(lab), lab, course), lab), lab
-    for cheat in OVERWRITE_CHEATS:
+        if chosen(pytestconfig, [lab]):
+            jobs[f"cheat/{name}/{lab.id}"] = trimmed(sanitized(cheats.get(name).notebook(lab), lab, course), lab), lab
+    for cheat in OVERWRITE_CHEATS if train else ():
         jobs[f"overwrite/{cheat.name}"] = trimmed(sanitized(cheat.notebook(TRAIN), TRAIN, course), TRAIN), TRAIN
     before = (course / "gradebook.db").read_bytes()
     with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn")) as pool:
@@ -160,6 +163,7 @@ def test_the_solved_notebook_scores_full_marks_and_the_blank_nothing(runs, lab):
     assert set(scores(runs[f"blank/{lab.id}"]).values()) == {0}
 
 
+@about(TRAIN)
 def test_the_grading_kernel_cannot_reach_the_reference_the_course_or_the_network(runs, listening):
     """Each of these would work in an unsandboxed kernel (tests/test_sandbox.py shows it with the
     sandbox off): the import, the reads, the connection to a server on the loopback."""
@@ -174,6 +178,7 @@ def test_the_grading_kernel_cannot_reach_the_reference_the_course_or_the_network
     assert listening[1] == [], "the kernel connected to the test's server"
 
 
+@about(TRAIN)
 @pytest.mark.parametrize("cheat", DEFEATED, ids=[c.name for c in DEFEATED])
 def test_a_cheat_gains_nothing_without_the_scan(runs, cheat):
     """The blank it tries to pass with a wrong answer, or with the reference's, scores 0."""
@@ -187,6 +192,7 @@ def test_cheats_gain_nothing_in_every_lab(runs, lab, name):
     assert scores(runs[f"cheat/{name}/{lab.id}"])[f"test_{cheats.target(lab)}"] == 0
 
 
+@about(*LABS)
 def test_nothing_was_written_outside_the_submission(runs, course):
     before, after = runs["gradebook-bytes"]
     assert before == after
@@ -198,6 +204,7 @@ def test_nothing_was_written_outside_the_submission(runs, course):
     assert [p for p in (course / "submitted" / "student").rglob("*") if p.is_symlink()] == []
 
 
+@about(TRAIN)
 @pytest.mark.parametrize("cheat", OVERWRITE_CHEATS, ids=[c.name for c in OVERWRITE_CHEATS])
 def test_nbgrader_restores_test_cells_and_the_wrong_blank_scores_zero(runs, cheat):
     # nbgrader 0.9.6 alone fails on a test cell retagged with an unknown grade_id (KeyError

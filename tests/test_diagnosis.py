@@ -18,10 +18,9 @@ import pytest
 from autograder import cells
 from autograder.hidden_tests import diagnosis
 from autograder.hidden_tests.diagnosis import LEAD, diagnose, diagnosed, mistake_function
-from autograder.labs import all_labs
 from autograder.catalogues.mistakes import Mistake, catalogue
 from lab_code import define, hidden_tests
-from over_labs import LABS, over_labs
+from over_labs import LABS, about, chosen, over_labs
 from random_draws import random_draws
 
 MINIMUM_RATE = 1.0
@@ -48,10 +47,10 @@ def _named(lab, blank: str, function) -> list[str]:
     return [m.slug for m in catalogue(lab) if m.blank == blank and m.hint in message]
 
 
-def _diagnoses() -> tuple[tuple[str, str, tuple[str, ...]], ...]:
-    """(lab id, mistake slug, slugs named in its message) for every catalogued mistake of every lab."""
+def _diagnoses(labs) -> tuple[tuple[str, str, tuple[str, ...]], ...]:
+    """(lab id, mistake slug, slugs named in its message) for every catalogued mistake of the labs."""
     rows = []
-    for lab in all_labs():
+    for lab in labs:
         answers = _answers(lab)
         for mistake in catalogue(lab):
             wrong = define(lab, mistake.apply(answers[mistake.blank]), mistake.blank)
@@ -59,13 +58,14 @@ def _diagnoses() -> tuple[tuple[str, str, tuple[str, ...]], ...]:
     return tuple(rows)
 
 
-def test_the_catalogue_is_diagnosed_by_name_and_never_falsely(monkeypatch):
-    """Over every lab's catalogue: no message names a mistake other than the one made, and at least
-    MINIMUM_RATE of the mistakes are named. What is measured is the diagnosis, not the machine's
+@about(*LABS)
+def test_the_catalogue_is_diagnosed_by_name_and_never_falsely(monkeypatch, pytestconfig):
+    """Over every lab's catalogue (every chosen lab's, with ``pytest --lab``): no message names a
+    mistake other than the one made, and at least MINIMUM_RATE of the mistakes are named. What is measured is the diagnosis, not the machine's
     speed: its time limits are lifted (in grading, a diagnosis that runs out of time is left out)."""
     monkeypatch.setattr(diagnosis, "BUDGET_S", 600.0)
     monkeypatch.setattr(diagnosis, "CELL_SHARE", 1e6)
-    rows = _diagnoses()
+    rows = _diagnoses(chosen(pytestconfig, LABS))
     false = [(lab, made, named) for lab, made, named in rows if any(made != f"{made.split('/')[0]}/{n}" for n in named)]
     right = [(lab, made) for lab, made, named in rows if named == (made.split("/")[1],)]
     missed = [(lab, made) for lab, made, named in rows if not named]

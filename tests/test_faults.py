@@ -10,10 +10,12 @@ from autograder.catalogues import faults, submissions, synthetic_class
 from autograder.pipeline import grading, nbgrader_apps
 from autograder.catalogues.faults import FAULTS
 from autograder.labs import get_lab
+from over_labs import about
 
 LAB = get_lab("train-kf")
 BLANK = "gain_information_form"
 """The blank that holds the faults: its visible checks and one demonstration cell call it too."""
+pytestmark = about(LAB)
 
 
 @pytest.fixture(scope="module")

@@ -15,13 +15,15 @@ from autograder.catalogues import submissions
 from autograder.pipeline.compare import ReferenceUnavailable
 from autograder.pipeline.execute import GradingExecute
 from autograder.labs import ROOT
-from over_labs import LABS
+from over_labs import LABS, about
 from round_trip import *  # noqa: F401,F403 (the tests, the graded fixture, the lab parametrization)
 from round_trip import HALVES
 
 HALF = HALVES[0]
+pytestmark = about(*HALF)
 
 
+@about()
 def test_grading_refuses_to_start_without_the_reference(tmp_path, monkeypatch):
     """A hidden test that the grader's process cannot import stops the submission before any kernel
     starts (otherwise every hidden test would fail and nbgrader would still report success)."""
@@ -36,6 +38,7 @@ def test_grading_refuses_to_start_without_the_reference(tmp_path, monkeypatch):
     assert started == []
 
 
+@about()
 def test_plain_nbgrader_autogrades_from_the_course_root(tmp_path):
     """`nbgrader generate_assignment` and `nbgrader autograde`, as an instructor types them, in a
     copy of the course root (so that the repository's own gradebook is left alone)."""

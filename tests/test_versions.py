@@ -55,14 +55,15 @@ def test_the_lock_pins_exactly_what_environment_txt_installs():
 
 
 def test_a_locked_package_that_environment_txt_does_not_install_is_no_difference(tmp_path, monkeypatch, capsys):
-    """The lock once pinned jupytext, which a maintainer had installed and environment.txt does not:
-    every environment installed as README says then warned 'differs from environment.lock: jupytext
-    None'. A locked package that is absent counts only if environment.txt installs it here."""
+    """The lock once pinned jupytext, which a maintainer had installed and environment.txt did not then:
+    every environment installed as README says warned 'differs from environment.lock: jupytext None'.
+    A locked package that is absent counts only if environment.txt installs it here."""
+    tool = "a-maintainers-own-tool"
     with pytest.raises(metadata.PackageNotFoundError):
-        metadata.version("jupytext")
-    assert "jupytext" not in versions.needed()
+        metadata.version(tool)
+    assert tool not in versions.needed()
     lock = tmp_path / "environment.lock"
-    lock.write_text(versions.LOCK.read_text() + "jupytext==1.19.6\n")
+    lock.write_text(versions.LOCK.read_text() + f"{tool}==1.0\n")
     # an environment installed from the lock, whatever the newest releases in environment.txt's ranges are today
     installed = {versions._canonical(name): version for name, version in versions.read_lock(versions.LOCK).items()}
     monkeypatch.setattr(versions, "_installed", lambda name: installed.get(versions._canonical(name)))

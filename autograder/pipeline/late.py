@@ -19,9 +19,8 @@ from nbgrader.plugins import BasePlugin
 from traitlets import Float
 from traitlets.config import Config
 
-from autograder.labs import ROOT, Lab, all_labs
+from autograder.labs import DUE_DATES, Lab, all_labs
 
-DUE_DATES = ROOT / "due_dates.toml"
 SECONDS_PER_DAY = 86400
 
 

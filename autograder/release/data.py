@@ -1,4 +1,6 @@
-"""Rebuilding the shipped data in ``course/data/`` (and its records) from each lab's seeded reference build."""
+"""Rebuilding the shipped data in ``course/data/`` (and its records) from each lab's seeded reference build.
+
+Data are optional: a lab ships data if its reference has ``write_data``."""
 
 from __future__ import annotations
 
@@ -20,6 +22,11 @@ RECORD_SUFFIX = ".records.npz"
 """How a built file's name ends when it is a record (kept in RECORDS_DIR), not data (kept in DATA_DIR)."""
 
 
+def ships_data(lab: Lab) -> bool:
+    """Whether the lab ships data: its reference has ``write_data(directory) -> list[Path]``."""
+    return hasattr(lab.reference(), "write_data")
+
+
 def build(lab: Lab, directory: Path) -> list[Path]:
     """Write a lab's data files (and records) into ``directory`` with ``solutions.<module>.reference.write_data``."""
     return lab.reference().write_data(directory)
@@ -32,10 +39,10 @@ def shipped_path(built: Path) -> Path:
 
 @contextmanager
 def _fresh_build(labs: list[Lab] | None) -> Iterator[list[Path]]:
-    """The files a fresh build of the labs (every lab by default) writes into a temporary folder,
-    which lasts as long as the ``with`` block."""
+    """The files a fresh build of the labs that ship data (of every lab by default) writes into a
+    temporary folder, which lasts as long as the ``with`` block."""
     with tempfile.TemporaryDirectory() as tmp:
-        yield [path for lab in labs or all_labs() for path in build(lab, Path(tmp))]
+        yield [path for lab in labs or all_labs() if ships_data(lab) for path in build(lab, Path(tmp))]
 
 
 def rebuild(labs: list[Lab] | None = None) -> list[Path]:
