@@ -4,12 +4,14 @@
 
 - hidden tests run in the grader's process, never in the student's kernel (autograder/compare.py):
   a test cell's visible part runs in the kernel, then its check runs here against the student's
-  function, which the kernel only calls; the grader refuses to start if it cannot import the checks
+  function, which the kernel only calls, in a forked child capped in memory and killed at the
+  cell's deadline (autograder/confined_check.py), with what the student's function printed kept
+  within the cell's output cap; the grader refuses to start if it cannot import the checks
   and the reference they compare with (without them every hidden test would fail and nbgrader
   would still report success);
 - caps on each kernel: address space (``memory_limit_gb``), time per cell (``timeout``, the visible
   part and the hidden test together), time for the whole notebook (``notebook_timeout``), and
-  output kept per cell (``max_output_bytes``);
+  output kept per cell (``max_output_bytes``: printed text, displayed data and results alike);
 - a kernel that does not start (on a loaded machine a start can take minutes) is started again,
   up to ``kernel_start_attempts`` times in all, rather than nbgrader dropping the submission;
 - recovery: when the kernel dies (``os._exit``, a crash, the memory cap) or a cell times out, the
@@ -23,6 +25,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import json
 import os
 import shutil
 import tempfile
@@ -36,7 +39,7 @@ from nbformat.v4 import new_output
 from nbgrader.preprocessors import Execute
 from traitlets import Float, Integer
 
-from autograder import cells, compare, sandbox
+from autograder import cells, compare, confined_check, sandbox
 from autograder.restore_cells import add_grader_notes
 
 TIMEOUT_ERROR = "CellTimeoutError"
@@ -49,15 +52,20 @@ class GradingExecute(Execute):
 
     memory_limit_gb = Float(4.0, help="Address-space cap of each grading kernel, GiB (0: none).").tag(config=True)
     notebook_timeout = Integer(300, help="Seconds for a whole submission; later cells are not run.").tag(config=True)
-    max_output_bytes = Integer(1_000_000, help="Text output kept per cell; the rest is dropped.").tag(config=True)
+    max_output_bytes = Integer(1_000_000, help="Output kept per cell (printed text, displayed data, results), in "
+                               "characters; the rest is dropped.").tag(config=True)
     max_restarts = Integer(12, help="Kernel restarts per submission before the rest is not run.").tag(config=True)
     kernel_start_attempts = Integer(3, help="Kernel starts tried before a submission is given up.").tag(config=True)
+
+    def _memory_bytes(self) -> int:
+        """The memory cap, in bytes, of each kernel and of each hidden test's check (0: none)."""
+        return int(max(0.0, self.memory_limit_gb) * 2**30)
 
     def _setup_code(self) -> list[tuple[str, str]]:
         """(what it is, code) run silently in every new kernel before any student cell."""
         steps = [("the grader's kernel-side module", compare.kernel_setup_code())]
         if self.memory_limit_gb > 0:
-            cap = int(self.memory_limit_gb * 2**30)
+            cap = self._memory_bytes()
             steps.append(("the memory cap", f"__import__('resource').setrlimit(__import__('resource').RLIMIT_AS, ({cap}, {cap}))"))
         return steps
 
@@ -179,7 +187,14 @@ class GradingExecute(Execute):
                 cell.outputs.append(compare.error_output("AssertionError", why_not))
             else:
                 try:
-                    cell.outputs += compare.run_check(peer, test, check, earlier)
+                    used = self._output_bytes.get(index, 0)
+                    outputs, printed = confined_check.run(
+                        lambda: compare.run_check(peer, test, check, earlier, max(0, self.max_output_bytes - used)),
+                        deadline, self._memory_bytes())
+                    cell.outputs += outputs
+                    self._output_bytes[index] = used + printed
+                    if used < self.max_output_bytes < used + printed:
+                        cell.outputs.append(self._kept_note())
                 except compare.KernelStopped:
                     if not self._finished_alive(msg_id):
                         raise DeadKernelError("Kernel died") from None
@@ -248,23 +263,40 @@ class GradingExecute(Execute):
         await self.async_start_new_kernel()
         await self.async_start_new_kernel_client()
 
-    def output(self, outs, msg, display_id, cell_index):
-        """Keep at most ``max_output_bytes`` of text output per cell, then say that the rest was cut."""
-        if msg["msg_type"] != "stream":
-            return super().output(outs, msg, display_id, cell_index)
+    def process_message(self, msg: dict, cell: NotebookNode, cell_index: int) -> NotebookNode | None:
+        """nbclient's handling of a kernel message, with each cell's output capped: printed text,
+        displayed data and results together keep at most ``max_output_bytes`` characters, then the
+        cell says that the rest was dropped (the rest of a text is cut, any later output dropped).
+        An error is always kept, its name, message and traceback lines cut to compare.MAX_MESSAGE_CHARS:
+        dropping it would turn a failing test cell into a passing one."""
+        kind, content = msg["msg_type"], msg["content"]
+        if kind == "error":
+            content = {**content, **{key: compare.cut(str(content.get(key, ""))) for key in ("ename", "evalue")},
+                       "traceback": [compare.cut(str(line)) for line in content.get("traceback", [])]}
+            return super().process_message({**msg, "content": content}, cell, cell_index)
+        if kind not in ("stream", "display_data", "execute_result", "update_display_data"):
+            return super().process_message(msg, cell, cell_index)
         used = self._output_bytes.get(cell_index, 0)
-        text = msg["content"]["text"]
-        self._output_bytes[cell_index] = used + len(text)
-        if used >= self.max_output_bytes:
-            return None
-        if used + len(text) > self.max_output_bytes:
-            msg = {**msg, "content": {**msg["content"], "text": text[: self.max_output_bytes - used]}}
-            out = super().output(outs, msg, display_id, cell_index)
-            outs.append(new_output("stream", name="stdout", text=(
-                f"\n[The grader kept the first {self.max_output_bytes:,} characters of this cell's output "
-                "and dropped the rest.]\n")))
-            return out
-        return super().output(outs, msg, display_id, cell_index)
+        if kind == "stream":
+            size = len(content.get("text", ""))
+        else:
+            size = len(json.dumps([content.get("data"), content.get("metadata")]))
+        self._output_bytes[cell_index] = used + size
+        if used + size <= self.max_output_bytes:
+            return super().process_message(msg, cell, cell_index)
+        out = None
+        if kind == "stream" and used < self.max_output_bytes:
+            msg = {**msg, "content": {**content, "text": content["text"][: self.max_output_bytes - used]}}
+            out = super().process_message(msg, cell, cell_index)
+        if used <= self.max_output_bytes:
+            cell.outputs.append(self._kept_note())
+        return out
+
+    def _kept_note(self) -> NotebookNode:
+        """The output that ends a cell's output when some of it was dropped."""
+        return new_output("stream", name="stdout", text=(
+            f"\n[The grader kept the first {self.max_output_bytes:,} characters of this cell's output "
+            "and dropped the rest.]\n"))
 
 
 @contextlib.contextmanager

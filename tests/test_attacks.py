@@ -1,0 +1,375 @@
+"""Attacks on grading that autograder/cheats.py does not list, graded as nbgrader grades them.
+
+A student who has read the kit's source (course/ and autograder/) tries to earn marks they did not,
+or to break grading for others: through the blanks the grader serves, the socket to the grader,
+the grader's memory and time, the size of what a cell outputs, processes that outlive the kernel,
+and symbolic links in a submission. Each graded run is a solved train-kf notebook with several
+attacks planted, run through the grading execute step with the course's configuration (the
+sandboxed kernel, hidden tests in the grader's process), each run in a fresh process whose peak
+memory is measured; README (What grading defends against) lists what each defence does.
+"""
+
+from __future__ import annotations
+
+import copy
+import errno
+import json
+import multiprocessing
+import os
+import resource
+import secrets
+import shutil
+import signal
+import subprocess
+import sys
+import tempfile
+import time
+from concurrent.futures import ProcessPoolExecutor
+from pathlib import Path
+
+import landlockpy
+import nbformat
+import pytest
+from nbformat import NotebookNode
+
+import solutions.train_kf as reference
+from autograder import cells, confined_check, grading, sandbox, submissions
+from autograder.compare import MAX_MESSAGE_CHARS, error_output
+from autograder.hidden import called_blanks
+from autograder.hidden_tests import train_kf
+from autograder.kernel_side import PeerTimeout
+from autograder.labs import get_lab
+from autograder.mistakes import catalogue
+from defended_runs import graded_run, sanitized
+from test_defences import scores, trimmed
+
+TRAIN = get_lab("train-kf")
+MAX_OUTPUT = 1_000_000
+"""The course's cap on each cell's output (nbgrader_config.py)."""
+GRADER_MEMORY = 600 * 2**20
+"""The most memory a grading process may hold at its peak in these runs (it holds about 250 MiB)."""
+SAFETY_MARGIN = 3 * 2**30
+"""How much a grading process here may grow before Python refuses it memory: without the defences,
+an attack would otherwise take the test machine's memory."""
+
+PEER = 'peer = __import__("sys")._getframe(1).f_locals["self"]  # the kernel side of the socket, from the stack'
+
+
+def _stub(blank: str, params: str, body: str) -> str:
+    return f"def {blank}({params}):\n" + "".join(f"    {line}\n" for line in body.strip("\n").splitlines())
+
+
+WIRE = {
+    # the served-blank attack: the student's own information form is wrong, and the covariance
+    # form returns it; the grader used to answer the call with the reference's information form
+    "gain_covariance_form": _stub("gain_covariance_form", "B, H, R", "return gain_information_form(B, H, R)"),
+    # a forged answer whose JSON header is nested 100,000 deep
+    "process_noise": _stub("process_noise", "sigma, dt_min=1.0", f"""
+{PEER}
+data = b'{{"op": "return", "value": ' + b'{{"t": "list", "items": [' * 100_000 + b']}}' * 100_000 + b'}}'
+peer.wire.sock.sendall(__import__("struct").pack("!QQ", len(data), 0) + data)
+"""),
+    # a correct predict that prints 3,000,000 characters in each call of the hidden test
+    "predict": _stub("predict", "x, B, A, Q", """
+print("x" * 3_000_000)
+return A @ x, A @ B @ A.T + Q
+"""),
+    # an exception whose message is 3,000,000 characters long
+    "kupdate": _stub("kupdate", "x_f, B_f, y, H, R", 'raise ValueError("y" * 3_000_000)'),
+    # a forged answer of 1,500 arrays that all point at one buffer of 1 MiB: 1.5 GiB once decoded
+    "nees": _stub("nees", "errors, covariances", f"""
+{PEER}
+node = {{"t": "array", "dtype": "<f8", "shape": [131072], "buffer": 0}}
+peer.wire.send({{"op": "return", "value": {{"t": "list", "items": [node] * 1500}}, "written": {{}}}}, [bytes(1 << 20)])
+"""),
+}
+"""train-kf answers that attack over the wire, by blank."""
+
+PROCESSES = '''import ctypes, os, signal, time
+from IPython.display import HTML, display
+
+libc = ctypes.CDLL(None, use_errno=True)
+found = {}
+def attempt(name, action):
+    try:
+        action()
+        found[name] = "ok"
+    except OSError as error:
+        found[name] = type(error).__name__
+def trace():
+    if libc.ptrace(16, os.getppid(), None, None) != 0:  # PTRACE_ATTACH
+        raise OSError(ctypes.get_errno(), "ptrace")
+attempt("signal the kernel's parent", lambda: os.kill(os.getppid(), 0))
+attempt("trace the kernel's parent", trace)
+attempt("read the parent's memory", lambda: open(f"/proc/{os.getppid()}/mem", "rb").read(1))
+attempt("list the processes", lambda: os.listdir("/proc"))
+attempt("write in /dev/shm", lambda: open("/dev/shm/kit-attack", "w").close())
+print(found)
+# a daemon: it leaves the kernel's process group and session, and ignores the signals of a shutdown
+if os.fork() == 0:
+    os.setsid()
+    if os.fork() == 0:
+        libc.prctl(15, b"NAME", 0, 0, 0)
+        for sig in (signal.SIGTERM, signal.SIGHUP, signal.SIGINT):
+            signal.signal(sig, signal.SIG_IGN)
+        time.sleep(600)
+    os._exit(0)
+os.wait()
+# displayed data, not printed text: 10 MB of it
+for _ in range(50):
+    display(HTML("<p>" + "z" * 200_000 + "</p>"))
+'''
+"""A cell added at the end: the kernel's reach over other processes, a daemon, and a display flood."""
+
+SERVED = {
+    # a hidden test that spins and ignores interrupts: the kernel is restarted, the rest graded
+    "predict": _stub("predict", "x, B, A, Q", """
+import signal
+signal.signal(signal.SIGINT, signal.SIG_IGN)
+while True:
+    pass
+"""),
+    # a gigantic answer: 960 MB, within what the wire carries
+    "gain_information_form": _stub("gain_information_form", "B, H, R", "return np.zeros(120_000_000)"),
+    # answers the kernel's side cannot send: a list that holds itself, and an integer of 5,000 digits
+    "nees": _stub("nees", "errors, covariances", "loop = []\nloop.append(loop)\nreturn loop"),
+    "process_noise": _stub("process_noise", "sigma, dt_min=1.0", "return 10**5000"),
+}
+"""train-kf answers for the run on the reference's cost and a stuck kernel, by blank."""
+
+BIG_CALL = ('''    if not _calls:  # the notebook's own list, which the copy of run_filter that the grader calls shares
+        _calls.append(1)
+        m = 6000
+        kupdate(np.zeros(1), np.eye(1), np.zeros(m), np.ones((m, 1)), 1.0)
+''', "    T, n = y.shape[0], x0.shape[0]\n")
+"""Lines put into run_filter before its first line of code: once per notebook, it calls the served
+kupdate with H of shape (6000, 1), a message of 100 kB that makes the reference build and solve a
+6000 x 6000 system, 1 GiB and seconds of work."""
+
+
+def _answer(nb: NotebookNode, blank: str) -> NotebookNode:
+    [cell] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == blank]
+    return cell
+
+
+def _planted(blank: str, slug: str, nb: NotebookNode) -> None:
+    """Plant the catalogued mistake ``slug`` of ``blank`` in ``nb``."""
+    [mistake] = [m for m in catalogue(TRAIN) if m.blank == blank and m.slug == slug]
+    cell = _answer(nb, blank)
+    cell.source = mistake.apply(cell.source)
+
+
+def wire_notebook(daemon: str) -> NotebookNode:
+    nb = copy.deepcopy(submissions.solved(TRAIN))
+    _planted("gain_information_form", "B-not-inverted", nb)
+    for blank, source in WIRE.items():
+        _answer(nb, blank).source = source
+    nb.cells.append(nbformat.v4.new_code_cell(PROCESSES.replace("NAME", daemon)))
+    return nb
+
+
+def served_notebook() -> NotebookNode:
+    nb = copy.deepcopy(submissions.solved(TRAIN))
+    for blank, source in SERVED.items():
+        _answer(nb, blank).source = source
+    cell = _answer(nb, "run_filter")
+    lines, first = BIG_CALL
+    assert first in cell.source
+    cell.source = "_calls = []\n\n\n" + cell.source.replace(first, lines + first)
+    return nb
+
+
+def graded_in_own_process(nb_json: str, course: str, timeout: int) -> tuple[str, int]:
+    """``nb_json`` after the execute step, with the cell timeout ``timeout``, and this process's
+    peak memory in bytes (it runs in a process of its own)."""
+    os.environ["GRADING_CELL_TIMEOUT"] = str(timeout)
+    size = int(open("/proc/self/statm").read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
+    resource.setrlimit(resource.RLIMIT_AS, (size + SAFETY_MARGIN, resource.getrlimit(resource.RLIMIT_AS)[1]))
+    graded = graded_run(nb_json, TRAIN.id, course)
+    return graded, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
+def daemons(name: str) -> list[int]:
+    """The processes named ``name`` on this machine."""
+    found = []
+    for entry in os.scandir("/proc"):
+        try:
+            if entry.name.isdigit() and Path(entry.path, "comm").read_text().strip() == name:
+                found.append(int(entry.name))
+        except OSError:
+            continue
+    return found
+
+
+@pytest.fixture(scope="module")
+def daemon_name():
+    """A name for the daemon of the wire run; any process of that name is killed afterwards."""
+    name = f"kit-{secrets.token_hex(4)}"
+    yield name
+    for pid in daemons(name):
+        os.kill(pid, signal.SIGKILL)
+
+
+@pytest.fixture(scope="module")
+def runs(tmp_path_factory, daemon_name) -> dict[str, tuple[NotebookNode, int]]:
+    """Each attack run, graded once: name -> (the graded notebook, the grader's peak memory)."""
+    course = tmp_path_factory.mktemp("course")
+    jobs = {"wire": (trimmed(sanitized(wire_notebook(daemon_name), TRAIN, course), TRAIN), 30),
+            "served": (trimmed(sanitized(served_notebook(), TRAIN, course), TRAIN), 15)}
+    with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn"), max_tasks_per_child=1) as pool:
+        futures = {name: pool.submit(graded_in_own_process, nbformat.writes(nb), str(course), timeout)
+                   for name, (nb, timeout) in jobs.items()}
+        done = {name: future.result() for name, future in futures.items()}
+    return {name: (nbformat.reads(graded, as_version=4), peak) for name, (graded, peak) in done.items()}
+
+
+def _test_cell(nb: NotebookNode, blank: str) -> NotebookNode:
+    [cell] = [c for c in nb.cells if cells.is_autograded_test(c) and cells.grade_id(c) == f"test_{blank}"]
+    return cell
+
+
+def _text(outputs) -> int:
+    """How many characters the outputs hold (text, data, error message and traceback)."""
+    return sum(len(json.dumps({k: v for k, v in o.items() if k != "output_type"})) for o in outputs)
+
+
+def test_a_blank_is_served_only_what_its_reference_calls():
+    """kupdate's reference calls gain_covariance_form, run_filter's calls predict and kupdate; the
+    covariance form calls no other blank, so a student's covariance form that calls the information
+    form gets the student's own."""
+    blanks = train_kf.BLANKS
+    assert called_blanks(reference, "kupdate", blanks) == {"gain_covariance_form"}
+    assert called_blanks(reference, "run_filter", blanks) == {"predict", "kupdate"}
+    assert called_blanks(reference, "gain_covariance_form", blanks) == frozenset()
+
+
+def test_a_blank_that_returns_another_blanks_answer_gets_the_students_own(runs):
+    """gain_covariance_form returns gain_information_form(B, H, R), which holds a catalogued
+    mistake: before the fix the grader answered that call with the reference, and the blank scored
+    full marks for work it did not do."""
+    got = scores(runs["wire"][0])
+    assert got["test_gain_information_form"] == 0 and got["test_gain_covariance_form"] == 0, got
+
+
+def test_forged_answers_and_floods_fail_their_own_test_and_the_grader_stays_small(runs):
+    """A forged answer that decodes to 1.5 GiB, and one nested 100,000 deep, fail their blank's
+    test and leave the grader's own memory alone (the check runs in a child capped in memory);
+    printed text, error messages and displayed data stay within the cell's output cap; the blank
+    that only printed a lot, and every untouched blank, keep their marks."""
+    nb, peak = runs["wire"]
+    assert scores(nb) == {"test_gain_information_form": 0, "test_gain_covariance_form": 0, "test_process_noise": 0,
+                          "test_predict": 1.0, "test_kupdate": 0, "test_run_filter": 2.0, "test_nees": 0}
+    assert peak < GRADER_MEMORY, f"the grader grew to {peak / 2**20:.0f} MiB"
+    predict = _test_cell(nb, "predict").outputs
+    assert MAX_OUTPUT < _text(predict) < MAX_OUTPUT + 1000 and "dropped the rest" in predict[-1].text
+    [error] = [o for o in _test_cell(nb, "kupdate").outputs if o.output_type == "error"]
+    assert error.ename == "ValueError" and len(error.evalue) < MAX_MESSAGE_CHARS + 100
+    assert "more characters cut by the grader" in error.evalue
+    assert [o.ename for o in _test_cell(nb, "nees").outputs if o.output_type == "error"] == ["AssertionError"]
+    assert [o.ename for o in _test_cell(nb, "process_noise").outputs if o.output_type == "error"] == ["RecursionError"]
+    added = nb.cells[-1].outputs
+    assert _text(added) < MAX_OUTPUT + 3000 and "dropped the rest" in added[-1].text
+    assert 0 < sum(o.output_type == "display_data" for o in added) < 50
+    assert len(nbformat.writes(nb)) < 8 * MAX_OUTPUT
+
+
+def test_the_kernel_reaches_no_other_process_and_none_of_its_processes_outlives_it(runs, daemon_name):
+    """The kernel cannot signal, trace or read its parent, list processes or write in shared memory
+    (/dev/shm, where another kernel could read it); a daemon it started
+    (its own session, shutdown signals ignored) dies with it: before the PID namespace it lived on
+    after grading, sandboxed but free to take the machine's CPU and memory from other jobs."""
+    nb, _ = runs["wire"]
+    printed = next(o.text for o in nb.cells[-1].outputs if o.output_type == "stream" and o.text.startswith("{"))
+    assert eval(printed) == {"signal the kernel's parent": "PermissionError",
+                             "trace the kernel's parent": "PermissionError",
+                             "read the parent's memory": "PermissionError", "list the processes": "PermissionError",
+                             "write in /dev/shm": "PermissionError"}
+    time.sleep(1)
+    assert daemons(daemon_name) == [], "a process the kernel started outlived it"
+
+
+def test_the_references_cost_on_the_students_inputs_stays_out_of_the_grader(runs):
+    """run_filter asks the served kupdate for a 6000 x 6000 solve (a message of 100 kB): the child
+    that runs the check pays for it, not the grader, and so it does for an answer of 960 MB. A
+    hidden test that spins with interrupts ignored times out, and a kernel whose answer cannot be
+    sent fails that test; both leave the other blanks graded."""
+    nb, peak = runs["served"]
+    got = scores(nb)
+    assert peak < GRADER_MEMORY, f"the grader grew to {peak / 2**20:.0f} MiB"
+    assert {k: v for k, v in got.items() if k != "test_run_filter"} == {
+        "test_gain_information_form": 0, "test_gain_covariance_form": 1.0, "test_process_noise": 0,
+        "test_predict": 0, "test_kupdate": 2.0, "test_nees": 0}
+    assert [o.ename for o in _test_cell(nb, "predict").outputs if o.output_type == "error"] == ["CellTimeoutError"]
+
+
+def test_a_check_that_crashes_or_hangs_stops_alone():
+    """The child that runs a check can die or hang without taking the grader with it."""
+    crashed, printed = confined_check.run(lambda: os.kill(os.getpid(), signal.SIGKILL), None, 0)
+    assert printed == 0 and [o.ename for o in crashed] == ["GradingError"] and "signal 9" in crashed[0].evalue
+    with pytest.raises(PeerTimeout):
+        confined_check.run(lambda: time.sleep(60), time.monotonic() + 0.5, 0)
+    outputs = [error_output("AssertionError", "wrong")]
+    assert confined_check.run(lambda: (outputs, 7), None, 2**30) == (outputs, 7)
+    with pytest.raises(confined_check.CheckFailed, match="MemoryError"):
+        confined_check.run(lambda: bytearray(2**31), None, 2**30)
+
+
+def test_a_symbolic_link_in_the_submissions_is_graded_as_empty(tmp_path):
+    """Submissions copied with their links (a git clone, rsync): Mallory's notebook is a link to the
+    course's solved source notebook, Eve's lab folder a link to Alice's. The grader followed both
+    and graded the solution and Alice's work as theirs; now both are graded as empty, with a note."""
+    submitted = tmp_path / "submissions"
+    (submitted / "alice" / TRAIN.id).mkdir(parents=True)
+    nbformat.write(submissions.solved(TRAIN), submitted / "alice" / TRAIN.id / TRAIN.notebook_name)
+    (submitted / "mallory" / TRAIN.id).mkdir(parents=True)
+    (submitted / "mallory" / TRAIN.id / TRAIN.notebook_name).symlink_to(TRAIN.source_notebook)
+    (submitted / "eve").mkdir()
+    (submitted / "eve" / TRAIN.id).symlink_to(submitted / "alice" / TRAIN.id)
+    work = tmp_path / "work"
+    assert grading.import_submissions(submitted, work, [TRAIN]) == {TRAIN.id: ["alice", "eve", "mallory"]}
+    release = [c.source for c in cells.read(TRAIN.release_notebook).cells if cells.is_code_answer(c)]
+    for student in ("mallory", "eve"):
+        nb = nbformat.read(work / "submitted" / student / TRAIN.id / TRAIN.notebook_name, as_version=4)
+        assert [c.source for c in nb.cells if cells.is_code_answer(c)] == release
+        assert "is a symbolic link" in json.dumps(nb.cells[0].metadata) + nb.cells[0].source
+
+
+FORK_BOMB = '''import os, time
+forked, stopped = 0, 0
+try:
+    for _ in range(4 * MAX_TASKS):
+        if os.fork() == 0:
+            time.sleep(30)
+            os._exit(0)
+        forked += 1
+except OSError as error:
+    stopped = error.errno
+print(forked, stopped)
+'''
+"""A bounded fork bomb: it prints how many children it made, and the error that stopped it."""
+
+
+def test_a_fork_bomb_in_a_plain_users_kernel_stops_at_its_cap():
+    """Run by a plain user (nobody, when the tests run as root), the launcher caps the kernel's
+    processes and threads at sandbox.MAX_TASKS, counted in the kernel's own user namespace; a fork
+    bomb stops there (EAGAIN), and its children die with the kernel. Linux exempts root from the
+    cap: README says what that leaves open."""
+    python, prefix, pythons = sys.executable, [], [sys.prefix, sys.base_prefix, os.path.realpath(sys.executable)]
+    if os.getuid() == 0:
+        python, setpriv = "/usr/bin/python3", shutil.which("setpriv")
+        assert setpriv and os.path.exists(python), "run as root, this test needs setpriv and Debian's /usr/bin/python3"
+        prefix, pythons = [setpriv, "--reuid=nobody", "--regid=nogroup", "--clear-groups"], []
+    with tempfile.TemporaryDirectory(prefix="kit-test-") as tmp:  # /tmp, where nobody may look
+        folder = Path(tmp)
+        shutil.copytree(Path(landlockpy.__file__).parent, folder / "landlockpy")
+        shutil.copy(sandbox.__file__, folder)
+        (folder / "bomb.py").write_text(FORK_BOMB.replace("MAX_TASKS", str(sandbox.MAX_TASKS)))
+        for path in (folder, *folder.rglob("*")):
+            path.chmod(0o755)
+        read = [p for p in (*pythons, "/usr", "/lib", "/lib64", "/etc/ld.so.cache", tmp) if os.path.exists(p)]
+        launcher = [python, str(folder / "sandbox.py"), *(arg for p in read for arg in ("--read", p)), "--"]
+        done = subprocess.run([*prefix, *launcher, python, "-I", str(folder / "bomb.py")], capture_output=True,
+                              text=True, timeout=60, cwd="/")
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    forked, stopped = (int(word) for word in done.stdout.split())
+    assert (stopped, forked) == (errno.EAGAIN, sandbox.MAX_TASKS - 3), "the launcher, the init and the kernel count too"
