@@ -6,12 +6,13 @@
   a test cell's visible part runs in the kernel, then its check runs here against the student's
   function, which the kernel only calls, in a forked child capped in memory and killed at the
   cell's deadline (autograder/confined_check.py), with what the student's function printed kept
-  within the cell's output cap; the grader refuses to start if it cannot import the checks
+  within the output caps; the grader refuses to start if it cannot import the checks
   and the reference they compare with (without them every hidden test would fail and nbgrader
   would still report success);
 - caps on each kernel: address space (``memory_limit_gb``), time per cell (``timeout``, the visible
   part and the hidden test together), time for the whole notebook (``notebook_timeout``), and
-  output kept per cell (``max_output_bytes``: printed text, displayed data and results alike);
+  output kept per cell and per notebook (``max_output_bytes``, ``max_notebook_output_bytes``: printed
+  text, displayed data and results alike);
 - a kernel that does not start (on a loaded machine a start can take minutes) is started again,
   up to ``kernel_start_attempts`` times in all, rather than nbgrader dropping the submission;
 - recovery: when the kernel dies (``os._exit``, a crash, the memory cap) or a cell times out, the
@@ -43,6 +44,8 @@ from autograder import cells, compare, confined_check, sandbox
 from autograder.restore_cells import add_grader_notes
 
 TIMEOUT_ERROR = "CellTimeoutError"
+NOTED_LOUD_CELLS = 3
+"""How many cells whose output was cut the grader's note names one by one (then it counts the rest)."""
 KERNEL_DIED = "KernelDied"
 NOT_RUN = "NotRun"
 
@@ -54,6 +57,8 @@ class GradingExecute(Execute):
     notebook_timeout = Integer(300, help="Seconds for a whole submission; later cells are not run.").tag(config=True)
     max_output_bytes = Integer(1_000_000, help="Output kept per cell (printed text, displayed data, results), in "
                                "characters; the rest is dropped.").tag(config=True)
+    max_notebook_output_bytes = Integer(10_000_000, help="Output kept for a whole submission, in characters; "
+                                        "later output is dropped.").tag(config=True)
     max_restarts = Integer(12, help="Kernel restarts per submission before the rest is not run.").tag(config=True)
     kernel_start_attempts = Integer(3, help="Kernel starts tried before a submission is given up.").tag(config=True)
 
@@ -112,6 +117,8 @@ class GradingExecute(Execute):
         """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""
         earlier: set[str] = set()
         self._output_bytes: dict[int, int] = {}
+        self._kept: dict[int, int] = {}
+        self._kept_total = 0
         notes: list[str] = []
         deadline = time.monotonic() + self.notebook_timeout
         failed: set[int] = set()
@@ -158,8 +165,13 @@ class GradingExecute(Execute):
                 failed.add(index)
                 restarts += 1
                 self._restart_and_replay(index, failed, deadline)
-        notes += [f"Cell {_name(self.nb.cells[i], i)} printed {n:,} characters; the grader kept the first "
-                  f"{self.max_output_bytes:,}." for i, n in sorted(self._output_bytes.items()) if n > self.max_output_bytes]
+        loud = [i for i, n in sorted(self._output_bytes.items()) if n > self._kept.get(i, 0)]
+        notes += [f"Cell {_name(self.nb.cells[i], i)} printed {self._output_bytes[i]:,} characters; the grader kept "
+                  f"the first {self._kept[i]:,}." for i in loud[:NOTED_LOUD_CELLS]]
+        if len(loud) > NOTED_LOUD_CELLS:
+            notes.append(f"{len(loud) - NOTED_LOUD_CELLS} more cells printed more than the grader keeps: "
+                         f"{self.max_output_bytes:,} characters of a cell's output, and "
+                         f"{self.max_notebook_output_bytes:,} of the whole notebook's.")
         add_grader_notes(self.nb, notes)
         self.set_widgets_metadata()
         return self.nb, self.resources
@@ -187,14 +199,11 @@ class GradingExecute(Execute):
                 cell.outputs.append(compare.error_output("AssertionError", why_not))
             else:
                 try:
-                    used = self._output_bytes.get(index, 0)
-                    outputs, printed = confined_check.run(
-                        lambda: compare.run_check(peer, test, check, earlier, max(0, self.max_output_bytes - used)),
-                        deadline, self._memory_bytes())
+                    room = self._room(index)
+                    outputs, printed = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
+                                                          deadline, self._memory_bytes())
                     cell.outputs += outputs
-                    self._output_bytes[index] = used + printed
-                    if used < self.max_output_bytes < used + printed:
-                        cell.outputs.append(self._kept_note())
+                    self._count(cell, index, printed, min(printed, room))
                 except compare.KernelStopped:
                     if not self._finished_alive(msg_id):
                         raise DeadKernelError("Kernel died") from None
@@ -264,11 +273,12 @@ class GradingExecute(Execute):
         await self.async_start_new_kernel_client()
 
     def process_message(self, msg: dict, cell: NotebookNode, cell_index: int) -> NotebookNode | None:
-        """nbclient's handling of a kernel message, with each cell's output capped: printed text,
-        displayed data and results together keep at most ``max_output_bytes`` characters, then the
-        cell says that the rest was dropped (the rest of a text is cut, any later output dropped).
-        An error is always kept, its name, message and traceback lines cut to compare.MAX_MESSAGE_CHARS:
-        dropping it would turn a failing test cell into a passing one."""
+        """nbclient's handling of a kernel message, with output capped: printed text, displayed data
+        and results together keep at most ``max_output_bytes`` characters of a cell and
+        ``max_notebook_output_bytes`` of the notebook, then the cell says that the rest was dropped
+        (the rest of a text is cut, any later output dropped). An error is always kept, its name,
+        message and traceback lines cut to compare.MAX_MESSAGE_CHARS: dropping it would turn a
+        failing test cell into a passing one."""
         kind, content = msg["msg_type"], msg["content"]
         if kind == "error":
             content = {**content, **{key: compare.cut(str(content.get(key, ""))) for key in ("ename", "evalue")},
@@ -276,27 +286,34 @@ class GradingExecute(Execute):
             return super().process_message({**msg, "content": content}, cell, cell_index)
         if kind not in ("stream", "display_data", "execute_result", "update_display_data"):
             return super().process_message(msg, cell, cell_index)
-        used = self._output_bytes.get(cell_index, 0)
         if kind == "stream":
             size = len(content.get("text", ""))
         else:
             size = len(json.dumps([content.get("data"), content.get("metadata")]))
-        self._output_bytes[cell_index] = used + size
-        if used + size <= self.max_output_bytes:
-            return super().process_message(msg, cell, cell_index)
-        out = None
-        if kind == "stream" and used < self.max_output_bytes:
-            msg = {**msg, "content": {**content, "text": content["text"][: self.max_output_bytes - used]}}
+        room, out = self._room(cell_index), None
+        kept = size if size <= room else room if kind == "stream" else 0
+        if kept == size:
             out = super().process_message(msg, cell, cell_index)
-        if used <= self.max_output_bytes:
-            cell.outputs.append(self._kept_note())
+        elif kept:
+            out = super().process_message({**msg, "content": {**content, "text": content["text"][:kept]}}, cell, cell_index)
+        self._count(cell, cell_index, size, kept)
         return out
 
-    def _kept_note(self) -> NotebookNode:
-        """The output that ends a cell's output when some of it was dropped."""
-        return new_output("stream", name="stdout", text=(
-            f"\n[The grader kept the first {self.max_output_bytes:,} characters of this cell's output "
-            "and dropped the rest.]\n"))
+    def _room(self, index: int) -> int:
+        """How many more characters of output cell ``index`` may keep: within its own cap and the notebook's."""
+        return max(0, min(self.max_output_bytes - self._output_bytes.get(index, 0),
+                          self.max_notebook_output_bytes - self._kept_total))
+
+    def _count(self, cell: NotebookNode, index: int, size: int, kept: int) -> None:
+        """Count ``size`` more characters of output of cell ``index``, of which it kept ``kept``; the
+        first time some are dropped, the cell's output ends with a note that says so."""
+        self._output_bytes[index] = self._output_bytes.get(index, 0) + size
+        self._kept[index] = self._kept.get(index, 0) + kept
+        self._kept_total += kept
+        if kept < size and self._output_bytes[index] - size <= self._kept[index] - kept:  # the cell's first drop
+            cell.outputs.append(new_output("stream", name="stdout", text=(
+                f"\n[The grader kept the first {self._kept[index]:,} characters of this cell's output and dropped "
+                "the rest.]\n")))
 
 
 @contextlib.contextmanager
