@@ -41,6 +41,9 @@ from course.checks import count
 # nbgrader 0.9.6 builds gradebook objects that SQLAlchemy 2 no longer adds to the session through
 # backrefs; nbgrader adds them explicitly right after, so the warning is noise for every submission.
 NBGRADER_SESSION_WARNING = r"Object of type <\w+> not in session, add operation along"
+MAX_SUBMISSION_BYTES = 50_000_000
+"""The largest notebook file the grader reads (a lab's solved notebook, figures and all, is under 2 MB):
+a larger one is graded as empty, since reading it could take the grader's memory."""
 warnings.filterwarnings("ignore", message=NBGRADER_SESSION_WARNING, category=SAWarning)
 
 
@@ -122,9 +125,9 @@ def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
     notebook (not JSON, truncated, invalid) is replaced by the blank release notebook, so that it
     is graded as an empty submission, with the reason in its notes. So is a notebook reached through
     a symbolic link (the notebook, its folder or the student's folder): the grader would read
-    whatever file it points to, another student's notebook or the course's solved source. A
-    grader's note that arrives inside the file becomes an ordinary cell of the student's: only the
-    grader writes notes.
+    whatever file it points to, another student's notebook or the course's solved source. So is a
+    file larger than MAX_SUBMISSION_BYTES. A grader's note that arrives inside the file becomes an
+    ordinary cell of the student's: only the grader writes notes.
     """
     linked = [p for p in (folder.parent, folder, *folder.glob("*.ipynb")) if p.is_symlink()]
     if linked:
@@ -142,6 +145,12 @@ def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
         listed = ", ".join(p.name for p in found) or "none"
         return cells.read(lab.release_notebook), [
             f"No notebook named {lab.notebook_name} was found (notebooks there: {listed}); "
+            "it was graded as an empty submission."
+        ]
+    size = path.stat().st_size
+    if size > MAX_SUBMISSION_BYTES:
+        return cells.read(lab.release_notebook), notes + [
+            f"{path.name} is {size:,} bytes, more than the {MAX_SUBMISSION_BYTES:,} the grader reads; "
             "it was graded as an empty submission."
         ]
     try:

@@ -40,6 +40,7 @@ from autograder.hidden_tests import train_kf
 from autograder.kernel_side import PeerTimeout
 from autograder.labs import get_lab
 from autograder.mistakes import catalogue
+from autograder.restore_cells import grader_notes
 from defended_runs import graded_run, sanitized
 from test_defences import scores, trimmed
 
@@ -312,10 +313,12 @@ def test_a_check_that_crashes_or_hangs_stops_alone():
         confined_check.run(lambda: bytearray(2**31), None, 2**30)
 
 
-def test_a_symbolic_link_in_the_submissions_is_graded_as_empty(tmp_path):
+def test_a_symbolic_link_or_a_huge_file_in_the_submissions_is_graded_as_empty(tmp_path):
     """Submissions copied with their links (a git clone, rsync): Mallory's notebook is a link to the
     course's solved source notebook, Eve's lab folder a link to Alice's. The grader followed both
-    and graded the solution and Alice's work as theirs; now both are graded as empty, with a note."""
+    and graded the solution and Alice's work as theirs; now both are graded as empty, with a note.
+    So is Trudy's valid notebook of 60 MB, which the grader used to read whole (one of some GB takes
+    its memory)."""
     submitted = tmp_path / "submissions"
     (submitted / "alice" / TRAIN.id).mkdir(parents=True)
     nbformat.write(submissions.solved(TRAIN), submitted / "alice" / TRAIN.id / TRAIN.notebook_name)
@@ -323,13 +326,18 @@ def test_a_symbolic_link_in_the_submissions_is_graded_as_empty(tmp_path):
     (submitted / "mallory" / TRAIN.id / TRAIN.notebook_name).symlink_to(TRAIN.source_notebook)
     (submitted / "eve").mkdir()
     (submitted / "eve" / TRAIN.id).symlink_to(submitted / "alice" / TRAIN.id)
+    huge = submissions.solved(TRAIN)
+    huge.cells.append(nbformat.v4.new_markdown_cell("z" * 60_000_000))
+    (submitted / "trudy" / TRAIN.id).mkdir(parents=True)
+    nbformat.write(huge, submitted / "trudy" / TRAIN.id / TRAIN.notebook_name)
     work = tmp_path / "work"
-    assert grading.import_submissions(submitted, work, [TRAIN]) == {TRAIN.id: ["alice", "eve", "mallory"]}
+    assert grading.import_submissions(submitted, work, [TRAIN]) == {TRAIN.id: ["alice", "eve", "mallory", "trudy"]}
     release = [c.source for c in cells.read(TRAIN.release_notebook).cells if cells.is_code_answer(c)]
-    for student in ("mallory", "eve"):
+    for student, why in (("mallory", "is a symbolic link"), ("eve", "is a symbolic link"), ("trudy", "bytes, more than")):
         nb = nbformat.read(work / "submitted" / student / TRAIN.id / TRAIN.notebook_name, as_version=4)
         assert [c.source for c in nb.cells if cells.is_code_answer(c)] == release
-        assert "is a symbolic link" in json.dumps(nb.cells[0].metadata) + nb.cells[0].source
+        [note] = grader_notes(nb)
+        assert why in note, note
 
 
 FORK_BOMB = '''import os, time
