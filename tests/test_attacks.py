@@ -379,3 +379,21 @@ def test_a_fork_bomb_in_a_plain_users_kernel_stops_at_its_cap():
     assert done.returncode == 0 and done.stderr == "", done.stderr
     forked, stopped = (int(word) for word in done.stdout.split())
     assert (stopped, forked) == (errno.EAGAIN, sandbox.MAX_TASKS - 3), "the launcher, the init and the kernel count too"
+
+
+def test_without_landlocks_signal_scope_the_kernel_still_signals_nothing_outside():
+    """Landlock scopes signals only from ABI 6 (Linux 6.12); before it, a kernel run by root in its
+    user namespace could signal every root process on the machine (``kill(-1, SIGKILL)``: the
+    grader, every other kernel). In its own PID namespace it cannot even name them: here with the
+    files layer (Landlock) left out, a process of this test's is out of its reach."""
+    sleeper = subprocess.Popen(["sleep", "60"])
+    try:
+        probe = (f"import os\nfor pid in ({sleeper.pid}, -1):\n    try:\n        os.kill(pid, 0)\n"
+                 "        print('ok')\n    except OSError as error:\n        print(type(error).__name__)\n")
+        read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable)) if os.path.exists(p)]
+        command = [*sandbox.launcher_command(read, [], ("network",)), sys.executable, "-I", "-c", probe]
+        done = subprocess.run(command, capture_output=True, text=True, timeout=60)
+    finally:
+        sleeper.kill()
+        sleeper.wait()
+    assert done.stdout.split() == ["ProcessLookupError", "ProcessLookupError"], done.stderr
