@@ -11,7 +11,8 @@ Two layers of the Linux kernel confine the kernel process, applied by a launcher
   root holds no capability over the machine (loading kernel modules, mounting, raw devices), and
   its own PID namespace, under an init that ends when the kernel ends: Linux then kills every
   process left in the namespace, so nothing the kernel starts (a daemon that left its process
-  group, a fork bomb) outlives it. The launcher stays, as the kernel's manager's process, and waits.
+  group, a fork bomb) outlives it, and its own IPC namespace, so that no System V shared memory
+  or message queue does either. The launcher stays, as the kernel's manager's process, and waits.
   Run by a plain user, the kernel may have at most MAX_TASKS processes and threads.
 
 ``python -m autograder.sandbox --read P ... --write P ... -- CMD ARGS...`` is the launcher. It never
@@ -48,6 +49,7 @@ from landlockpy import AccessFS, Scope
 SWITCH = "KIT_SANDBOX"
 LAYERS = ("files", "network")
 
+CLONE_NEWIPC = 0x08000000
 CLONE_NEWNET = 0x40000000
 CLONE_NEWPID = 0x20000000
 CLONE_NEWUSER = 0x10000000
@@ -186,8 +188,9 @@ def _check(result: int, call: str) -> None:
 
 
 def enter_network_namespace() -> None:
-    """Move this process into a new network namespace, and the children it starts from now on into
-    a new PID namespace. First into a new user namespace where this user is itself, where the OS
+    """Move this process into new network and IPC namespaces (System V shared memory, semaphores and
+    message queues, which would outlive the kernel and be shared with other kernels, die with the
+    last process in it), and the children it starts from now on into a new PID namespace. First into a new user namespace where this user is itself, where the OS
     allows one (for root too: root inside holds no capability over the machine); without the uid
     map, which some systems refuse, it shows as nobody and still works. Raises OSError when the
     namespaces cannot be made."""
@@ -197,7 +200,7 @@ def enter_network_namespace() -> None:
             Path("/proc/self/setgroups").write_text("deny")
             Path("/proc/self/uid_map").write_text(f"{uid} {uid} 1")
             Path("/proc/self/gid_map").write_text(f"{gid} {gid} 1")
-    _check(_libc().unshare(CLONE_NEWNET | CLONE_NEWPID), "unshare(CLONE_NEWNET | CLONE_NEWPID)")
+    _check(_libc().unshare(CLONE_NEWNET | CLONE_NEWPID | CLONE_NEWIPC), "unshare(CLONE_NEWNET | CLONE_NEWPID | CLONE_NEWIPC)")
 
 
 def run_below_namespace_init() -> None:

@@ -12,6 +12,7 @@ memory is measured; README (What grading defends against) lists what each defenc
 from __future__ import annotations
 
 import copy
+import ctypes
 import errno
 import json
 import multiprocessing
@@ -116,11 +117,14 @@ if os.fork() == 0:
         time.sleep(600)
     os._exit(0)
 os.wait()
+# System V shared memory: a segment stays, memory and all, after its process ends, unless removed
+libc.shmget(KEY, 1 << 20, 0o1000 | 0o600)  # IPC_CREAT
 # displayed data, not printed text: 10 MB of it
 for _ in range(50):
     display(HTML("<p>" + "z" * 200_000 + "</p>"))
 '''
-"""A cell added at the end: the kernel's reach over other processes, a daemon, and a display flood."""
+"""A cell added at the end: the kernel's reach over other processes, a daemon, shared memory that
+would outlive it, and a display flood."""
 LOUD_CELLS = 15
 """Cells added after it, each printing 900,000 characters, under the cell's cap but not the notebook's."""
 
@@ -155,12 +159,14 @@ def _planted(blank: str, slug: str, nb: NotebookNode) -> None:
     cell.source = mistake.apply(cell.source)
 
 
-def wire_notebook(daemon: str) -> NotebookNode:
+def wire_notebook(leftover: tuple[str, int]) -> NotebookNode:
+    """The wire run's notebook; ``leftover`` names its daemon and its shared memory segment's key."""
     nb = copy.deepcopy(submissions.solved(TRAIN))
     _planted("gain_information_form", "B-not-inverted", nb)
     for blank, source in WIRE.items():
         _answer(nb, blank).source = source
-    nb.cells.append(nbformat.v4.new_code_cell(PROCESSES.replace("NAME", daemon)))
+    daemon, key = leftover
+    nb.cells.append(nbformat.v4.new_code_cell(PROCESSES.replace("NAME", daemon).replace("KEY", str(key))))
     nb.cells += [nbformat.v4.new_code_cell('print("w" * 900_000)') for _ in range(LOUD_CELLS)]
     return nb
 
@@ -197,20 +203,30 @@ def daemons(name: str) -> list[int]:
     return found
 
 
+def segments(key: int) -> list[int]:
+    """The ids of this machine's System V shared memory segments with ``key``."""
+    rows = [line.split() for line in Path("/proc/sysvipc/shm").read_text().splitlines()[1:]]
+    return [int(row[1]) for row in rows if int(row[0]) == key]
+
+
 @pytest.fixture(scope="module")
-def daemon_name():
-    """A name for the daemon of the wire run; any process of that name is killed afterwards."""
-    name = f"kit-{secrets.token_hex(4)}"
-    yield name
+def leftover():
+    """A name for the wire run's daemon and a key for its shared memory segment; any process of
+    that name is killed, and any segment with that key removed, afterwards."""
+    token = secrets.token_hex(4)
+    name, key = f"kit-{token}", int(token, 16) & 0x7FFFFFFF
+    yield name, key
     for pid in daemons(name):
         os.kill(pid, signal.SIGKILL)
+    for shmid in segments(key):
+        ctypes.CDLL(None).shmctl(shmid, 0, None)  # IPC_RMID
 
 
 @pytest.fixture(scope="module")
-def runs(tmp_path_factory, daemon_name) -> dict[str, tuple[NotebookNode, int]]:
+def runs(tmp_path_factory, leftover) -> dict[str, tuple[NotebookNode, int]]:
     """Each attack run, graded once: name -> (the graded notebook, the grader's peak memory)."""
     course = tmp_path_factory.mktemp("course")
-    jobs = {"wire": trimmed(sanitized(wire_notebook(daemon_name), TRAIN, course), TRAIN),
+    jobs = {"wire": trimmed(sanitized(wire_notebook(leftover), TRAIN, course), TRAIN),
             "served": trimmed(sanitized(served_notebook(), TRAIN, course), TRAIN)}
     with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn"), max_tasks_per_child=1) as pool:
         futures = {name: pool.submit(graded_in_own_process, nbformat.writes(nb), str(course))
@@ -273,11 +289,12 @@ def test_forged_answers_and_floods_fail_their_own_test_and_the_grader_stays_smal
         "\n[The grader kept the first 0 characters of this cell's output and dropped the rest.]\n"))])] * 3
 
 
-def test_the_kernel_reaches_no_other_process_and_none_of_its_processes_outlives_it(runs, daemon_name):
-    """The kernel cannot signal, trace or read its parent, list processes or write in shared memory
-    (/dev/shm, where another kernel could read it); a daemon it started
-    (its own session, shutdown signals ignored) dies with it: before the PID namespace it lived on
-    after grading, sandboxed but free to take the machine's CPU and memory from other jobs."""
+def test_the_kernel_reaches_no_other_process_and_nothing_it_started_outlives_it(runs, leftover):
+    """The kernel cannot signal, trace or read its parent, list processes or write in /dev/shm; a
+    daemon it started (its own session, shutdown signals ignored) dies with it, and so does a System
+    V shared memory segment it made. Before the PID and IPC namespaces both lived on after grading:
+    the daemon free to take the machine's CPU and memory from other jobs, the segment holding its
+    memory and readable by every later kernel."""
     nb, _ = runs["wire"]
     outputs = nb.cells[-1 - LOUD_CELLS].outputs
     printed = next(o.text for o in outputs if o.output_type == "stream" and o.text.startswith("{"))
@@ -286,7 +303,9 @@ def test_the_kernel_reaches_no_other_process_and_none_of_its_processes_outlives_
                              "read the parent's memory": "PermissionError", "list the processes": "PermissionError",
                              "write in /dev/shm": "PermissionError"}
     time.sleep(1)
-    assert daemons(daemon_name) == [], "a process the kernel started outlived it"
+    name, key = leftover
+    assert daemons(name) == [], "a process the kernel started outlived it"
+    assert segments(key) == [], "a shared memory segment the kernel made outlived it"
 
 
 def test_the_references_cost_on_the_students_inputs_stays_out_of_the_grader(runs):
