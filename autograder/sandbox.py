@@ -266,7 +266,7 @@ def restrict_files(read: list[str], write: list[str]) -> list[str]:
 def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS) -> list[str]:
     """Apply the sandbox's ``layers`` to this process: the network and PID namespaces (returning in
     a grandchild, see ``run_below_namespace_init``, capped at MAX_TASKS tasks unless run by root),
-    no_new_privs, then Landlock. Returns what could not be applied, one sentence each (empty when all
+    no core dumps, no_new_privs, then Landlock. Returns what could not be applied, one sentence each (empty when all
     was)."""
     if sys.platform != "linux":
         return [f"not applied: {', '.join(layers)} confinement needs Linux"] if layers else []
@@ -280,6 +280,9 @@ def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS)
             run_below_namespace_init()
             if os.getuid() != 0:  # a plain user got here through its own user namespace
                 resource.setrlimit(resource.RLIMIT_NPROC, (MAX_TASKS, MAX_TASKS))
+    # no core dumps: a crash would write the kernel's memory (up to its 4 GiB) to disk, in its folder,
+    # or outside the sandbox where a helper collects cores (systemd-coredump, apport)
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
     try:
         set_no_new_privs()
     except OSError as error:

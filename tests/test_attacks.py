@@ -416,3 +416,20 @@ def test_without_landlocks_signal_scope_the_kernel_still_signals_nothing_outside
         sleeper.kill()
         sleeper.wait()
     assert done.stdout.split() == ["ProcessLookupError", "ProcessLookupError"], done.stderr
+
+
+def test_a_crashing_kernel_dumps_no_core():
+    """A kernel that raises its core size limit and crashes wrote its memory (up to 4 GiB) into its
+    folder (the core pattern here), or, where a helper collects cores (systemd-coredump, apport),
+    outside the sandbox, once per restart; the launcher sets the limit to 0 for good."""
+    with tempfile.TemporaryDirectory(prefix="kit-test-") as folder:
+        probe = ("import os, resource, signal\ntry:\n    resource.setrlimit(resource.RLIMIT_CORE, (-1, -1))\n"
+                 "except ValueError as error:\n    print(error, flush=True)\nbuffer = bytearray(50 << 20)\n"
+                 "os.kill(os.getpid(), signal.SIGSEGV)\n")
+        read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable), "/usr/lib", "/lib", "/lib64",
+                            "/etc/ld.so.cache") if os.path.exists(p)]
+        command = [*sandbox.launcher_command(read, [folder], sandbox.LAYERS), sys.executable, "-I", "-c", probe]
+        done = subprocess.run(command, capture_output=True, text=True, timeout=60, cwd=folder)
+        left = os.listdir(folder)
+    assert done.returncode == 128 + signal.SIGSEGV and done.stdout == "not allowed to raise maximum limit\n", done
+    assert left == [], "the crash left a core dump"
