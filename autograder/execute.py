@@ -278,8 +278,12 @@ class GradingExecute(Execute):
         ``max_notebook_output_bytes`` of the notebook, then the cell says that the rest was dropped
         (the rest of a text is cut, any later output dropped). An error is always kept, its name,
         message and traceback lines cut to compare.MAX_MESSAGE_CHARS: dropping it would turn a
-        failing test cell into a passing one."""
+        failing test cell into a passing one. Widgets' messages (``comm_*``) are dropped: nbclient
+        would keep their state, of any size, in the graded notebook, and a malformed one made it
+        raise and end the grading of the submission."""
         kind, content = msg["msg_type"], msg["content"]
+        if kind.startswith("comm"):
+            return None
         if kind == "error":
             content = {**content, **{key: compare.cut(str(content.get(key, ""))) for key in ("ename", "evalue")},
                        "traceback": [compare.cut(str(line)) for line in content.get("traceback", [])]}

@@ -36,6 +36,7 @@ from nbformat import NotebookNode
 import solutions.train_kf as reference
 from autograder import cells, confined_check, grading, sandbox, submissions
 from autograder.compare import MAX_MESSAGE_CHARS, error_output
+from autograder.execute import GradingExecute
 from autograder.hidden import called_blanks
 from autograder.hidden_tests import train_kf
 from autograder.kernel_side import PeerTimeout
@@ -433,3 +434,18 @@ def test_a_crashing_kernel_dumps_no_core():
         left = os.listdir(folder)
     assert done.returncode == 128 + signal.SIGSEGV and done.stdout == "not allowed to raise maximum limit\n", done
     assert left == [], "the crash left a core dump"
+
+
+def test_widget_messages_neither_bloat_nor_break_the_graded_notebook(tmp_path):
+    """A kernel can send widgets' messages (comm) of its own making: nbclient kept their state in
+    the graded notebook without limit (60 MB here), and a widget without its module made it raise,
+    which ended the grading of the submission. The grader drops them."""
+    sources = ["from ipykernel.comm import Comm\nfor _ in range(30):\n    Comm(target_name='jupyter.widget', data={"
+               "'state': {'_model_name': 'X', '_model_module': 'x', '_model_module_version': '1', 'v': 'v' * 2_000_000}})",
+               "Comm(target_name='jupyter.widget', data={'state': {'_model_name': 'OutputModel'}})",
+               "print('graded on')"]
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in sources])
+    executor = GradingExecute(config=grading.course_config(tmp_path))
+    nb, _ = executor.preprocess(nb, {"metadata": {"path": str(tmp_path)}})
+    assert "widgets" not in nb.metadata and len(nbformat.writes(nb)) < 100_000
+    assert [o.get("text") for o in nb.cells[-1].outputs] == ["graded on\n"]
