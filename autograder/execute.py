@@ -285,9 +285,7 @@ class GradingExecute(Execute):
         if kind.startswith("comm"):
             return None
         if kind == "error":
-            content = {**content, **{key: compare.cut(str(content.get(key, ""))) for key in ("ename", "evalue")},
-                       "traceback": [compare.cut(str(line)) for line in content.get("traceback", [])]}
-            return super().process_message({**msg, "content": content}, cell, cell_index)
+            return super().process_message({**msg, "content": _cut_error(content)}, cell, cell_index)
         if kind not in ("stream", "display_data", "execute_result", "update_display_data"):
             return super().process_message(msg, cell, cell_index)
         if kind == "stream":
@@ -302,6 +300,14 @@ class GradingExecute(Execute):
             out = super().process_message({**msg, "content": {**content, "text": content["text"][:kept]}}, cell, cell_index)
         self._count(cell, cell_index, size, kept)
         return out
+
+    def on_cell_executed(self, **kwargs) -> None:
+        """nbgrader's, which adds the execute reply's error to the cell when the kernel showed none,
+        with that error cut as ``process_message`` cuts one (the kernel writes the reply too)."""
+        reply = kwargs["execute_reply"]
+        if reply["content"].get("status") == "error":
+            kwargs["execute_reply"] = {**reply, "content": _cut_error(reply["content"])}
+        return super().on_cell_executed(**kwargs)
 
     def _room(self, index: int) -> int:
         """How many more characters of output cell ``index`` may keep: within its own cap and the notebook's."""
@@ -351,6 +357,12 @@ def _warn_once_if_not_sandboxed(log) -> None:
 def _name(cell: NotebookNode, index: int) -> str:
     """How a note names a cell: its nbgrader id, or its position."""
     return cells.grade_id(cell) if "grade_id" in cells.meta(cell) else str(index + 1)
+
+
+def _cut_error(content: dict) -> dict:
+    """An error's content with its name, message and traceback lines cut to compare.MAX_MESSAGE_CHARS."""
+    return {**content, **{key: compare.cut(str(content.get(key, ""))) for key in ("ename", "evalue")},
+            "traceback": [compare.cut(str(line)) for line in content.get("traceback", [])]}
 
 
 def _add_error(cell: NotebookNode, ename: str, evalue: str) -> None:

@@ -130,8 +130,8 @@ LOUD_CELLS = 15
 """Cells added after it, each printing 900,000 characters, under the cell's cap but not the notebook's."""
 
 SERVED = {
-    # a gigantic answer: 400 MB, within what the wire carries
-    "gain_information_form": _stub("gain_information_form", "B, H, R", "return np.zeros(50_000_000)"),
+    # a gigantic answer: 100 MB, within what the wire carries
+    "gain_information_form": _stub("gain_information_form", "B, H, R", "return np.zeros(12_500_000)"),
     # answers the kernel's side cannot send: a list that holds itself, and an integer of 5,000 digits
     "nees": _stub("nees", "errors, covariances", "loop = []\nloop.append(loop)\nreturn loop"),
     "process_noise": _stub("process_noise", "sigma, dt_min=1.0", "return 10**5000"),
@@ -146,6 +146,20 @@ BIG_CALL = ('''    if not _calls:  # the notebook's own list, which the copy of 
 """Lines put into run_filter before its first line of code: once per notebook, it calls the served
 kupdate with H of shape (5000, 1), a message of 80 kB that makes the reference build and solve a
 5000 x 5000 system, 600 MB and seconds of work."""
+
+
+MESSAGES = [
+    # widgets' messages of the kernel's own making: 60 MB of state, then a widget without its module
+    "from ipykernel.comm import Comm\nfor _ in range(30):\n    Comm(target_name='jupyter.widget', data={'state': {"
+    "'_model_name': 'X', '_model_module': 'x', '_model_module_version': '1', 'v': 'v' * 2_000_000}})",
+    "Comm(target_name='jupyter.widget', data={'state': {'_model_name': 'OutputModel'}})",
+    # three messages of 100 MB on standard output
+    "import sys\nblock = 'x' * 100_000_000\nfor _ in range(3):\n    sys.stdout.write(block)\n    sys.stdout.flush()",
+    "print('graded on')",
+]
+"""Cells for the run on the kernel's messages (a notebook of its own, no lab)."""
+MESSAGE_CAP = 16 * 2**20
+"""The cap on a kernel's message in that run (the course's is 128 MiB)."""
 
 
 def _answer(nb: NotebookNode, blank: str) -> NotebookNode:
@@ -223,15 +237,30 @@ def leftover():
         ctypes.CDLL(None).shmctl(shmid, 0, None)  # IPC_RMID
 
 
+def executed_in_own_process(sources: list[str], folder: str, max_message_bytes: int) -> tuple[str, int]:
+    """``sources`` as code cells run by the grading executor with the course's configuration (no
+    gradebook, cells stopped after 5 s), in ``folder``, its kernel's messages capped at
+    ``max_message_bytes``: the executed notebook, and this process's peak memory in bytes."""
+    os.environ["GRADING_CELL_TIMEOUT"] = "5"
+    config = grading.course_config(Path(folder))
+    config.SandboxedKernelManager.max_message_bytes = max_message_bytes
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in sources])
+    nb, _ = GradingExecute(config=config).preprocess(nb, {"metadata": {"path": folder}})
+    return nbformat.writes(nb), resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+
+
 @pytest.fixture(scope="module")
 def runs(tmp_path_factory, leftover) -> dict[str, tuple[NotebookNode, int]]:
-    """Each attack run, graded once: name -> (the graded notebook, the grader's peak memory)."""
+    """Each attack run, graded once (the kernel's messages only executed): name -> (the graded
+    notebook, the grader's peak memory)."""
     course = tmp_path_factory.mktemp("course")
     jobs = {"wire": trimmed(sanitized(wire_notebook(leftover), TRAIN, course), TRAIN),
             "served": trimmed(sanitized(served_notebook(), TRAIN, course), TRAIN)}
     with ProcessPoolExecutor(2, mp_context=multiprocessing.get_context("spawn"), max_tasks_per_child=1) as pool:
         futures = {name: pool.submit(graded_in_own_process, nbformat.writes(nb), str(course))
                    for name, nb in jobs.items()}
+        futures["messages"] = pool.submit(executed_in_own_process, MESSAGES, str(tmp_path_factory.mktemp("messages")),
+                                          MESSAGE_CAP)
         done = {name: future.result() for name, future in futures.items()}
     return {name: (nbformat.reads(graded, as_version=4), peak) for name, (graded, peak) in done.items()}
 
@@ -311,7 +340,7 @@ def test_the_kernel_reaches_no_other_process_and_nothing_it_started_outlives_it(
 
 def test_the_references_cost_on_the_students_inputs_stays_out_of_the_grader(runs):
     """run_filter asks the served kupdate for a 5000 x 5000 solve (a message of 80 kB): the child
-    that runs the check pays for it, not the grader, and so it does for an answer of 400 MB. A
+    that runs the check pays for it, not the grader, and so it does for an answer of 100 MB. A
     kernel whose answer cannot be sent fails that test; the other blanks are graded."""
     nb, peak = runs["served"]
     got = scores(nb)
@@ -436,16 +465,21 @@ def test_a_crashing_kernel_dumps_no_core():
     assert left == [], "the crash left a core dump"
 
 
-def test_widget_messages_neither_bloat_nor_break_the_graded_notebook(tmp_path):
+def test_widget_messages_neither_bloat_nor_break_the_graded_notebook(runs):
     """A kernel can send widgets' messages (comm) of its own making: nbclient kept their state in
     the graded notebook without limit (60 MB here), and a widget without its module made it raise,
     which ended the grading of the submission. The grader drops them."""
-    sources = ["from ipykernel.comm import Comm\nfor _ in range(30):\n    Comm(target_name='jupyter.widget', data={"
-               "'state': {'_model_name': 'X', '_model_module': 'x', '_model_module_version': '1', 'v': 'v' * 2_000_000}})",
-               "Comm(target_name='jupyter.widget', data={'state': {'_model_name': 'OutputModel'}})",
-               "print('graded on')"]
-    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in sources])
-    executor = GradingExecute(config=grading.course_config(tmp_path))
-    nb, _ = executor.preprocess(nb, {"metadata": {"path": str(tmp_path)}})
+    nb, _ = runs["messages"]
     assert "widgets" not in nb.metadata and len(nbformat.writes(nb)) < 100_000
-    assert [o.get("text") for o in nb.cells[-1].outputs] == ["graded on\n"]
+
+
+def test_a_huge_message_from_the_kernel_never_reaches_the_grader(runs):
+    """Three messages of 100 MB on the kernel's standard output: jupyter_client decoded each whole,
+    and the grader held several times its size (1.4 GiB for messages of 300 MB), whatever the output
+    cap kept. ZeroMQ now refuses a message over the cap (128 MiB; 16 MiB here) before the grader
+    reads it; the cell that sent it times out, and grading goes on."""
+    nb, peak = runs["messages"]
+    *_, flooded, after = nb.cells
+    assert peak < 450 * 2**20, f"the grader grew to {peak / 2**20:.0f} MiB"
+    assert [o.get("ename") for o in flooded.outputs] == ["CellTimeoutError"]
+    assert [o.get("text") for o in after.outputs] == ["graded on\n"]
