@@ -55,6 +55,9 @@ MODULE_NAME = "_kit_grading"
 """The kernel-side module's name in the kernel's ``sys.modules``."""
 MAX_MESSAGE_CHARS = 10_000
 """The most of an error's name, message or location that a test cell keeps."""
+FIRST_MESSAGE_BYTES = 1 << 16
+"""The largest first message (ready, or why not) the grader reads from a kernel: it reads it in its
+own process, before the check's capped child starts."""
 
 
 class HiddenTestFormError(ValueError):
@@ -295,11 +298,12 @@ def connect(listener: Listener, deadline: float | None, gave_up: Callable[[], bo
             raise PeerTimeout()
         return None, tampered
     wire = Wire(connection)
-    wire.deadline = deadline
+    wire.deadline, wire.limit = deadline, FIRST_MESSAGE_BYTES
     try:
         header, _ = wire.receive()
     except (PeerGone, ProtocolError):
         header = {}
+    wire.limit = kernel_side.MAX_MESSAGE_BYTES
     if header.get("op") == "ready":
         return Peer(wire), ""
     connection.close()

@@ -133,8 +133,27 @@ SERVED = {
     # a gigantic answer: 100 MB, within what the wire carries
     "gain_information_form": _stub("gain_information_form", "B, H, R", "return np.zeros(12_500_000)"),
     # answers the kernel's side cannot send: a list that holds itself, and an integer of 5,000 digits
-    "nees": _stub("nees", "errors, covariances", "loop = []\nloop.append(loop)\nreturn loop"),
+    "predict": _stub("predict", "x, B, A, Q", "loop = []\nloop.append(loop)\nreturn loop"),
     "process_noise": _stub("process_noise", "sigma, dt_min=1.0", "return 10**5000"),
+    # the grader's code in the kernel replaced: for two tests, the first message (which the grader
+    # reads in its own process) is nested 30,000 deep, or 600 MB long
+    "gain_covariance_form": _stub("gain_covariance_form", "B, H, R", "return gain_information_form(B, H, R)") + """
+
+def _first_message(path, name, serve=__import__("sys").modules["_kit_grading"].serve):
+    import socket, struct
+    if name not in ("gain_covariance_form", "nees"):
+        return serve(path, name)
+    if name == "gain_covariance_form":
+        data = b'{"op": "ready", "pad": ' + b"[" * 30_000 + b"]" * 30_000 + b"}"
+    else:
+        data = b'{"op": "ready", "pad": "' + b"x" * 600_000_000 + b'"}'
+    connection = socket.socket(socket.AF_UNIX)
+    connection.connect(path)
+    connection.sendall(struct.pack("!QQ", len(data), 0) + data)
+
+
+__import__("sys").modules["_kit_grading"].serve = _first_message
+""",
 }
 """train-kf answers for the run on the reference's cost, by blank."""
 
@@ -309,7 +328,7 @@ def test_forged_answers_and_floods_fail_their_own_test_and_the_grader_stays_smal
     assert error.ename == "ValueError" and len(error.evalue) < MAX_MESSAGE_CHARS + 100
     assert "more characters cut by the grader" in error.evalue
     assert [o.ename for o in _test_cell(nb, "nees").outputs if o.output_type == "error"] == ["AssertionError"]
-    assert [o.ename for o in _test_cell(nb, "process_noise").outputs if o.output_type == "error"] == ["RecursionError"]
+    assert [o.ename for o in _test_cell(nb, "process_noise").outputs if o.output_type == "error"] == ["GradingError"]
     added = nb.cells[-1 - LOUD_CELLS].outputs
     assert _text(added) < MAX_OUTPUT + 3000 and "dropped the rest" in added[-1].text
     assert 0 < sum(o.output_type == "display_data" for o in added) < 50
@@ -341,13 +360,19 @@ def test_the_kernel_reaches_no_other_process_and_nothing_it_started_outlives_it(
 def test_the_references_cost_on_the_students_inputs_stays_out_of_the_grader(runs):
     """run_filter asks the served kupdate for a 5000 x 5000 solve (a message of 80 kB): the child
     that runs the check pays for it, not the grader, and so it does for an answer of 100 MB. A
-    kernel whose answer cannot be sent fails that test; the other blanks are graded."""
+    kernel whose answer cannot be sent fails that test. The grader's code in the kernel, replaced,
+    sends a first message 600 MB long, which the grader read whole in its own process, or nested
+    30,000 deep, which made it raise and end the grading of the submission: both only fail their
+    test. The other blanks are graded."""
     nb, peak = runs["served"]
     got = scores(nb)
     assert peak < GRADER_MEMORY, f"the grader grew to {peak / 2**20:.0f} MiB"
     assert {k: v for k, v in got.items() if k != "test_run_filter"} == {
-        "test_gain_information_form": 0, "test_gain_covariance_form": 1.0, "test_process_noise": 0,
-        "test_predict": 1.0, "test_kupdate": 2.0, "test_nees": 0}
+        "test_gain_information_form": 0, "test_gain_covariance_form": 0, "test_process_noise": 0,
+        "test_predict": 0, "test_kupdate": 2.0, "test_nees": 0}
+    for blank in ("gain_covariance_form", "nees"):
+        [error] = [o for o in _test_cell(nb, blank).outputs if o.output_type == "error"]
+        assert "could not reach your function" in error.evalue, error
 
 
 def test_a_check_that_crashes_or_hangs_stops_alone():
