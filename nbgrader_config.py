@@ -21,6 +21,7 @@ os.environ["PATH"] = os.pathsep.join((os.path.dirname(sys.executable), os.enviro
 from autograder.execute import GradingExecute  # noqa: E402
 from autograder.sandbox_kernel import SandboxedKernelManager  # noqa: E402
 from autograder.flag_cheating import FlagCheating  # noqa: E402
+from autograder.inert_html import InertHtml  # noqa: E402
 from autograder.restore_cells import RestoreLabCells  # noqa: E402
 from course.checks import NOT_WRITTEN  # noqa: E402
 from nbconvert.preprocessors import ClearMetadataPreprocessor, CSSHTMLHeaderPreprocessor  # noqa: E402
@@ -90,6 +91,7 @@ c.Autograde.sanitize_preprocessors = [
 # points of every blank a submission games, and flag it for review (autograder/flag_cheating.py).
 c.Autograde.autograde_preprocessors = [
     GradingExecute,
+    InertHtml,
     FlagCheating,
     IgnorePattern,
     ClearMetadataPreprocessor,

@@ -31,7 +31,10 @@ from pathlib import Path
 import landlockpy
 import nbformat
 import pytest
+from nbconvert.exporters import HTMLExporter
 from nbformat import NotebookNode
+from nbgrader.server_extensions.formgrader import handlers as formgrader_handlers
+from traitlets.config import Config
 
 import solutions.train_kf as reference
 from autograder import cells, confined_check, grading, sandbox, submissions
@@ -39,6 +42,7 @@ from autograder.compare import MAX_MESSAGE_CHARS, error_output
 from autograder.execute import GradingExecute
 from autograder.hidden import called_blanks
 from autograder.hidden_tests import train_kf
+from autograder.inert_html import InertHtml
 from autograder.kernel_side import PeerTimeout
 from autograder.labs import get_lab
 from autograder.mistakes import catalogue
@@ -79,11 +83,15 @@ return A @ x, A @ B @ A.T + Q
 """),
     # an exception whose message is 3,000,000 characters long
     "kupdate": _stub("kupdate", "x_f, B_f, y, H, R", 'raise ValueError("y" * 3_000_000)'),
-    # a forged answer of 800 arrays that all point at one buffer of 1 MiB: 800 MiB once decoded
-    "nees": _stub("nees", "errors, covariances", f"""
+    # a forged answer of 600 arrays that all point at one buffer of 1 MiB: 600 MiB once decoded (once:
+    # the grader's diagnosis calls nees again after the test fails)
+    "nees": "_forged = []\n\n\n" + _stub("nees", "errors, covariances", f"""
+if _forged:
+    return errors[:, 0]
+_forged.append(1)
 {PEER}
 node = {{"t": "array", "dtype": "<f8", "shape": [131072], "buffer": 0}}
-peer.wire.send({{"op": "return", "value": {{"t": "list", "items": [node] * 800}}, "written": {{}}}}, [bytes(1 << 20)])
+peer.wire.send({{"op": "return", "value": {{"t": "list", "items": [node] * 600}}, "written": {{}}}}, [bytes(1 << 20)])
 """),
 }
 """train-kf answers that attack over the wire, by blank."""
@@ -120,6 +128,9 @@ if os.fork() == 0:
 os.wait()
 # System V shared memory: a segment stays, memory and all, after its process ends, unless removed
 libc.shmget(KEY, 1 << 20, 0o1000 | 0o600)  # IPC_CREAT
+# scripts, for whoever views the graded notebook
+from IPython.display import Javascript, Markdown
+display(HTML("<script>alert('html')</script>"), Javascript("alert('js')"), Markdown("<img src=x onerror=alert('md')>"))
 # displayed data, not printed text: 10 MB of it
 for _ in range(50):
     display(HTML("<p>" + "z" * 200_000 + "</p>"))
@@ -136,7 +147,7 @@ SERVED = {
     "predict": _stub("predict", "x, B, A, Q", "loop = []\nloop.append(loop)\nreturn loop"),
     "process_noise": _stub("process_noise", "sigma, dt_min=1.0", "return 10**5000"),
     # the grader's code in the kernel replaced: for two tests, the first message (which the grader
-    # reads in its own process) is nested 30,000 deep, or 600 MB long
+    # reads in its own process) is nested 30,000 deep, or 300 MB long
     "gain_covariance_form": _stub("gain_covariance_form", "B, H, R", "return gain_information_form(B, H, R)") + """
 
 def _first_message(path, name, serve=__import__("sys").modules["_kit_grading"].serve):
@@ -146,7 +157,7 @@ def _first_message(path, name, serve=__import__("sys").modules["_kit_grading"].s
     if name == "gain_covariance_form":
         data = b'{"op": "ready", "pad": ' + b"[" * 30_000 + b"]" * 30_000 + b"}"
     else:
-        data = b'{"op": "ready", "pad": "' + b"x" * 600_000_000 + b'"}'
+        data = b'{"op": "ready", "pad": "' + b"x" * 300_000_000 + b'"}'
     connection = socket.socket(socket.AF_UNIX)
     connection.connect(path)
     connection.sendall(struct.pack("!QQ", len(data), 0) + data)
@@ -168,12 +179,12 @@ kupdate with H of shape (5000, 1), a message of 80 kB that makes the reference b
 
 
 MESSAGES = [
-    # widgets' messages of the kernel's own making: 60 MB of state, then a widget without its module
-    "from ipykernel.comm import Comm\nfor _ in range(30):\n    Comm(target_name='jupyter.widget', data={'state': {"
-    "'_model_name': 'X', '_model_module': 'x', '_model_module_version': '1', 'v': 'v' * 2_000_000}})",
+    # widgets' messages of the kernel's own making: 10 MB of state, then a widget without its module
+    "from ipykernel.comm import Comm\nfor _ in range(10):\n    Comm(target_name='jupyter.widget', data={'state': {"
+    "'_model_name': 'X', '_model_module': 'x', '_model_module_version': '1', 'v': 'v' * 1_000_000}})",
     "Comm(target_name='jupyter.widget', data={'state': {'_model_name': 'OutputModel'}})",
-    # three messages of 100 MB on standard output
-    "import sys\nblock = 'x' * 100_000_000\nfor _ in range(3):\n    sys.stdout.write(block)\n    sys.stdout.flush()",
+    # a message of 150 MB on standard output
+    "import sys\nsys.stdout.write('x' * 150_000_000)\nsys.stdout.flush()",
     "print('graded on')",
 ]
 """Cells for the run on the kernel's messages (a notebook of its own, no lab)."""
@@ -313,7 +324,7 @@ def test_a_blank_that_returns_another_blanks_answer_gets_the_students_own(runs):
 
 
 def test_forged_answers_and_floods_fail_their_own_test_and_the_grader_stays_small(runs):
-    """A forged answer that decodes to 800 MiB, and one nested 100,000 deep, fail their blank's
+    """A forged answer that decodes to 600 MiB, and one nested 100,000 deep, fail their blank's
     test and leave the grader's own memory alone (the check runs in a child capped in memory);
     printed text, error messages and displayed data stay within the cell's output cap, and cells
     that each print just under it within the notebook's; the blank that only printed a lot, and
@@ -361,7 +372,7 @@ def test_the_references_cost_on_the_students_inputs_stays_out_of_the_grader(runs
     """run_filter asks the served kupdate for a 5000 x 5000 solve (a message of 80 kB): the child
     that runs the check pays for it, not the grader, and so it does for an answer of 100 MB. A
     kernel whose answer cannot be sent fails that test. The grader's code in the kernel, replaced,
-    sends a first message 600 MB long, which the grader read whole in its own process, or nested
+    sends a first message 300 MB long, which the grader read whole in its own process, or nested
     30,000 deep, which made it raise and end the grading of the submission: both only fail their
     test. The other blanks are graded."""
     nb, peak = runs["served"]
@@ -492,19 +503,39 @@ def test_a_crashing_kernel_dumps_no_core():
 
 def test_widget_messages_neither_bloat_nor_break_the_graded_notebook(runs):
     """A kernel can send widgets' messages (comm) of its own making: nbclient kept their state in
-    the graded notebook without limit (60 MB here), and a widget without its module made it raise,
+    the graded notebook without limit (10 MB here), and a widget without its module made it raise,
     which ended the grading of the submission. The grader drops them."""
     nb, _ = runs["messages"]
     assert "widgets" not in nb.metadata and len(nbformat.writes(nb)) < 100_000
 
 
 def test_a_huge_message_from_the_kernel_never_reaches_the_grader(runs):
-    """Three messages of 100 MB on the kernel's standard output: jupyter_client decoded each whole,
-    and the grader held several times its size (1.4 GiB for messages of 300 MB), whatever the output
-    cap kept. ZeroMQ now refuses a message over the cap (128 MiB; 16 MiB here) before the grader
+    """A message of 150 MB on the kernel's standard output: jupyter_client decoded it whole, and
+    the grader held several times its size (1.4 GiB for messages of 300 MB), whatever the output cap
+    kept. ZeroMQ now refuses a message over the cap (128 MiB; 16 MiB here) before the grader
     reads it; the cell that sent it times out, and grading goes on."""
     nb, peak = runs["messages"]
     *_, flooded, after = nb.cells
     assert peak < 450 * 2**20, f"the grader grew to {peak / 2**20:.0f} MiB"
     assert [o.get("ename") for o in flooded.outputs] == ["CellTimeoutError"]
     assert [o.get("text") for o in after.outputs] == ["graded on\n"]
+
+
+def test_a_submissions_html_is_inert_where_the_instructor_views_it(runs):
+    """nbgrader's formgrader shows a graded notebook as a page of the instructor's Jupyter server, and
+    rendered a script in a student's Markdown answer or displayed output as live HTML: it ran as the
+    instructor, with the server's API (the reference, terminals, the grades). The course's autograde
+    runs InertHtml right after the kernel; the page then holds the text, and no script."""
+    preprocessors = grading.course_config().Autograde.autograde_preprocessors
+    assert preprocessors[preprocessors.index(GradingExecute) + 1] is InertHtml
+    nb = copy.deepcopy(runs["wire"][0])
+    nb.cells.append(nbformat.v4.new_markdown_cell("My derivation: x < y. <img src=x onerror=\"alert('answer')\">"))
+    nb, _ = InertHtml().preprocess(nb, {})
+    config = Config()
+    config.HTMLExporter.template_name = "formgrade"
+    config.HTMLExporter.extra_template_basedirs = [formgrader_handlers.template_path]
+    page, _ = HTMLExporter(config=config).from_notebook_node(nb, resources={
+        "index": 0, "total": 1, "base_url": "/", "notebook_id": TRAIN.id, "nbgrader": {}})
+    assert "x &amp;lt; y" not in page and "x &lt; y." in page, "the answer's text is shown as written"
+    for live in ("<script>alert(", "<img src=x onerror", "alert('js')\n</script>"):  # as tags, not as text
+        assert live not in page, live
