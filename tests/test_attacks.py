@@ -2,11 +2,13 @@
 
 A student who has read the kit's source (course/ and autograder/) tries to earn marks they did not,
 or to break grading for others: through the blanks the grader serves, the socket to the grader,
-the grader's memory and time, the size of what a cell outputs, processes that outlive the kernel,
-and symbolic links in a submission. Each graded run is a solved train-kf notebook with several
-attacks planted, run through the grading execute step with the course's configuration (the
-sandboxed kernel, hidden tests in the grader's process), each run in a fresh process whose peak
-memory is measured; README (What grading defends against) lists what each defence does.
+the grader's memory and time, the size of what a cell outputs, the kernel's messages, processes
+and shared memory that outlive the kernel, core dumps, HTML for whoever views the graded notebook,
+and symbolic links or huge files in the submissions. Each graded run is a solved train-kf notebook
+with several attacks planted, run through the grading execute step with the course's configuration
+(the sandboxed kernel, hidden tests in the grader's process), each in a fresh process whose peak
+memory is measured, three runs two at a time; the launcher's own defences are tried on the
+launcher alone. README (What grading defends against) lists what each defence does.
 """
 
 from __future__ import annotations
@@ -21,6 +23,7 @@ import resource
 import secrets
 import shutil
 import signal
+import socket
 import subprocess
 import sys
 import tempfile
@@ -115,6 +118,7 @@ attempt("trace the kernel's parent", trace)
 attempt("read the parent's memory", lambda: open(f"/proc/{os.getppid()}/mem", "rb").read(1))
 attempt("list the processes", lambda: os.listdir("/proc"))
 attempt("write in /dev/shm", lambda: open("/dev/shm/kit-attack", "w").close())
+attempt("connect to an abstract socket", lambda: __import__("socket").socket(1).connect("\\0NAME"))
 print(found)
 # a daemon: it leaves the kernel's process group and session, and ignores the signals of a shutdown
 if os.fork() == 0:
@@ -141,6 +145,9 @@ LOUD_CELLS = 15
 """Cells added after it, each printing 900,000 characters, under the cell's cap but not the notebook's."""
 
 SERVED = {
+    # an exception whose message cannot be made: str() of it raises
+    "kupdate": "class _Unspeakable(Exception):\n    def __str__(self):\n        raise RuntimeError('no words')\n\n\n"
+               + _stub("kupdate", "x_f, B_f, y, H, R", "raise _Unspeakable()"),
     # a gigantic answer: 100 MB, within what the wire carries
     "gain_information_form": _stub("gain_information_form", "B, H, R", "return np.zeros(12_500_000)"),
     # answers the kernel's side cannot send: a list that holds itself, and an integer of 5,000 digits
@@ -256,11 +263,15 @@ def segments(key: int) -> list[int]:
 
 @pytest.fixture(scope="module")
 def leftover():
-    """A name for the wire run's daemon and a key for its shared memory segment; any process of
-    that name is killed, and any segment with that key removed, afterwards."""
+    """A name for the wire run's daemon (and for an abstract Unix socket that listens meanwhile)
+    and a key for its shared memory segment; any process of that name is killed, and any segment
+    with that key removed, afterwards."""
     token = secrets.token_hex(4)
     name, key = f"kit-{token}", int(token, 16) & 0x7FFFFFFF
-    yield name, key
+    with socket.socket(socket.AF_UNIX) as listening:
+        listening.bind(f"\0{name}")
+        listening.listen(1)
+        yield name, key
     for pid in daemons(name):
         os.kill(pid, signal.SIGKILL)
     for shmid in segments(key):
@@ -350,8 +361,8 @@ def test_forged_answers_and_floods_fail_their_own_test_and_the_grader_stays_smal
 
 
 def test_the_kernel_reaches_no_other_process_and_nothing_it_started_outlives_it(runs, leftover):
-    """The kernel cannot signal, trace or read its parent, list processes or write in /dev/shm; a
-    daemon it started (its own session, shutdown signals ignored) dies with it, and so does a System
+    """The kernel cannot signal, trace or read its parent, list processes, write in /dev/shm, or
+    reach an abstract Unix socket of the machine's (this test's, which listens); a daemon it started (its own session, shutdown signals ignored) dies with it, and so does a System
     V shared memory segment it made. Before the PID and IPC namespaces both lived on after grading:
     the daemon free to take the machine's CPU and memory from other jobs, the segment holding its
     memory and readable by every later kernel."""
@@ -361,7 +372,8 @@ def test_the_kernel_reaches_no_other_process_and_nothing_it_started_outlives_it(
     assert eval(printed) == {"signal the kernel's parent": "PermissionError",
                              "trace the kernel's parent": "PermissionError",
                              "read the parent's memory": "PermissionError", "list the processes": "PermissionError",
-                             "write in /dev/shm": "PermissionError"}
+                             "write in /dev/shm": "PermissionError",
+                             "connect to an abstract socket": "ConnectionRefusedError"}
     time.sleep(1)
     name, key = leftover
     assert daemons(name) == [], "a process the kernel started outlived it"
@@ -371,7 +383,8 @@ def test_the_kernel_reaches_no_other_process_and_nothing_it_started_outlives_it(
 def test_the_references_cost_on_the_students_inputs_stays_out_of_the_grader(runs):
     """run_filter asks the served kupdate for a 5000 x 5000 solve (a message of 80 kB): the child
     that runs the check pays for it, not the grader, and so it does for an answer of 100 MB. A
-    kernel whose answer cannot be sent fails that test. The grader's code in the kernel, replaced,
+    kernel whose answer cannot be sent (a list that holds itself, an integer of 5,000 digits, an
+    exception that has no message) fails that test. The grader's code in the kernel, replaced,
     sends a first message 300 MB long, which the grader read whole in its own process, or nested
     30,000 deep, which made it raise and end the grading of the submission: both only fail their
     test. The other blanks are graded."""
@@ -380,7 +393,7 @@ def test_the_references_cost_on_the_students_inputs_stays_out_of_the_grader(runs
     assert peak < GRADER_MEMORY, f"the grader grew to {peak / 2**20:.0f} MiB"
     assert {k: v for k, v in got.items() if k != "test_run_filter"} == {
         "test_gain_information_form": 0, "test_gain_covariance_form": 0, "test_process_noise": 0,
-        "test_predict": 0, "test_kupdate": 2.0, "test_nees": 0}
+        "test_predict": 0, "test_kupdate": 0, "test_nees": 0}
     for blank in ("gain_covariance_form", "nees"):
         [error] = [o for o in _test_cell(nb, blank).outputs if o.output_type == "error"]
         assert "could not reach your function" in error.evalue, error
