@@ -21,6 +21,7 @@ os.environ["PATH"] = os.pathsep.join((os.path.dirname(sys.executable), os.enviro
 from autograder.pipeline.execute import GradingExecute  # noqa: E402
 from autograder.kernel.manager import SandboxedKernelManager  # noqa: E402
 from autograder.integrity.flag import FlagCheating  # noqa: E402
+from autograder.pipeline.inert_html import InertHtml  # noqa: E402
 from autograder.pipeline.restore import RestoreLabCells  # noqa: E402
 from course.checks import NOT_WRITTEN  # noqa: E402
 from nbconvert.preprocessors import ClearMetadataPreprocessor, CSSHTMLHeaderPreprocessor  # noqa: E402
@@ -90,6 +91,7 @@ c.Autograde.sanitize_preprocessors = [
 # points of every blank a submission games, and flag it for review (autograder/integrity/flag.py).
 c.Autograde.autograde_preprocessors = [
     GradingExecute,
+    InertHtml,
     FlagCheating,
     IgnorePattern,
     ClearMetadataPreprocessor,

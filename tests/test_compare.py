@@ -153,9 +153,8 @@ def test_the_grader_answers_only_for_earlier_blanks_and_never_for_the_one_under_
     """Isolation: the student's run calls the reference's step for a blank graded earlier, its own
     for a blank graded later, and its own run when it calls itself."""
     reference = type(np)("reference")
-    reference.step = lambda x: x + 100.0
-    reference.later = lambda x: x + 1000.0
-    reference.run = lambda x, depth=0: -1.0
+    exec("def step(x):\n    return x + 100.0\ndef later(x):\n    return x + 1000.0\n"
+         "def run(x, depth=0):\n    return step(later(x))\n", reference.__dict__)  # the reference's run calls both
     source = ("def step(x):\n    return x + 1.0\n"
               "def later(x):\n    return x + 10.0\n"
               "def run(x, depth=0):\n    return step(x) + later(x) + (run(x, 1) if depth == 0 else 0.0)\n")

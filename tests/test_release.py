@@ -15,7 +15,7 @@ from autograder import cells
 from autograder.release import data, leaks
 from autograder.pipeline import versions, nbgrader_apps
 from autograder.release.bundle import LeakFound, write_bundle
-from autograder.labs import ROOT, all_labs
+from autograder.labs import ROOT
 from importable import importable
 from over_labs import LABS, about, chosen, over_labs
 

@@ -156,15 +156,16 @@ def test_status_reports_what_this_machine_offers():
     assert can_unshare, "this machine makes no network namespaces: the sandbox cannot cut the network here"
     found = sandbox.status()
     assert (found.landlock_abi, found.network_namespace, found.complete) == (raw, True, True)
-    assert found.summary == f"Landlock ABI {raw} (files) and a private network namespace (no network)"
+    assert found.summary == (f"Landlock ABI {raw} (files) and private network and PID namespaces (no network, and no "
+                             "process outlives the kernel)")
 
 
 @pytest.mark.parametrize("value, layers, starts, ends", [
-    ("on", ("files", "network"), "Landlock ABI", "a private network namespace (no network)"),
+    ("on", ("files", "network"), "Landlock ABI", "PID namespaces (no network, and no process outlives the kernel)"),
     ("off", (), "NOT SANDBOXED: Landlock turned off (KIT_SANDBOX=off), and network namespace turned off",
      "the grading kernel can read every file the grader's user can, and use the network"),
     ("files", ("files",), "PARTLY SANDBOXED: Landlock ABI", "the grading kernel can use the network"),
-    ("network", ("network",), "PARTLY SANDBOXED: Landlock turned off (KIT_SANDBOX=network) and a private network",
+    ("network", ("network",), "PARTLY SANDBOXED: Landlock turned off (KIT_SANDBOX=network) and private network",
      "the grading kernel can read every file the grader's user can"),
 ])
 def test_kit_sandbox_turns_layers_off_and_status_says_so(monkeypatch, value, layers, starts, ends):

@@ -1,8 +1,11 @@
 """Helpers for the hidden tests, which run in the grader's process (autograder/pipeline/compare.py), or in
 the kernel of a source notebook run by hand, where the reference is present.
 
-Partial credit is isolated: a blank's hidden tests call the student's function with every other
-blank it uses bound to the reference, so that one mistake costs one blank's points.
+Partial credit is isolated: a blank's hidden tests call the student's function with the other
+blanks that the reference's own version of it calls bound to the reference, so that one mistake
+costs one blank's points. Only those: a blank whose answer called another blank that its reference
+does not call (a covariance-form gain that returns the information-form gain) would otherwise be
+handed the reference's answer for its own work.
 
 Warnings are failures with a message. nbgrader gives 0 to a test cell that writes to stderr, but
 Python shows a warning only the first time a line triggers it, so the score would depend on which
@@ -18,8 +21,22 @@ import sys
 from typing import Callable, Iterable
 
 
+def called_blanks(reference: types.ModuleType, name: str, blanks: Iterable[str]) -> frozenset[str]:
+    """The blanks among ``blanks``, other than ``name``, whose names the reference's ``name`` uses
+    (in its code or in the code of functions defined inside it); none if it has no such function."""
+    names: set[str] = set()
+    code = getattr(getattr(reference, name, None), "__code__", None)
+    codes = [code] if code is not None else []
+    while codes:
+        code = codes.pop()
+        names.update(code.co_names)
+        codes += [const for const in code.co_consts if isinstance(const, types.CodeType)]
+    return frozenset(blank for blank in blanks if blank in names and blank != name)
+
+
 def isolate(func: Callable, reference: types.ModuleType, blanks: Iterable[str], *, warnings_fail: bool = True) -> Callable:
-    """A copy of ``func`` that sees the reference's version of every other blank in ``blanks``.
+    """A copy of ``func`` that sees the reference's version of each other blank in ``blanks`` that
+    the reference's own version of ``func`` calls (``called_blanks``); other names are its own.
 
     The notebook's namespace is left alone: only the copy sees the reference functions. With
     ``warnings_fail`` (the default) a warning in the copy fails with a message; a check that turns
@@ -30,7 +47,7 @@ def isolate(func: Callable, reference: types.ModuleType, blanks: Iterable[str], 
         return func.isolated(reference, blanks, warnings_fail)
     if not isinstance(func, types.FunctionType):
         raise AssertionError(f"{func!r} should be a function defined with `def`.")
-    others = {name: getattr(reference, name) for name in blanks if name != func.__name__}
+    others = {name: getattr(reference, name) for name in called_blanks(reference, func.__name__, blanks)}
     namespace = {**func.__globals__, **others}
     copy = types.FunctionType(func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__)
     copy.__kwdefaults__ = func.__kwdefaults__

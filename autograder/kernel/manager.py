@@ -19,8 +19,11 @@ from functools import cache
 from pathlib import Path
 from typing import Any
 
+import zmq
+import zmq.asyncio
+from jupyter_client.asynchronous import AsyncKernelClient
 from jupyter_client.manager import AsyncKernelManager
-from traitlets import CaselessStrEnum, List, Unicode
+from traitlets import CaselessStrEnum, Integer, List, Type, Unicode
 
 from autograder.labs import ROOT
 from autograder.kernel.sandbox import launcher_command, wanted_layers
@@ -84,6 +87,16 @@ def font_cache(read: tuple[str, ...]) -> Path | None:
     return next(Path(folder).glob("fontlist-*.json"), None)
 
 
+class CappedKernelClient(AsyncKernelClient):
+    """jupyter_client's client, whose sockets take no message larger than its kernel manager's
+    ``max_message_bytes``."""
+
+    def _context_default(self) -> zmq.asyncio.Context:
+        context = super()._context_default()
+        context.setsockopt(zmq.MAXMSGSIZE, self.parent.max_message_bytes)
+        return context
+
+
 class SandboxedKernelManager(AsyncKernelManager):
     """A Jupyter kernel manager whose kernels run in the sandbox (see the module doc).
 
@@ -100,6 +113,13 @@ class SandboxedKernelManager(AsyncKernelManager):
 
     transport = CaselessStrEnum(["ipc"], default_value="ipc", config=True,
                                 help="Unix sockets only: TCP does not reach into the kernel's network namespace.")
+    client_factory = Type(CappedKernelClient, klass=AsyncKernelClient, config=True,
+                          help="The kernel client: jupyter_client's, taking no message larger than max_message_bytes.")
+    max_message_bytes = Integer(128 * 2**20, config=True, help=(
+        "The largest message (ZeroMQ frame) the grader takes from a kernel. ZeroMQ refuses a larger one before "
+        "the grader reads it, and the kernel's output stops reaching the grader, so the cell times out. Without "
+        "the cap one message of a gigabyte (the kernel's memory cap allows that) made the grader hold several times "
+        "its size while it decoded it; a cell keeps 1,000,000 characters of output anyway."))
     read_paths = List(Unicode(), help="Further paths the kernel may read beneath.").tag(config=True)
     write_paths = List(Unicode(), help="Further paths the kernel may read and write beneath.").tag(config=True)
 

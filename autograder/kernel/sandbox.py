@@ -1,14 +1,19 @@
 """A sandbox for the grading kernel: what it may read and write, and no network.
 
 Two layers of the Linux kernel confine the kernel process, applied by a launcher that then
-``exec``s the kernel (the process, and so its pid, stay the same):
+``exec``s the kernel (in a grandchild, when it makes a PID namespace):
 
 - files: a Landlock ruleset (``landlockpy``) lets the process read only beneath the read paths
   and read and write only beneath the write paths; everything else on the filesystem is closed,
   even to root. It also keeps the process from signalling or tracing processes outside it;
 - network: a private network namespace, whose only interface is a loopback that is down. The
   process also gets its own user namespace where the OS allows one, so that a kernel started by
-  root holds no capability over the machine (loading kernel modules, mounting, raw devices).
+  root holds no capability over the machine (loading kernel modules, mounting, raw devices), and
+  its own PID namespace, under an init that ends when the kernel ends: Linux then kills every
+  process left in the namespace, so nothing the kernel starts (a daemon that left its process
+  group, a fork bomb) outlives it, and its own IPC namespace, so that no System V shared memory
+  or message queue does either. The launcher stays, as the kernel's manager's process, and waits.
+  Run by a plain user, the kernel may have at most MAX_TASKS processes and threads.
 
 ``python -m autograder.kernel.sandbox --read P ... --write P ... -- CMD ARGS...`` is the launcher. It never
 refuses: a layer the OS does not offer is left out, and it says so on stderr. ``status()`` says what
@@ -28,12 +33,15 @@ import contextlib
 import ctypes
 import errno
 import os
+import resource
+import select
 import shutil
+import signal
 import sys
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 import landlockpy
 from landlockpy import AccessFS, Scope
@@ -41,9 +49,15 @@ from landlockpy import AccessFS, Scope
 SWITCH = "KIT_SANDBOX"
 LAYERS = ("files", "network")
 
+CLONE_NEWIPC = 0x08000000
 CLONE_NEWNET = 0x40000000
+CLONE_NEWPID = 0x20000000
 CLONE_NEWUSER = 0x10000000
 PR_SET_NO_NEW_PRIVS = 38
+MAX_TASKS = 256
+"""The most processes and threads that a kernel run by a plain user may have at once (RLIMIT_NPROC,
+which Linux counts per user namespace, so per kernel here): a fork bomb stops there. Linux exempts
+root from the limit."""
 
 READ = AccessFS.READ_FILE | AccessFS.READ_DIR | AccessFS.EXECUTE
 """What a read path allows: read files and list folders, run programs."""
@@ -64,7 +78,7 @@ class SandboxStatus:
     files: bool
     """Whether kernels get the files layer (Landlock), given the OS and ``KIT_SANDBOX``."""
     network: bool
-    """Whether kernels get the network layer (a private network namespace)."""
+    """Whether kernels get the network layer (private network and PID namespaces)."""
     summary: str
     """One line for the grader's output and the grades record."""
 
@@ -109,7 +123,7 @@ def status() -> SandboxStatus:
     elif netns_problem is not None:
         network_part = f"no network namespace ({netns_problem})"
     else:
-        network_part = "a private network namespace (no network)"
+        network_part = "private network and PID namespaces (no network, and no process outlives the kernel)"
     if files and network:
         summary = f"{files_part} and {network_part}"
     elif files or network:
@@ -174,17 +188,53 @@ def _check(result: int, call: str) -> None:
 
 
 def enter_network_namespace() -> None:
-    """Move this process into a new network namespace. First into a new user namespace where this
-    user is itself, where the OS allows one (for root too: root inside holds no capability over the
-    machine); without the uid map, which some systems refuse, it shows as nobody and still works.
-    Raises OSError when no network namespace can be made."""
+    """Move this process into new network and IPC namespaces (System V shared memory, semaphores and
+    message queues, which would outlive the kernel and be shared with other kernels, die with the
+    last process in it), and the children it starts from now on into a new PID namespace. First into a new user namespace where this user is itself, where the OS
+    allows one (for root too: root inside holds no capability over the machine); without the uid
+    map, which some systems refuse, it shows as nobody and still works. Raises OSError when the
+    namespaces cannot be made."""
     uid, gid = os.getuid(), os.getgid()
     if _libc().unshare(CLONE_NEWUSER) == 0:
         with contextlib.suppress(OSError):
             Path("/proc/self/setgroups").write_text("deny")
             Path("/proc/self/uid_map").write_text(f"{uid} {uid} 1")
             Path("/proc/self/gid_map").write_text(f"{gid} {gid} 1")
-    _check(_libc().unshare(CLONE_NEWNET), "unshare(CLONE_NEWNET)")
+    _check(_libc().unshare(CLONE_NEWNET | CLONE_NEWPID | CLONE_NEWIPC), "unshare(CLONE_NEWNET | CLONE_NEWPID | CLONE_NEWIPC)")
+
+
+def run_below_namespace_init() -> None:
+    """After ``enter_network_namespace``: fork twice and return in the grandchild, whose parent is
+    the init (PID 1) of the new PID namespace. The init reaps every orphan of the namespace and
+    exits with the grandchild's status when it ends; Linux then kills every process left in the
+    namespace. This process, the launcher, exits with the init's status, and kills the init if its
+    own parent (the grader) dies first: ipykernel's own check that its parent lives cannot see the
+    grader from inside the namespace, so the grandchild's JPY_PARENT_PID names its real parent, the
+    init (PID 1), which ipykernel does not watch."""
+    init = os.fork()
+    if init:
+        parent = os.getppid()
+        signal.signal(signal.SIGINT, signal.SIG_IGN)  # the grader's interrupts are for the kernel
+        ended = os.pidfd_open(init)
+        while not select.select([ended], [], [], 1.0)[0]:
+            if os.getppid() != parent:
+                os.kill(init, signal.SIGKILL)
+        _exit_as(os.waitpid(init, 0)[1])
+    kernel = os.fork()
+    if kernel:
+        signal.signal(signal.SIGINT, signal.SIG_IGN)
+        while True:
+            pid, status = os.wait()
+            if pid == kernel:
+                _exit_as(status)
+    if "JPY_PARENT_PID" in os.environ:
+        os.environ["JPY_PARENT_PID"] = "1"
+
+
+def _exit_as(status: int) -> NoReturn:
+    """Exit with the status a child ended with (128 + the signal's number if a signal ended it)."""
+    code = os.waitstatus_to_exitcode(status)
+    os._exit(code if code >= 0 else 128 - code)
 
 
 def set_no_new_privs() -> None:
@@ -214,8 +264,10 @@ def restrict_files(read: list[str], write: list[str]) -> list[str]:
 
 
 def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS) -> list[str]:
-    """Apply the sandbox's ``layers`` to this process: the network namespace, no_new_privs, then
-    Landlock. Returns what could not be applied, one sentence each (empty when all was)."""
+    """Apply the sandbox's ``layers`` to this process: the network and PID namespaces (returning in
+    a grandchild, see ``run_below_namespace_init``, capped at MAX_TASKS tasks unless run by root),
+    no core dumps, no_new_privs, then Landlock. Returns what could not be applied, one sentence each (empty when all
+    was)."""
     if sys.platform != "linux":
         return [f"not applied: {', '.join(layers)} confinement needs Linux"] if layers else []
     problems = []
@@ -224,6 +276,13 @@ def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS)
             enter_network_namespace()
         except OSError as error:
             problems.append(f"no network namespace, the kernel has the network ({_namespace_error(error.errno)})")
+        else:
+            run_below_namespace_init()
+            if os.getuid() != 0:  # a plain user got here through its own user namespace
+                resource.setrlimit(resource.RLIMIT_NPROC, (MAX_TASKS, MAX_TASKS))
+    # no core dumps: a crash would write the kernel's memory (up to its 4 GiB) to disk, in its folder,
+    # or outside the sandbox where a helper collects cores (systemd-coredump, apport)
+    resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
     try:
         set_no_new_privs()
     except OSError as error:

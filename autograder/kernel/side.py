@@ -79,6 +79,8 @@ class Wire:
         self.sock = sock
         self.deadline: float | None = None
         """time.monotonic() after which receive raises PeerTimeout (None: wait for ever)."""
+        self.limit = MAX_MESSAGE_BYTES
+        """The largest message receive accepts; a larger one is a ProtocolError, raised before it is read."""
 
     def send(self, header: dict, buffers: list[bytes]) -> None:
         data = json.dumps(header).encode()
@@ -92,11 +94,11 @@ class Wire:
 
     def receive(self) -> tuple[dict, list[bytes]]:
         size, count = struct.unpack("!QQ", self._exactly(16))
-        if size > MAX_MESSAGE_BYTES or count > 1_000_000:
+        if size > self.limit or count > 1_000_000:
             raise ProtocolError("a message larger than the wire allows")
         try:
             header = json.loads(self._exactly(size))
-        except ValueError:
+        except (ValueError, RecursionError):  # not JSON, or nested deeper than Python's stack
             raise ProtocolError("a header that is not JSON") from None
         if not isinstance(header, dict):
             raise ProtocolError("a header that is not a JSON object")
@@ -104,7 +106,7 @@ class Wire:
         for _ in range(count):
             (length,) = struct.unpack("!Q", self._exactly(8))
             total += length
-            if total > MAX_MESSAGE_BYTES:
+            if total > self.limit:
                 raise ProtocolError("a message larger than the wire allows")
             buffers.append(self._exactly(length))
         return header, buffers

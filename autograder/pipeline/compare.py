@@ -9,17 +9,19 @@ A graded test cell of blank ``f`` ends with a hidden block that nbgrader strips 
 
 Run by hand or by nbval on a source notebook, where the reference is legitimately present, the
 block runs as written: the check compares in-process (the local mode). In grading, the kernel never
-runs it. ``GradingExecute`` runs the cell's visible part in the kernel, then :func:`run_hidden_test`
-runs ``check_f`` here, in the grader's process, where the reference is, on a :class:`StudentFunction`:
+runs it. ``GradingExecute`` runs the cell's visible part in the kernel, then :func:`run_check`
+runs ``check_f`` here, in the grader's process (in a forked child capped in memory and time,
+autograder/pipeline/confined_check.py), where the reference is, on a :class:`StudentFunction`:
 a stand-in whose calls go over a Unix socket to ``autograder/kernel/side.py`` in the kernel, which
 calls the student's ``f`` and sends back what it returned. The check's verdict becomes the cell's
 outputs: nothing on a pass, the check's error on a failure. Whatever the kernel does, it cannot make
 a check pass without returning the reference's values, and it never holds the reference.
 
 Partial credit stays isolated (autograder/hidden_tests/isolate.py, ``isolate``): in the kernel, the student's ``f``
-calls stand-ins for the other blanks, which the grader answers with the reference, only while this
-test runs, never for ``f`` itself, and only for blanks whose own hidden test came earlier in the
-notebook, so that no test can collect the reference's answers for a later one.
+calls stand-ins for the other blanks that the reference's ``f`` calls, which the grader answers with
+the reference, only while this test runs, never for ``f`` itself, and only for blanks whose own
+hidden test came earlier in the notebook, so that no test can collect the reference's answers for a
+later one, nor have a blank it does not need answer for it.
 """
 
 from __future__ import annotations
@@ -44,6 +46,7 @@ from typing import Callable
 from nbformat import NotebookNode
 from nbformat.v4 import new_output
 
+from autograder.hidden_tests.isolate import called_blanks
 from autograder.kernel import side
 from autograder.kernel.side import Peer, PeerGone, PeerTimeout, ProtocolError, Wire, warning_class
 
@@ -52,6 +55,11 @@ HIDDEN_MODULE = re.compile(r"solutions\.[a-z0-9_]+\.hidden_tests")
 """Where a hidden block imports its check from: ``solutions.<module>.hidden_tests``."""
 MODULE_NAME = "_kit_grading"
 """The kernel-side module's name in the kernel's ``sys.modules``."""
+MAX_MESSAGE_CHARS = 10_000
+"""The most of an error's name, message or location that a test cell keeps."""
+FIRST_MESSAGE_BYTES = 1 << 16
+"""The largest first message (ready, or why not) the grader reads from a kernel: it reads it in its
+own process, before the check's capped child starts."""
 
 
 class HiddenTestFormError(ValueError):
@@ -153,8 +161,10 @@ class StudentFunction:
         self.earlier, self.served, self.warnings_fail = earlier, served or {}, warnings_fail
 
     def isolated(self, reference: types.ModuleType, blanks, warnings_fail: bool) -> "StudentFunction":
-        """The same function, seeing the reference's version of the other blanks that came earlier."""
-        served = {name: getattr(reference, name) for name in blanks if name != self.__name__ and name in self.earlier}
+        """The same function, seeing the reference's version of the other blanks that came earlier
+        and that the reference's own version calls (autograder/hidden_tests/isolate.py, ``called_blanks``)."""
+        served = {name: getattr(reference, name) for name in called_blanks(reference, self.__name__, blanks)
+                  if name in self.earlier}
         return StudentFunction(self.peer, self.__name__, self.earlier, served, warnings_fail)
 
     def __call__(self, *args, **kwargs):
@@ -209,18 +219,23 @@ class Listener:
 
 
 def error_output(ename: str, evalue: str, where: str = "") -> NotebookNode:
-    """An error output as IPython's minimal traceback shows it: one line, plus where it was raised."""
+    """An error output as IPython's minimal traceback shows it: one line, plus where it was raised.
+    Each part is cut to MAX_MESSAGE_CHARS: a student's exception can carry megabytes."""
+    ename, evalue, where = (cut(text) for text in (ename, evalue, where))
     lines = [f"{ename}: {evalue}"] + ([f"(raised {where})"] if where else [])
     return new_output("error", ename=ename, evalue=evalue, traceback=lines)
 
 
-def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[str]) -> list[NotebookNode]:
-    """Run ``check`` on the student's function over ``peer``; the outputs the cell gets.
+def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[str],
+              max_chars: int) -> tuple[list[NotebookNode], int]:
+    """Run ``check`` on the student's function over ``peer``: the outputs the cell gets, and how many
+    characters the student's function printed (and warned) in all, of which the outputs keep the
+    first ``max_chars``.
 
     Raises PeerTimeout when the kernel does not answer in time and KernelStopped when it stops
     answering; every other failure is the student's, and becomes an error output.
     """
-    out, err = io.StringIO(), io.StringIO()
+    out, err = Capped(max_chars), Capped(max_chars)
     outputs: list[NotebookNode] = []
     value = None
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings(record=True) as caught:
@@ -236,12 +251,43 @@ def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[
         except Exception as error:  # noqa: BLE001 (a failing check: its message is the student's feedback)
             notes = getattr(error, "__notes__", [])
             outputs.append(error_output(type(error).__name__, "\n".join([str(error), *notes]), getattr(error, "where", "")))
-    text = err.getvalue() + "".join(f"{w.filename}:{w.lineno}: {w.category.__name__}: {w.message}\n" for w in caught)
-    streams = [new_output("stream", name=name, text=t) for name, t in (("stdout", out.getvalue()), ("stderr", text)) if t]
+    for w in caught:
+        err.write(f"{w.filename}:{w.lineno}: {w.category.__name__}: {w.message}\n")
+    stdout = out.getvalue()
+    texts = (("stdout", stdout), ("stderr", err.getvalue()[: max_chars - len(stdout)]))
+    streams = [new_output("stream", name=name, text=text) for name, text in texts if text]
     result = []
     if value is not None and not outputs:
         result = [new_output("execute_result", data={"text/plain": repr(value)}, execution_count=None)]
-    return streams + outputs + result
+    return streams + outputs + result, out.written + err.written
+
+
+class Capped(io.TextIOBase):
+    """A text stream that keeps the first ``limit`` characters written to it, and counts them all."""
+
+    def __init__(self, limit: int):
+        super().__init__()
+        self.limit, self.written, self.parts = limit, 0, []
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, text: str) -> int:
+        if self.written < self.limit:
+            self.parts.append(text[: self.limit - self.written])
+        self.written += len(text)
+        return len(text)
+
+    def getvalue(self) -> str:
+        return "".join(self.parts)
+
+
+def cut(text: str) -> str:
+    """``text``, cut to MAX_MESSAGE_CHARS with a note that says so (an error's message, name or line)."""
+    if len(text) <= MAX_MESSAGE_CHARS:
+        return text
+    dropped = len(text) - MAX_MESSAGE_CHARS
+    return f"{text[:MAX_MESSAGE_CHARS]} [... {dropped:,} more characters cut by the grader]"
 
 
 def connect(listener: Listener, deadline: float | None, gave_up: Callable[[], bool]) -> tuple[Peer | None, str]:
@@ -254,11 +300,12 @@ def connect(listener: Listener, deadline: float | None, gave_up: Callable[[], bo
             raise PeerTimeout()
         return None, tampered
     wire = Wire(connection)
-    wire.deadline = deadline
+    wire.deadline, wire.limit = deadline, FIRST_MESSAGE_BYTES
     try:
         header, _ = wire.receive()
     except (PeerGone, ProtocolError):
         header = {}
+    wire.limit = side.MAX_MESSAGE_BYTES
     if header.get("op") == "ready":
         return Peer(wire), ""
     connection.close()

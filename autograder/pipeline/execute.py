@@ -4,12 +4,15 @@
 
 - hidden tests run in the grader's process, never in the student's kernel (autograder/pipeline/compare.py):
   a test cell's visible part runs in the kernel, then its check runs here against the student's
-  function, which the kernel only calls; the grader refuses to start if it cannot import the checks
+  function, which the kernel only calls, in a forked child capped in memory and killed at the
+  cell's deadline (autograder/pipeline/confined_check.py), with what the student's function printed kept
+  within the output caps; the grader refuses to start if it cannot import the checks
   and the reference they compare with (without them every hidden test would fail and nbgrader
   would still report success);
 - caps on each kernel: address space (``memory_limit_gb``), time per cell (``timeout``, the visible
   part and the hidden test together), time for the whole notebook (``notebook_timeout``), and
-  output kept per cell (``max_output_bytes``);
+  output kept per cell and per notebook (``max_output_bytes``, ``max_notebook_output_bytes``: printed
+  text, displayed data and results alike);
 - a kernel that does not start (on a loaded machine a start can take minutes) is started again,
   up to ``kernel_start_attempts`` times in all, rather than nbgrader dropping the submission;
 - recovery: when the kernel dies (``os._exit``, a crash, the memory cap) or a cell times out, the
@@ -23,6 +26,7 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import json
 import os
 import shutil
 import tempfile
@@ -37,11 +41,13 @@ from nbgrader.preprocessors import Execute
 from traitlets import Float, Integer
 
 from autograder import cells
-from autograder.pipeline import compare
 from autograder.kernel import sandbox
+from autograder.pipeline import compare, confined_check
 from autograder.pipeline.restore import add_grader_notes
 
 TIMEOUT_ERROR = "CellTimeoutError"
+NOTED_LOUD_CELLS = 3
+"""How many cells whose output was cut the grader's note names one by one (then it counts the rest)."""
 KERNEL_DIED = "KernelDied"
 NOT_RUN = "NotRun"
 
@@ -51,15 +57,22 @@ class GradingExecute(Execute):
 
     memory_limit_gb = Float(4.0, help="Address-space cap of each grading kernel, GiB (0: none).").tag(config=True)
     notebook_timeout = Integer(300, help="Seconds for a whole submission; later cells are not run.").tag(config=True)
-    max_output_bytes = Integer(1_000_000, help="Text output kept per cell; the rest is dropped.").tag(config=True)
+    max_output_bytes = Integer(1_000_000, help="Output kept per cell (printed text, displayed data, results), in "
+                               "characters; the rest is dropped.").tag(config=True)
+    max_notebook_output_bytes = Integer(10_000_000, help="Output kept for a whole submission, in characters; "
+                                        "later output is dropped.").tag(config=True)
     max_restarts = Integer(12, help="Kernel restarts per submission before the rest is not run.").tag(config=True)
     kernel_start_attempts = Integer(3, help="Kernel starts tried before a submission is given up.").tag(config=True)
+
+    def _memory_bytes(self) -> int:
+        """The memory cap, in bytes, of each kernel and of each hidden test's check (0: none)."""
+        return int(max(0.0, self.memory_limit_gb) * 2**30)
 
     def _setup_code(self) -> list[tuple[str, str]]:
         """(what it is, code) run silently in every new kernel before any student cell."""
         steps = [("the grader's kernel-side module", compare.kernel_setup_code())]
         if self.memory_limit_gb > 0:
-            cap = int(self.memory_limit_gb * 2**30)
+            cap = self._memory_bytes()
             steps.append(("the memory cap", f"__import__('resource').setrlimit(__import__('resource').RLIMIT_AS, ({cap}, {cap}))"))
         return steps
 
@@ -106,6 +119,8 @@ class GradingExecute(Execute):
         """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""
         earlier: set[str] = set()
         self._output_bytes: dict[int, int] = {}
+        self._kept: dict[int, int] = {}
+        self._kept_total = 0
         notes: list[str] = []
         deadline = time.monotonic() + self.notebook_timeout
         failed: set[int] = set()
@@ -152,8 +167,13 @@ class GradingExecute(Execute):
                 failed.add(index)
                 restarts += 1
                 self._restart_and_replay(index, failed, deadline)
-        notes += [f"Cell {_name(self.nb.cells[i], i)} printed {n:,} characters; the grader kept the first "
-                  f"{self.max_output_bytes:,}." for i, n in sorted(self._output_bytes.items()) if n > self.max_output_bytes]
+        loud = [i for i, n in sorted(self._output_bytes.items()) if n > self._kept.get(i, 0)]
+        notes += [f"Cell {_name(self.nb.cells[i], i)} printed {self._output_bytes[i]:,} characters; the grader kept "
+                  f"the first {self._kept[i]:,}." for i in loud[:NOTED_LOUD_CELLS]]
+        if len(loud) > NOTED_LOUD_CELLS:
+            notes.append(f"{len(loud) - NOTED_LOUD_CELLS} more cells printed more than the grader keeps: "
+                         f"{self.max_output_bytes:,} characters of a cell's output, and "
+                         f"{self.max_notebook_output_bytes:,} of the whole notebook's.")
         add_grader_notes(self.nb, notes)
         self.set_widgets_metadata()
         return self.nb, self.resources
@@ -181,7 +201,11 @@ class GradingExecute(Execute):
                 cell.outputs.append(compare.error_output("AssertionError", why_not))
             else:
                 try:
-                    cell.outputs += compare.run_check(peer, test, check, earlier)
+                    room = self._room(index)
+                    outputs, printed = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
+                                                          deadline, self._memory_bytes())
+                    cell.outputs += outputs
+                    self._count(cell, index, printed, min(printed, room))
                 except compare.KernelStopped:
                     if not self._finished_alive(msg_id):
                         raise DeadKernelError("Kernel died") from None
@@ -250,23 +274,58 @@ class GradingExecute(Execute):
         await self.async_start_new_kernel()
         await self.async_start_new_kernel_client()
 
-    def output(self, outs, msg, display_id, cell_index):
-        """Keep at most ``max_output_bytes`` of text output per cell, then say that the rest was cut."""
-        if msg["msg_type"] != "stream":
-            return super().output(outs, msg, display_id, cell_index)
-        used = self._output_bytes.get(cell_index, 0)
-        text = msg["content"]["text"]
-        self._output_bytes[cell_index] = used + len(text)
-        if used >= self.max_output_bytes:
+    def process_message(self, msg: dict, cell: NotebookNode, cell_index: int) -> NotebookNode | None:
+        """nbclient's handling of a kernel message, with output capped: printed text, displayed data
+        and results together keep at most ``max_output_bytes`` characters of a cell and
+        ``max_notebook_output_bytes`` of the notebook, then the cell says that the rest was dropped
+        (the rest of a text is cut, any later output dropped). An error is always kept, its name,
+        message and traceback lines cut to compare.MAX_MESSAGE_CHARS: dropping it would turn a
+        failing test cell into a passing one. Widgets' messages (``comm_*``) are dropped: nbclient
+        would keep their state, of any size, in the graded notebook, and a malformed one made it
+        raise and end the grading of the submission."""
+        kind, content = msg["msg_type"], msg["content"]
+        if kind.startswith("comm"):
             return None
-        if used + len(text) > self.max_output_bytes:
-            msg = {**msg, "content": {**msg["content"], "text": text[: self.max_output_bytes - used]}}
-            out = super().output(outs, msg, display_id, cell_index)
-            outs.append(new_output("stream", name="stdout", text=(
-                f"\n[The grader kept the first {self.max_output_bytes:,} characters of this cell's output "
-                "and dropped the rest.]\n")))
-            return out
-        return super().output(outs, msg, display_id, cell_index)
+        if kind == "error":
+            return super().process_message({**msg, "content": _cut_error(content)}, cell, cell_index)
+        if kind not in ("stream", "display_data", "execute_result", "update_display_data"):
+            return super().process_message(msg, cell, cell_index)
+        if kind == "stream":
+            size = len(content.get("text", ""))
+        else:
+            size = len(json.dumps([content.get("data"), content.get("metadata")]))
+        room, out = self._room(cell_index), None
+        kept = size if size <= room else room if kind == "stream" else 0
+        if kept == size:
+            out = super().process_message(msg, cell, cell_index)
+        elif kept:
+            out = super().process_message({**msg, "content": {**content, "text": content["text"][:kept]}}, cell, cell_index)
+        self._count(cell, cell_index, size, kept)
+        return out
+
+    def on_cell_executed(self, **kwargs) -> None:
+        """nbgrader's, which adds the execute reply's error to the cell when the kernel showed none,
+        with that error cut as ``process_message`` cuts one (the kernel writes the reply too)."""
+        reply = kwargs["execute_reply"]
+        if reply["content"].get("status") == "error":
+            kwargs["execute_reply"] = {**reply, "content": _cut_error(reply["content"])}
+        return super().on_cell_executed(**kwargs)
+
+    def _room(self, index: int) -> int:
+        """How many more characters of output cell ``index`` may keep: within its own cap and the notebook's."""
+        return max(0, min(self.max_output_bytes - self._output_bytes.get(index, 0),
+                          self.max_notebook_output_bytes - self._kept_total))
+
+    def _count(self, cell: NotebookNode, index: int, size: int, kept: int) -> None:
+        """Count ``size`` more characters of output of cell ``index``, of which it kept ``kept``; the
+        first time some are dropped, the cell's output ends with a note that says so."""
+        self._output_bytes[index] = self._output_bytes.get(index, 0) + size
+        self._kept[index] = self._kept.get(index, 0) + kept
+        self._kept_total += kept
+        if kept < size and self._output_bytes[index] - size <= self._kept[index] - kept:  # the cell's first drop
+            cell.outputs.append(new_output("stream", name="stdout", text=(
+                f"\n[The grader kept the first {self._kept[index]:,} characters of this cell's output and dropped "
+                "the rest.]\n")))
 
 
 @contextlib.contextmanager
@@ -300,6 +359,12 @@ def _warn_once_if_not_sandboxed(log) -> None:
 def _name(cell: NotebookNode, index: int) -> str:
     """How a note names a cell: its nbgrader id, or its position."""
     return cells.grade_id(cell) if "grade_id" in cells.meta(cell) else str(index + 1)
+
+
+def _cut_error(content: dict) -> dict:
+    """An error's content with its name, message and traceback lines cut to compare.MAX_MESSAGE_CHARS."""
+    return {**content, **{key: compare.cut(str(content.get(key, ""))) for key in ("ename", "evalue")},
+            "traceback": [compare.cut(str(line)) for line in content.get("traceback", [])]}
 
 
 def _add_error(cell: NotebookNode, ename: str, evalue: str) -> None:

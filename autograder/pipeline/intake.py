@@ -13,15 +13,27 @@ from autograder import cells
 from autograder.labs import Lab
 from autograder.pipeline.restore import add_grader_notes, forget_grader_notes
 
+MAX_SUBMISSION_BYTES = 50_000_000
+"""The largest notebook file the grader reads (a lab's solved notebook, figures and all, is under 2 MB):
+a larger one is graded as empty, since reading it could take the grader's memory."""
 
 def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
     """The notebook in a student's ``folder`` for ``lab``, and notes on anything wrong with it.
 
     A notebook under another name is taken if it is the only one. A file that is not a readable
     notebook (not JSON, truncated, invalid) is replaced by the blank release notebook, so that it
-    is graded as an empty submission, with the reason in its notes. A grader's note that arrives
-    inside the file becomes an ordinary cell of the student's: only the grader writes notes.
+    is graded as an empty submission, with the reason in its notes. So is a notebook reached through
+    a symbolic link (the notebook, its folder or the student's folder): the grader would read
+    whatever file it points to, another student's notebook or the course's solved source. So is a
+    file larger than MAX_SUBMISSION_BYTES. A grader's note that arrives inside the file becomes an
+    ordinary cell of the student's: only the grader writes notes.
     """
+    linked = [p for p in (folder.parent, folder, *folder.glob("*.ipynb")) if p.is_symlink()]
+    if linked:
+        return cells.read(lab.release_notebook), [
+            f"{linked[0].name} is a symbolic link to {linked[0].readlink()}, not the student's own file; "
+            "it was graded as an empty submission."
+        ]
     expected = folder / lab.notebook_name
     found = sorted(folder.glob("*.ipynb"))
     if expected.exists():
@@ -32,6 +44,12 @@ def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
         listed = ", ".join(p.name for p in found) or "none"
         return cells.read(lab.release_notebook), [
             f"No notebook named {lab.notebook_name} was found (notebooks there: {listed}); "
+            "it was graded as an empty submission."
+        ]
+    size = path.stat().st_size
+    if size > MAX_SUBMISSION_BYTES:
+        return cells.read(lab.release_notebook), notes + [
+            f"{path.name} is {size:,} bytes, more than the {MAX_SUBMISSION_BYTES:,} the grader reads; "
             "it was graded as an empty submission."
         ]
     try:
@@ -65,7 +83,7 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab]) -> dic
                 shutil.rmtree(target)
             target.mkdir(parents=True)
             nbformat.write(nb, target / lab.notebook_name)
-            if (folder / "timestamp.txt").exists():
+            if (folder / "timestamp.txt").exists() and not (folder / "timestamp.txt").is_symlink():
                 shutil.copy2(folder / "timestamp.txt", target / "timestamp.txt")
             by_lab[lab.id].append(student)
     return by_lab
