@@ -28,6 +28,7 @@ from __future__ import annotations
 
 import ast
 import contextlib
+import functools
 import importlib
 import io
 import os
@@ -41,7 +42,7 @@ import types
 import warnings
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Callable
+from typing import Callable, Iterable
 
 from nbformat import NotebookNode
 from nbformat.v4 import new_output
@@ -92,6 +93,22 @@ class HiddenTest:
                 "hidden test would fail, so nothing was graded. Run the grader from the course root (plain "
                 "nbgrader reads nbgrader_config.py there, which puts the root on the grader's path)."
             ) from None
+
+
+def prepare(tests: Iterable[HiddenTest]) -> None:
+    """Call, once per process, the ``prepare()`` of each hidden-test module that has one: work that
+    does not depend on the student (a reference ensemble) is done before the checks are forked
+    (autograder/pipeline/confined_check.py), so that every check's child inherits it instead of
+    redoing it for every submission."""
+    for module in sorted({test.module for test in tests}):
+        _prepare(module)
+
+
+@functools.cache
+def _prepare(module: str) -> None:
+    hook = getattr(importlib.import_module(module), "prepare", None)
+    if hook is not None:
+        hook()
 
 
 def split(source: str) -> tuple[str, str | None]:

@@ -110,6 +110,7 @@ class GradingExecute(Execute):
         NotebookClient.__init__(self, nb, km)
         tests = compare.hidden_tests(nb)
         checks = {index: test.load() for index, test in tests.items()}  # ReferenceUnavailable before any kernel starts
+        compare.prepare(tests.values())
         self.reset_execution_trackers()
         self._check_assign_resources(resources)
         with _scratch_copy(self.resources):
