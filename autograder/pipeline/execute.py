@@ -43,11 +43,10 @@ from traitlets import Float, Integer
 from autograder import cells
 from autograder.kernel import sandbox
 from autograder.pipeline import compare, confined_check
+from autograder.pipeline.output_caps import OutputBudget
 from autograder.pipeline.restore import add_grader_notes
 
 TIMEOUT_ERROR = "CellTimeoutError"
-NOTED_LOUD_CELLS = 3
-"""How many cells whose output was cut the grader's note names one by one (then it counts the rest)."""
 KERNEL_DIED = "KernelDied"
 NOT_RUN = "NotRun"
 
@@ -119,9 +118,7 @@ class GradingExecute(Execute):
     def _execute_cells(self, tests: dict[int, compare.HiddenTest], checks: dict) -> tuple[NotebookNode, dict]:
         """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""
         earlier: set[str] = set()
-        self._output_bytes: dict[int, int] = {}
-        self._kept: dict[int, int] = {}
-        self._kept_total = 0
+        self._output = OutputBudget(self.max_output_bytes, self.max_notebook_output_bytes)
         notes: list[str] = []
         deadline = time.monotonic() + self.notebook_timeout
         failed: set[int] = set()
@@ -168,13 +165,7 @@ class GradingExecute(Execute):
                 failed.add(index)
                 restarts += 1
                 self._restart_and_replay(index, failed, deadline)
-        loud = [i for i, n in sorted(self._output_bytes.items()) if n > self._kept.get(i, 0)]
-        notes += [f"Cell {_name(self.nb.cells[i], i)} printed {self._output_bytes[i]:,} characters; the grader kept "
-                  f"the first {self._kept[i]:,}." for i in loud[:NOTED_LOUD_CELLS]]
-        if len(loud) > NOTED_LOUD_CELLS:
-            notes.append(f"{len(loud) - NOTED_LOUD_CELLS} more cells printed more than the grader keeps: "
-                         f"{self.max_output_bytes:,} characters of a cell's output, and "
-                         f"{self.max_notebook_output_bytes:,} of the whole notebook's.")
+        notes += self._output.notes(lambda i: _name(self.nb.cells[i], i))
         add_grader_notes(self.nb, notes)
         self.set_widgets_metadata()
         return self.nb, self.resources
@@ -202,11 +193,11 @@ class GradingExecute(Execute):
                 cell.outputs.append(compare.error_output("AssertionError", why_not))
             else:
                 try:
-                    room = self._room(index)
+                    room = self._output.room(index)
                     outputs, printed = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
                                                           deadline, self._memory_bytes())
                     cell.outputs += outputs
-                    self._count(cell, index, printed, min(printed, room))
+                    self._output.count(cell, index, printed, min(printed, room))
                 except compare.KernelStopped:
                     if not self._finished_alive(msg_id):
                         raise DeadKernelError("Kernel died") from None
@@ -295,13 +286,13 @@ class GradingExecute(Execute):
             size = len(content.get("text", ""))
         else:
             size = len(json.dumps([content.get("data"), content.get("metadata")]))
-        room, out = self._room(cell_index), None
+        room, out = self._output.room(cell_index), None
         kept = size if size <= room else room if kind == "stream" else 0
         if kept == size:
             out = super().process_message(msg, cell, cell_index)
         elif kept:
             out = super().process_message({**msg, "content": {**content, "text": content["text"][:kept]}}, cell, cell_index)
-        self._count(cell, cell_index, size, kept)
+        self._output.count(cell, cell_index, size, kept)
         return out
 
     def on_cell_executed(self, **kwargs) -> None:
@@ -311,22 +302,6 @@ class GradingExecute(Execute):
         if reply["content"].get("status") == "error":
             kwargs["execute_reply"] = {**reply, "content": _cut_error(reply["content"])}
         return super().on_cell_executed(**kwargs)
-
-    def _room(self, index: int) -> int:
-        """How many more characters of output cell ``index`` may keep: within its own cap and the notebook's."""
-        return max(0, min(self.max_output_bytes - self._output_bytes.get(index, 0),
-                          self.max_notebook_output_bytes - self._kept_total))
-
-    def _count(self, cell: NotebookNode, index: int, size: int, kept: int) -> None:
-        """Count ``size`` more characters of output of cell ``index``, of which it kept ``kept``; the
-        first time some are dropped, the cell's output ends with a note that says so."""
-        self._output_bytes[index] = self._output_bytes.get(index, 0) + size
-        self._kept[index] = self._kept.get(index, 0) + kept
-        self._kept_total += kept
-        if kept < size and self._output_bytes[index] - size <= self._kept[index] - kept:  # the cell's first drop
-            cell.outputs.append(new_output("stream", name="stdout", text=(
-                f"\n[The grader kept the first {self._kept[index]:,} characters of this cell's output and dropped "
-                "the rest.]\n")))
 
 
 @contextlib.contextmanager
