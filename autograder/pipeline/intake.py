@@ -4,6 +4,7 @@ becomes nbgrader's ``submitted/<student>/<lab>/``, each file read defensively.""
 from __future__ import annotations
 
 import shutil
+from collections.abc import Callable
 from pathlib import Path
 
 import nbformat
@@ -65,17 +66,25 @@ def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
     return nb, notes
 
 
-def import_submissions(submissions: Path, workdir: Path, labs: list[Lab]) -> dict[str, list[str]]:
-    """Put ``submissions/<student>/<lab>/<lab>.ipynb`` into ``workdir/submitted/``, for these labs.
+def class_list(submissions: Path, labs: list[Lab]) -> dict[str, list[str]]:
+    """Lab id -> the students with a folder ``submissions/<student>/<lab>/``, for these labs."""
+    return {lab.id: sorted(p.parent.name for p in submissions.glob(f"*/{lab.id}") if p.is_dir()) for lab in labs}
+
+
+def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
+                       takes: Callable[[str], bool] | None = None) -> dict[str, list[str]]:
+    """Put ``submissions/<student>/<lab>/<lab>.ipynb`` into ``workdir/submitted/``, for these labs
+    (only the students that ``takes`` accepts, when it is given: a shard's).
 
     Each file goes through ``read_submission``; its notes become a grader's note at the top of the
     notebook, which the feedback shows. A ``timestamp.txt`` beside the notebook (nbgrader's
     submission time) is copied too, so that late penalties apply. Returns lab id -> students.
     """
-    by_lab: dict[str, list[str]] = {lab.id: [] for lab in labs}
+    by_lab: dict[str, list[str]] = {}
     for lab in labs:
-        for folder in sorted(p for p in submissions.glob(f"*/{lab.id}") if p.is_dir()):
-            student = folder.parent.name
+        by_lab[lab.id] = [s for s in class_list(submissions, [lab])[lab.id] if takes is None or takes(s)]
+        for student in by_lab[lab.id]:
+            folder = submissions / student / lab.id
             nb, notes = read_submission(folder, lab)
             add_grader_notes(nb, notes)
             target = workdir / "submitted" / student / lab.id
@@ -85,5 +94,4 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab]) -> dic
             nbformat.write(nb, target / lab.notebook_name)
             if (folder / "timestamp.txt").exists() and not (folder / "timestamp.txt").is_symlink():
                 shutil.copy2(folder / "timestamp.txt", target / "timestamp.txt")
-            by_lab[lab.id].append(student)
     return by_lab
