@@ -91,6 +91,7 @@ def set_up(labs: list[Lab], workdir: Path, by_lab: dict[str, list[str]]) -> None
     """Set the class up in the course ``workdir`` and its gradebook, one process at a time (the
     gradebook's SET_UP lock, which holds across machines): ``nbgrader generate_assignment`` of each
     lab, the due dates, and a row for each student and submission of ``by_lab`` (lab id -> students)."""
+    workdir.mkdir(parents=True, exist_ok=True)
     config = course_config(workdir)
     with shards.gradebook_lock(gradebook_url(workdir), shards.SET_UP):
         generate_release(labs, workdir)
@@ -112,7 +113,6 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     if shard is not None and not shards.is_server(gradebook_url(workdir)):
         raise ValueError("--shard needs a gradebook that every shard reaches: set GRADEBOOK_URL to a PostgreSQL "
                          "database (README: PostgreSQL gradebook). The SQLite gradebook is a file of one machine.")
-    workdir.mkdir(parents=True, exist_ok=True)
     known = {p.parent.name for p in (ROOT / "source").glob("*/*.ipynb")}
     for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
         print(f"Skipped {folder}: there is no lab called {folder.name}.")
