@@ -136,7 +136,7 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     for lab in labs:
         pages = [s for s in by_lab[lab.id] if (s, lab.id) in graded and not feedback_page(workdir, lab.id, s).exists()]
         if failures[lab.id] or pages:
-            log_path = workdir / f"autograde-{lab.id}{f'-shard-{shard.index}-of-{shard.count}' if shard else ''}.log"
+            log_path = workdir / f"autograde-{lab.id}{shard.suffix if shard else ''}.log"
             log_path.write_text(logs[lab.id])
         if failures[lab.id]:
             print(f"{count(len(failures[lab.id]), 'submission')} of {lab.id} could not be graded; "
@@ -144,7 +144,7 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
         if pages:
             print(f"No feedback page was written for {count(len(pages), 'graded submission')} of {lab.id}; "
                   f"nbgrader's log is in {log_path}.")
-    out_csv = out_csv or workdir / (f"grades-shard-{shard.index}-of-{shard.count}.csv" if shard else "grades.csv")
+    out_csv = out_csv or workdir / f"grades{shard.suffix if shard else ''}.csv"
     write_grades(rows, out_csv)
     print_table(rows, failures)
     print(f"Grades: {out_csv}. Feedback: {workdir / 'feedback'}.")

@@ -47,6 +47,11 @@ class Shard:
     def __str__(self) -> str:
         return f"{self.index}/{self.count}"
 
+    @property
+    def suffix(self) -> str:
+        """What the names of this shard's own files end with: ``-shard-K-of-N``."""
+        return f"-shard-{self.index}-of-{self.count}"
+
     def takes(self, student: str) -> bool:
         """Whether this shard grades ``student``'s submissions."""
         return shard_of(student, self.count) == self.index
