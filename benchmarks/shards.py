@@ -24,6 +24,7 @@ gradebook serves.
 from __future__ import annotations
 
 import argparse
+import contextlib
 import multiprocessing
 import os
 import random
@@ -40,12 +41,29 @@ import postgres_server  # noqa: E402
 import shard_runs  # noqa: E402
 from gradebook_sql import query  # noqa: E402
 from nbgrader.api import Gradebook  # noqa: E402
+from sqlalchemy.engine import make_url  # noqa: E402
 
 from autograder.catalogues import demo  # noqa: E402
 from autograder.labs import get_lab  # noqa: E402
-from autograder.pipeline import grades  # noqa: E402
+from autograder.pipeline import grades, grading, intake  # noqa: E402
 
 LABS = [get_lab("train-kf"), get_lab("nonlinear-filters")]
+
+
+def server_cpu(db_url: str) -> float:
+    """CPU seconds used so far by the PostgreSQL server of ``db_url`` on this machine: its postmaster
+    (found by its port) and its processes, and the processes that ended (the postmaster's children's
+    times)."""
+    port, tick = str(make_url(db_url).port), os.sysconf("SC_CLK_TCK")
+    stats = {}
+    for proc in Path("/proc").glob("[0-9]*"):
+        with contextlib.suppress(OSError):
+            fields = (proc / "stat").read_text().rsplit(")", 1)[1].split()
+            stats[int(proc.name)] = (int(fields[1]), [int(f) for f in fields[11:15]], (proc / "cmdline").read_bytes())
+    [postmaster] = [pid for pid, (_, _, cmd) in stats.items() if cmd.split(b"\0")[:1] != [b""]
+                    and cmd.split(b"\0")[0].endswith(b"postgres") and port.encode() in cmd.split(b"\0")]
+    times = [t for pid, (parent, t, _) in stats.items() if pid == postmaster or parent == postmaster]
+    return sum(sum(t) for t in times) / tick
 
 
 def commits(db_url: str) -> int:
@@ -62,6 +80,18 @@ def grade_in_shards(class_dir: Path, folder: Path, db_url: str, count: int) -> f
     for run in runs:
         run.finish(timeout=3600)
     return time.perf_counter() - start
+
+
+def set_up_at_once(class_dir: Path, folder: Path, db_url: str, count: int) -> float:
+    """The wall time of ``count`` processes that set the class up at once in a fresh gradebook
+    (grading.set_up, each in a course folder of its own; the processes' start included): they take
+    the set-up lock in turn."""
+    by_lab = intake.class_list(class_dir, LABS)
+    os.environ["GRADEBOOK_URL"] = db_url  # the spawned processes inherit it
+    with multiprocessing.get_context("spawn").Pool(count) as pool:
+        start = time.perf_counter()
+        pool.starmap(grading.set_up, [(LABS, folder / f"course-{k}", by_lab) for k in range(count)])
+        return time.perf_counter() - start
 
 
 def write_rounds(db_url: str, keys: list[tuple[str, str]], seconds: float, seed: int) -> int:
@@ -101,15 +131,16 @@ def main() -> None:
         class_dir = Path(tmp) / "class"
         expected = demo.write_demo_class(LABS, class_dir, size=args.size)
         walls: dict[int, list[float]] = {n: [] for n in args.shards}
-        per_submission, reference, db_url = [], None, None
+        per_submission, cpu_per_submission, reference, db_url = [], [], None, None
         for repeat in range(args.repeat):
             for count in args.shards:
                 name = f"shards{count}-run{repeat}"
                 db_url, folder = shard_runs.new_database(server, name), Path(tmp) / name
-                before = commits(db_url)
+                before, cpu = commits(db_url), server_cpu(db_url)
                 walls[count].append(grade_in_shards(class_dir, folder, db_url, count))
                 time.sleep(1.5)
                 per_submission.append((commits(db_url) - before) / len(expected))
+                cpu_per_submission.append((server_cpu(db_url) - cpu) / len(expected))
                 exported = shard_runs.export(folder, db_url)
                 table = shard_runs.csv_rows(folder / "grades.csv")
                 os.environ["GRADEBOOK_URL"] = db_url
@@ -125,13 +156,22 @@ def main() -> None:
             wall = statistics.median(walls[count])
             print(f"{count:>8}{wall:>10.0f}{60 * len(expected) / wall:>12.1f}{one / wall:>10.2f}")
 
-        cost = statistics.median(per_submission)
+        for count in args.shards:
+            wall = set_up_at_once(class_dir, Path(tmp) / f"set-up-{count}", shard_runs.new_database(server, f"set-up-{count}"),
+                                  count)
+            print(f"{count} shards set up at once: {wall:.1f} s ({wall / count:.1f} s each, one at a time)", flush=True)
+
+        cost, cpu = statistics.median(per_submission), statistics.median(cpu_per_submission)
+        print(f"\nThe gradebook: {cost:.0f} commits and {1000 * cpu:.0f} ms of the server's CPU per graded submission "
+              f"(set-up included; median over the grading runs): one core of the server takes {1 / cpu:.0f} "
+              "submissions per second.")
+        print(f"{'writers':>8}{'commits/s':>11}{'submissions/s':>15}{'server CPU':>12}")
         keys = list(expected)
-        print(f"\nThe gradebook: {cost:.0f} commits per graded submission (median over the grading runs).")
-        print(f"{'writers':>8}{'commits/s':>11}{'submissions/s':>15}")
         for writers in args.writers:
+            before = server_cpu(db_url)
             rate = write_rate(db_url, keys, writers, args.seconds)
-            print(f"{writers:>8}{rate:>11.0f}{rate / cost:>15.1f}", flush=True)
+            busy = (server_cpu(db_url) - before) / args.seconds
+            print(f"{writers:>8}{rate:>11.0f}{rate / cost:>15.1f}{busy:>11.0%}", flush=True)
 
 
 if __name__ == "__main__":
