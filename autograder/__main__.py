@@ -6,13 +6,19 @@ import argparse
 import sys
 from pathlib import Path
 
+from typing import TYPE_CHECKING
+
 from autograder import default_jobs
 from autograder.labs import ROOT
+
+if TYPE_CHECKING:
+    from autograder.pipeline.shards import Shard
 
 JOBS_HELP = "grade this many submissions at a time (default: the number of cores, %(default)s here)"
 
 
-def _shard(spec: str):
+def _shard(spec: str) -> Shard:
+    """``--shard K/N`` (argparse reports a ValueError's message as the argument's error)."""
     from autograder.pipeline.shards import parse_shard
 
     try:
@@ -121,9 +127,11 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "grade":
         from autograder.pipeline.grading import grade as grade_submissions
 
+        from autograder.pipeline.shards import NotShared
+
         try:
             grade_submissions(args.submissions.resolve(), args.workdir.resolve(), args.out, args.jobs, args.shard)
-        except ValueError as error:
+        except NotShared as error:
             print(f"grade: {error}", file=sys.stderr)
             return 1
     elif args.command == "export":

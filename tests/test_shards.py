@@ -22,6 +22,8 @@ from __future__ import annotations
 import hashlib
 import multiprocessing
 import shutil
+import subprocess
+import sys
 import time
 
 import pytest
@@ -30,12 +32,12 @@ from nbgrader.api import Gradebook
 import postgres_server
 import shard_runs
 from autograder import cells
-from autograder.__main__ import build_parser
+from autograder.__main__ import build_parser, main
 from autograder.catalogues import demo
-from autograder.labs import get_lab
+from autograder.labs import ROOT, get_lab
 from autograder.pipeline import grades, grading, intake
 from autograder.pipeline.nbgrader_apps import feedback_page
-from autograder.pipeline.shards import Shard, shard_of
+from autograder.pipeline.shards import NotShared, Shard, shard_of
 
 LABS = [get_lab("train-kf"), get_lab("nonlinear-filters")]
 PER_LAB = 20
@@ -115,6 +117,9 @@ def test_two_shards_without_a_shared_folder_give_the_baseline_once_gathered(base
     nothing = shard_runs.export(gathered, url)
     assert nothing.returncode == 1
     assert listed(nothing) == set(klass[1])
+    plain = subprocess.run([sys.executable, "-m", "nbgrader", "export", f"--CourseDirectory.root={gathered}"], cwd=ROOT,
+                           env=shard_runs.environment(url), capture_output=True, text=True, timeout=300)
+    assert plain.returncode == 1 and f"lacks {len(klass[1])} submissions of the gradebook" in plain.stderr
 
     for folder in ("autograded", "feedback"):  # the copy step: shard 1's files only, so far
         shutil.copytree(shard_dirs[0] / folder, gathered / folder, dirs_exist_ok=True)
@@ -233,8 +238,10 @@ def test_shard_arguments_are_checked(capsys):
     assert build_parser().parse_args(["grade", "class", "--shard", "2/4"]).shard == Shard(2, 4)
 
 
-def test_a_shard_refuses_an_sqlite_gradebook(tmp_path, monkeypatch):
+def test_a_shard_refuses_an_sqlite_gradebook(tmp_path, monkeypatch, capsys):
     monkeypatch.delenv("GRADEBOOK_URL", raising=False)
-    with pytest.raises(ValueError, match="set GRADEBOOK_URL to a PostgreSQL database"):
+    with pytest.raises(NotShared, match="set GRADEBOOK_URL to a PostgreSQL database"):
         grading.grade(tmp_path / "class", tmp_path / "course", shard=Shard(1, 2))
     assert not (tmp_path / "course").exists()
+    assert main(["grade", str(tmp_path / "class"), "--workdir", str(tmp_path / "course"), "--shard", "1/2"]) == 1
+    assert "--shard needs a gradebook that every shard reaches" in capsys.readouterr().err

@@ -105,14 +105,14 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
 
     Refuses to start unless this process can import the hidden tests and the reference. Grades only the
     submissions given (with ``jobs`` processes), so that regrading one student leaves everyone
-    else's grades as they were; with ``shard``, only that shard's students' (README: Large classes).
+    else's grades as they were; with ``shard``, only that shard's students' (README: Large classes),
+    into a PostgreSQL gradebook (else it raises shards.NotShared).
     Writes feedback HTML to ``workdir/feedback/`` and the grades of every graded submission in the
     course (a shard's: its own) to ``out_csv`` (default ``workdir/grades.csv``, a shard's
     ``workdir/grades-shard-K-of-N.csv``), prints the table, and returns the rows.
     """
-    if shard is not None and not shards.is_server(gradebook_url(workdir)):
-        raise ValueError("--shard needs a gradebook that every shard reaches: set GRADEBOOK_URL to a PostgreSQL "
-                         "database (README: PostgreSQL gradebook). The SQLite gradebook is a file of one machine.")
+    if shard is not None:
+        shards.require_server(gradebook_url(workdir))
     known = {p.parent.name for p in (ROOT / "source").glob("*/*.ipynb")}
     for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
         print(f"Skipped {folder}: there is no lab called {folder.name}.")

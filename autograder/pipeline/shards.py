@@ -77,9 +77,20 @@ def lock_key(name: str) -> int:
     return int.from_bytes(hashlib.sha256(f"estimation-lab-kit {name}".encode()).digest()[:8], "big", signed=True)
 
 
+class NotShared(RuntimeError):
+    """The gradebook is not one that shards on several machines can share; the message says what to do."""
+
+
 def is_server(db_url: str) -> bool:
     """Whether the gradebook at ``db_url`` is in PostgreSQL, which several machines can share."""
     return make_url(db_url).get_backend_name() == "postgresql"
+
+
+def require_server(db_url: str) -> None:
+    """Raise NotShared unless the gradebook at ``db_url`` is in PostgreSQL."""
+    if not is_server(db_url):
+        raise NotShared("--shard needs a gradebook that every shard reaches: set GRADEBOOK_URL to a PostgreSQL "
+                        "database (README: PostgreSQL gradebook). The SQLite gradebook is a file of one machine.")
 
 
 @contextmanager
