@@ -18,7 +18,9 @@ gradebook as nbgrader does (a new connection, its table and course checks), find
 notebook with its grades, write a score into each grade, and commit. Their rate, in commits per
 second, divided by the commits of one graded submission, is the number of submissions per second
 the gradebook can take: the limit on how many grading processes, on any number of machines, one
-gradebook serves.
+gradebook serves. The server's CPU time (its processes' times from /proc, on this machine) is
+counted for each graded submission, for the write loop, and for a fresh open of nbgrader's
+gradebook alone, which nbgrader does at every step.
 """
 
 from __future__ import annotations
@@ -94,6 +96,16 @@ def set_up_at_once(class_dir: Path, folder: Path, db_url: str, count: int) -> fl
         return time.perf_counter() - start
 
 
+def open_cost(db_url: str, opens: int = 100) -> tuple[float, float]:
+    """The server's CPU seconds and the commits of one fresh open of nbgrader's gradebook, as every
+    step of nbgrader opens it (averaged over ``opens``)."""
+    cpu, committed = server_cpu(db_url), commits(db_url)
+    for _ in range(opens):
+        Gradebook(db_url, "estimation-lab-kit").close()
+    time.sleep(1.5)
+    return (server_cpu(db_url) - cpu) / opens, (commits(db_url) - committed) / opens
+
+
 def write_rounds(db_url: str, keys: list[tuple[str, str]], seconds: float, seed: int) -> int:
     """What grading does to the gradebook per submission, over and over for ``seconds``, on random
     submissions of ``keys`` (student, lab); how many rounds."""
@@ -165,6 +177,9 @@ def main() -> None:
         print(f"\nThe gradebook: {cost:.0f} commits and {1000 * cpu:.0f} ms of the server's CPU per graded submission "
               f"(set-up included; median over the grading runs): one core of the server takes {1 / cpu:.0f} "
               "submissions per second.")
+        open_cpu, open_commits = open_cost(db_url)
+        print(f"A fresh open of nbgrader's gradebook alone: {1000 * open_cpu:.0f} ms of the server's CPU and "
+              f"{open_commits:.0f} commits.")
         print(f"{'writers':>8}{'commits/s':>11}{'submissions/s':>15}{'server CPU':>12}")
         keys = list(expected)
         for writers in args.writers:
