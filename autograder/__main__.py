@@ -6,10 +6,25 @@ import argparse
 import sys
 from pathlib import Path
 
+from typing import TYPE_CHECKING
+
 from autograder import default_jobs
 from autograder.labs import ROOT
 
+if TYPE_CHECKING:
+    from autograder.pipeline.shards import Shard
+
 JOBS_HELP = "grade this many submissions at a time (default: the number of cores, %(default)s here)"
+
+
+def _shard(spec: str) -> Shard:
+    """``--shard K/N`` (argparse reports a ValueError's message as the argument's error)."""
+    from autograder.pipeline.shards import parse_shard
+
+    try:
+        return parse_shard(spec)
+    except ValueError as error:
+        raise argparse.ArgumentTypeError(str(error)) from None
 
 
 def build_parser() -> argparse.ArgumentParser:
@@ -25,6 +40,15 @@ def build_parser() -> argparse.ArgumentParser:
     grade.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder to grade in (default: the course root)")
     grade.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
     grade.add_argument("--jobs", type=int, default=default_jobs(), help=JOBS_HELP)
+    grade.add_argument("--shard", type=_shard, default=None, metavar="K/N",
+                       help="grade only the K-th of N parts of the class (split by student id), into a PostgreSQL "
+                       "gradebook (GRADEBOOK_URL) that every part shares; the grades CSV defaults to "
+                       "WORKDIR/grades-shard-K-of-N.csv (README: Large classes)")
+    export = commands.add_parser("export", help="write the grades CSV of every submission in the gradebook, without "
+                                 "grading again (as nbgrader export); fails, listing them, if some are not graded "
+                                 "yet or their autograded notebooks and feedback pages are not in WORKDIR")
+    export.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")
+    export.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
     feedback = commands.add_parser("feedback", help="after grading written answers in formgrader: rewrite every "
                                    "feedback page and the grades CSV from the gradebook, without grading again")
     feedback.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")
@@ -103,7 +127,23 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "grade":
         from autograder.pipeline.grading import grade as grade_submissions
 
-        grade_submissions(args.submissions.resolve(), args.workdir.resolve(), args.out, args.jobs)
+        from autograder.pipeline.shards import NotShared
+
+        try:
+            grade_submissions(args.submissions.resolve(), args.workdir.resolve(), args.out, args.jobs, args.shard)
+        except NotShared as error:
+            print(f"grade: {error}", file=sys.stderr)
+            return 1
+    elif args.command == "export":
+        from autograder.pipeline.export import export_course, incomplete
+
+        workdir = args.workdir.resolve()
+        out = args.out or workdir / "grades.csv"
+        rows, missing = export_course(workdir, out)
+        print(f"Exported the grades of {len(rows)} submissions to {out}.")
+        if missing:
+            print(incomplete(missing, out), file=sys.stderr)
+            return 1
     elif args.command == "feedback":
         from autograder.pipeline.feedback import regenerate
 

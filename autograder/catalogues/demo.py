@@ -19,7 +19,8 @@ from autograder.catalogues import cheats, faults, submissions
 from autograder.pipeline import grading, grades, nbgrader_apps, table
 from autograder.labs import ROOT, Lab, all_labs
 from autograder.catalogues.mistakes import catalogue
-from autograder.catalogues.synthetic_class import MISTAKE, Outcome, cheat_outcome, fault_outcome, honest_outcome
+from autograder.catalogues.synthetic_class import (MISTAKE, Outcome, cheat_outcome, fault_outcome, honest_outcome,
+                                                   write_honest)
 from course.checks import count
 
 DEMO_DIR = ROOT / "demo"
@@ -50,8 +51,10 @@ def quick_mistakes(lab: Lab, size: int = QUICK_MISTAKES) -> list:
     return [first[blanks[round(k * (len(blanks) - 1) / max(size - 1, 1))]] for k in range(min(size, len(blanks)))]
 
 
-def write_demo_class(labs: list[Lab], folder: Path, full: bool = False) -> dict[tuple[str, str], Outcome]:
-    """Write the demo class as ``folder/<student>/<lab>/...``: (student, lab id) -> what grading must make of it."""
+def write_demo_class(labs: list[Lab], folder: Path, full: bool = False,
+                     size: int | None = None) -> dict[tuple[str, str], Outcome]:
+    """Write the demo class as ``folder/<student>/<lab>/...``: (student, lab id) -> what grading must make of it.
+    With ``size``, honest work (``synthetic_class.write_honest``) then fills each lab up to ``size`` submissions."""
     if folder.exists():
         shutil.rmtree(folder)
     expected: dict[tuple[str, str], Outcome] = {}
@@ -64,6 +67,8 @@ def write_demo_class(labs: list[Lab], folder: Path, full: bool = False) -> dict[
             blank = cells.blank_names(cells.read(lab.source_notebook))[0]
             faults.write_fault(fault, lab, blank, folder)
             outcomes += [cheat_outcome(lab, cheat), fault_outcome(lab, fault, blank)]
+        if size is not None:
+            outcomes += write_honest(lab, size - len(outcomes), folder)
         expected |= {(o.student, lab.id): o for o in outcomes}
     return expected
 

@@ -84,9 +84,16 @@ def write(lab: Lab, size: int, folder: Path) -> list[Outcome]:
     for cheat in cheats.catalogue(lab):
         submissions.write(cheat.notebook(lab), folder, cheat.name, lab)
         outcomes.append(cheat_outcome(lab, cheat))
+    return outcomes + write_honest(lab, size - len(outcomes), folder)
+
+
+def write_honest(lab: Lab, size: int, folder: Path) -> list[Outcome]:
+    """Write ``size`` honest submissions of ``lab``, the solved notebook and each catalogued mistake
+    in turn, as the students ``student000``, ``student001``, ...; their outcomes."""
     honest = itertools.cycle([(submissions.solved(lab), None)]
                              + [(submissions.with_mistake(lab, m), m.blank) for m in mistake_catalogue(lab)])
-    for k in range(size - len(outcomes)):
+    outcomes = []
+    for k in range(size):
         nb, wrong = next(honest)
         submissions.write(nb, folder, f"student{k:03d}", lab)
         outcomes.append(honest_outcome(f"student{k:03d}", wrong))

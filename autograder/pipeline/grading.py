@@ -1,6 +1,7 @@
 """Grading a class: ``python -m autograder grade``. Refuses to start unless this process can import
-the hidden tests, sets up the course folder, takes the submissions in, autogrades them with
-nbgrader one per process at a time, writes feedback, grades.csv and the summary table.
+the hidden tests, sets up the course folder and the gradebook, takes the submissions in (a shard's
+only, with ``--shard``), autogrades them with nbgrader one per process at a time, writes feedback,
+grades.csv and the summary table.
 """
 
 from __future__ import annotations
@@ -16,10 +17,11 @@ from tqdm import tqdm
 from autograder import cells, default_jobs
 from autograder.kernel import sandbox
 from autograder.labs import ROOT, Lab
-from autograder.pipeline import compare, late
+from autograder.pipeline import compare, late, shards
 from autograder.pipeline.grades import GradeRow, all_graded_labs, read_grades, write_grades
-from autograder.pipeline.intake import import_submissions
-from autograder.pipeline.nbgrader_apps import course_config, feedback_page, generate_release, run_app
+from autograder.pipeline.intake import class_list, import_submissions
+from autograder.pipeline.nbgrader_apps import course_config, feedback_page, generate_release, gradebook_url, run_app
+from autograder.pipeline.shards import Shard
 from autograder.pipeline.table import print_table
 from course.checks import count
 
@@ -47,11 +49,13 @@ def sandbox_line() -> str:
 
 
 def _grade_student(workdir: Path, lab_id: str, student: str) -> str:
-    """Autograde, then write the feedback of, one student's submission of a lab; nbgrader's log."""
+    """Autograde, then write the feedback of, one student's submission of a lab, under that
+    submission's lock (another shard grading it waits); nbgrader's log."""
     log = []
-    for app_class in (Autograde, GenerateFeedback):
-        result = run_app(app_class, workdir, Lab(lab_id), student)
-        log.append(result.get("log", "") + result.get("error", ""))
+    with shards.gradebook_lock(gradebook_url(workdir), shards.submission_lock_name(lab_id, student)):
+        for app_class in (Autograde, GenerateFeedback):
+            result = run_app(app_class, workdir, Lab(lab_id), student)
+            log.append(result.get("log", "") + result.get("error", ""))
     return "".join(log)
 
 
@@ -83,16 +87,32 @@ def autograde(by_lab: dict[str, list[str]], workdir: Path, jobs: int | None = No
     return {lab_id: "".join(logs[lab_id, student] for student in students) for lab_id, students in by_lab.items()}
 
 
-def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int | None = None) -> list[GradeRow]:
+def set_up(labs: list[Lab], workdir: Path, by_lab: dict[str, list[str]]) -> None:
+    """Set the class up in the course ``workdir`` and its gradebook, one process at a time (the
+    gradebook's SET_UP lock, which holds across machines): ``nbgrader generate_assignment`` of each
+    lab, the due dates, and a row for each student and submission of ``by_lab`` (lab id -> students)."""
+    workdir.mkdir(parents=True, exist_ok=True)
+    config = course_config(workdir)
+    with shards.gradebook_lock(gradebook_url(workdir), shards.SET_UP):
+        generate_release(labs, workdir)
+        late.set_due_dates(labs, config)
+        shards.register_class(gradebook_url(workdir), config.CourseDirectory.course_id, by_lab)
+
+
+def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int | None = None,
+          shard: Shard | None = None) -> list[GradeRow]:
     """Autograde ``submissions/<student>/<lab>/<lab>.ipynb`` in the course ``workdir``.
 
     Refuses to start unless this process can import the hidden tests and the reference. Grades only the
     submissions given (with ``jobs`` processes), so that regrading one student leaves everyone
-    else's grades as they were. Writes feedback HTML to ``workdir/feedback/`` and the grades of
-    every graded submission in the course to ``out_csv`` (default ``workdir/grades.csv``), prints
-    the table, and returns the rows.
+    else's grades as they were; with ``shard``, only that shard's students' (README: Large classes),
+    into a PostgreSQL gradebook (else it raises shards.NotShared).
+    Writes feedback HTML to ``workdir/feedback/`` and the grades of every graded submission in the
+    course (a shard's: its own) to ``out_csv`` (default ``workdir/grades.csv``, a shard's
+    ``workdir/grades-shard-K-of-N.csv``), prints the table, and returns the rows.
     """
-    workdir.mkdir(parents=True, exist_ok=True)
+    if shard is not None:
+        shards.require_server(gradebook_url(workdir))
     known = {p.parent.name for p in (ROOT / "source").glob("*/*.ipynb")}
     for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
         print(f"Skipped {folder}: there is no lab called {folder.name}.")
@@ -100,17 +120,23 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     check_reference_available(labs)
     print(sandbox_line())
     print(f"Setting up the course folder {workdir} for {count(len(labs), 'lab')} (nbgrader generate_assignment).")
-    generate_release(labs, workdir)
-    late.set_due_dates(labs, course_config(workdir))
-    by_lab = import_submissions(submissions, workdir, labs)
+    whole_class = class_list(submissions, labs)
+    set_up(labs, workdir, whole_class)
+    by_lab = import_submissions(submissions, workdir, labs, shard.takes if shard else None)
+    if shard is not None:
+        print(f"Shard {shard} grades {count(sum(map(len, by_lab.values())), 'submission')} of the class's "
+              f"{sum(map(len, whole_class.values()))}.")
     logs = autograde(by_lab, workdir, jobs)
-    rows = read_grades(workdir, all_graded_labs(workdir))
+    if shard is None:
+        rows = read_grades(workdir, all_graded_labs(workdir))
+    else:
+        rows = read_grades(workdir, labs, sorted({s for students in by_lab.values() for s in students}))
     graded = {(row.student, row.lab) for row in rows}
     failures = {lab.id: [s for s in by_lab[lab.id] if (s, lab.id) not in graded] for lab in labs}
     for lab in labs:
         pages = [s for s in by_lab[lab.id] if (s, lab.id) in graded and not feedback_page(workdir, lab.id, s).exists()]
         if failures[lab.id] or pages:
-            log_path = workdir / f"autograde-{lab.id}.log"
+            log_path = workdir / f"autograde-{lab.id}{shard.suffix if shard else ''}.log"
             log_path.write_text(logs[lab.id])
         if failures[lab.id]:
             print(f"{count(len(failures[lab.id]), 'submission')} of {lab.id} could not be graded; "
@@ -118,7 +144,11 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
         if pages:
             print(f"No feedback page was written for {count(len(pages), 'graded submission')} of {lab.id}; "
                   f"nbgrader's log is in {log_path}.")
-    write_grades(rows, out_csv or workdir / "grades.csv")
+    out_csv = out_csv or workdir / f"grades{shard.suffix if shard else ''}.csv"
+    write_grades(rows, out_csv)
     print_table(rows, failures)
-    print(f"Grades: {out_csv or workdir / 'grades.csv'}. Feedback: {workdir / 'feedback'}.")
+    print(f"Grades: {out_csv}. Feedback: {workdir / 'feedback'}.")
+    if shard is not None:
+        print(f"When every shard is done: `python -m autograder export --workdir {workdir}` writes the class's "
+              "grades.csv and lists any submission not graded yet.")
     return rows

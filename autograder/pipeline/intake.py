@@ -3,7 +3,10 @@ becomes nbgrader's ``submitted/<student>/<lab>/``, each file read defensively.""
 
 from __future__ import annotations
 
+import os
 import shutil
+import tempfile
+from collections.abc import Callable
 from pathlib import Path
 
 import nbformat
@@ -65,25 +68,55 @@ def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
     return nb, notes
 
 
-def import_submissions(submissions: Path, workdir: Path, labs: list[Lab]) -> dict[str, list[str]]:
-    """Put ``submissions/<student>/<lab>/<lab>.ipynb`` into ``workdir/submitted/``, for these labs.
+def class_list(submissions: Path, labs: list[Lab]) -> dict[str, list[str]]:
+    """Lab id -> the students with a folder ``submissions/<student>/<lab>/``, for these labs."""
+    return {lab.id: sorted(p.parent.name for p in submissions.glob(f"*/{lab.id}") if p.is_dir()) for lab in labs}
+
+
+def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
+                       takes: Callable[[str], bool] | None = None) -> dict[str, list[str]]:
+    """Put ``submissions/<student>/<lab>/<lab>.ipynb`` into ``workdir/submitted/``, for these labs
+    (only the students that ``takes`` accepts, when it is given: a shard's).
 
     Each file goes through ``read_submission``; its notes become a grader's note at the top of the
     notebook, which the feedback shows. A ``timestamp.txt`` beside the notebook (nbgrader's
-    submission time) is copied too, so that late penalties apply. Returns lab id -> students.
+    submission time) is copied too, so that late penalties apply. Anything else in the target
+    folder goes. Each file is replaced whole (written beside it, then renamed), so that another
+    process taking in or grading the same submission at the same time (overlapping shards in one
+    course folder) always reads a whole file, the same. Returns lab id -> students.
     """
-    by_lab: dict[str, list[str]] = {lab.id: [] for lab in labs}
+    by_lab: dict[str, list[str]] = {}
     for lab in labs:
-        for folder in sorted(p for p in submissions.glob(f"*/{lab.id}") if p.is_dir()):
-            student = folder.parent.name
+        by_lab[lab.id] = [s for s in class_list(submissions, [lab])[lab.id] if takes is None or takes(s)]
+        for student in by_lab[lab.id]:
+            folder = submissions / student / lab.id
             nb, notes = read_submission(folder, lab)
             add_grader_notes(nb, notes)
             target = workdir / "submitted" / student / lab.id
-            if target.exists():
-                shutil.rmtree(target)
-            target.mkdir(parents=True)
-            nbformat.write(nb, target / lab.notebook_name)
+            target.mkdir(parents=True, exist_ok=True)
+            files = {lab.notebook_name: (nbformat.writes(nb).rstrip("\n") + "\n").encode()}  # as nbformat.write
             if (folder / "timestamp.txt").exists() and not (folder / "timestamp.txt").is_symlink():
-                shutil.copy2(folder / "timestamp.txt", target / "timestamp.txt")
-            by_lab[lab.id].append(student)
+                files["timestamp.txt"] = (folder / "timestamp.txt").read_bytes()
+            for stale in target.iterdir():
+                if stale.name in files or stale.name.startswith(PARTIAL):
+                    continue
+                if stale.is_dir() and not stale.is_symlink():
+                    shutil.rmtree(stale, ignore_errors=True)
+                else:
+                    stale.unlink(missing_ok=True)
+            for name, data in files.items():
+                _replace(target / name, data)
     return by_lab
+
+
+PARTIAL = ".partial-"
+"""How the name of a file being written into ``submitted/`` begins, before it is renamed into place."""
+
+
+def _replace(path: Path, data: bytes) -> None:
+    """Write ``data`` to ``path`` whole: into a file of its own beside it (readable by all, as a file
+    that Python creates is by default), then renamed over it."""
+    with tempfile.NamedTemporaryFile(dir=path.parent, prefix=f"{PARTIAL}{path.name}.", delete=False) as handle:
+        handle.write(data)
+    os.chmod(handle.name, 0o644)
+    os.replace(handle.name, path)

@@ -42,6 +42,11 @@ def course_config(workdir: Path = ROOT) -> Config:
     return config
 
 
+def gradebook_url(workdir: Path = ROOT) -> str:
+    """The SQLAlchemy URL of the gradebook of the course ``workdir``."""
+    return CourseDirectory(config=course_config(workdir)).db_url
+
+
 def _coursedir(workdir: Path, lab: Lab, student: str) -> CourseDirectory:
     config = course_config(workdir)
     coursedir = CourseDirectory(config=config)
