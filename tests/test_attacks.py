@@ -243,7 +243,15 @@ def graded_in_own_process(nb_json: str, course: str) -> tuple[str, int]:
     size = int(open("/proc/self/statm").read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
     resource.setrlimit(resource.RLIMIT_AS, (size + SAFETY_MARGIN, resource.getrlimit(resource.RLIMIT_AS)[1]))
     graded = graded_run(nb_json, TRAIN.id, course)
-    return graded, resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    return graded, own_peak_memory()
+
+
+def own_peak_memory() -> int:
+    """This process's own peak resident memory in bytes (VmHWM). Not getrusage's ru_maxrss: Linux
+    keeps that across execve, so a spawned process reports its parent's peak at the fork (a pytest
+    worker grown to 2.6 GiB by the test files it ran before this one)."""
+    [line] = [line for line in Path("/proc/self/status").read_text().splitlines() if line.startswith("VmHWM:")]
+    return int(line.split()[1]) * 1024
 
 
 def daemons(name: str) -> list[int]:
@@ -290,7 +298,7 @@ def executed_in_own_process(sources: list[str], folder: str, max_message_bytes: 
     config.SandboxedKernelManager.max_message_bytes = max_message_bytes
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in sources])
     nb, _ = GradingExecute(config=config).preprocess(nb, {"metadata": {"path": folder}})
-    return nbformat.writes(nb), resource.getrusage(resource.RUSAGE_SELF).ru_maxrss * 1024
+    return nbformat.writes(nb), own_peak_memory()
 
 
 @pytest.fixture(scope="module")
