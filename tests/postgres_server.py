@@ -38,6 +38,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import psycopg
+import pytest
 from sqlalchemy.engine import URL
 
 START_TIMEOUT = 30.0  # seconds for the server to accept connections
@@ -269,3 +270,17 @@ def _stop(server: subprocess.Popen) -> None:
         except subprocess.TimeoutExpired:
             server.kill()
             server.wait()
+
+
+@pytest.fixture(scope="module")
+def postgres_url() -> Iterator[str]:
+    """A fixture: the SQLAlchemy URL of an empty database on a PostgreSQL server of the test module's
+    own (``running_server``). Without a server the test fails, saying what to install; it never skips."""
+    reason = None
+    try:
+        with running_server() as url:
+            yield url
+    except ServerUnavailable as error:
+        reason = str(error)
+    if reason:  # outside the except block, so that the reason is reported once
+        pytest.fail(reason, pytrace=False)

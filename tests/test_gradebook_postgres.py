@@ -19,7 +19,7 @@ from datetime import timedelta, timezone
 import pytest
 from nbgrader.coursedir import CourseDirectory
 
-import postgres_server
+from postgres_server import postgres_url  # noqa: F401 (a fixture: this module's own server)
 from autograder import cells
 from autograder.catalogues import cheats, submissions
 from autograder.pipeline import grading, late, nbgrader_apps
@@ -32,19 +32,6 @@ MISTAKE = catalogue(LAB)[0]
 CHEAT = next(c for c in cheats.catalogue(LAB) if cheats.STATIC in c.caught_by and c.games == "blank")
 LATE = {"late": 1.5, "late_mistake": 10.0}
 """Days late: 2 started days (20%), and over the 50% cap."""
-
-
-@pytest.fixture(scope="module")
-def postgres_url():
-    """The SQLAlchemy URL of an empty database on a PostgreSQL server of this module's own."""
-    reason = None
-    try:
-        with postgres_server.running_server() as url:
-            yield url
-    except postgres_server.ServerUnavailable as error:
-        reason = str(error)
-    if reason:  # outside the except block, so that the reason is reported once
-        pytest.fail(reason, pytrace=False)
 
 
 @pytest.fixture(scope="module")

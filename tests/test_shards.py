@@ -29,7 +29,7 @@ import time
 import pytest
 from nbgrader.api import Gradebook
 
-import postgres_server
+from postgres_server import postgres_url  # noqa: F401 (a fixture: this module's own server)
 import shard_runs
 from autograder import cells
 from autograder.__main__ import build_parser, main
@@ -41,20 +41,6 @@ from autograder.pipeline.shards import NotShared, Shard, shard_of
 
 LABS = [get_lab("train-kf"), get_lab("nonlinear-filters")]
 PER_LAB = 20
-
-
-@pytest.fixture(scope="module")
-def server():
-    """The SQLAlchemy URL of a database on a PostgreSQL server of this module's own; each run makes
-    a fresh database beside it (shard_runs.new_database)."""
-    reason = None
-    try:
-        with postgres_server.running_server() as url:
-            yield url
-    except postgres_server.ServerUnavailable as error:
-        reason = str(error)
-    if reason:  # outside the except block, so that the reason is reported once
-        pytest.fail(reason, pytrace=False)
 
 
 @pytest.fixture(scope="module")
@@ -75,13 +61,13 @@ def students_of(klass, shard: Shard) -> set[tuple[str, str]]:
 
 
 @pytest.fixture(scope="module")
-def baseline_and_two_shards(server, klass, tmp_path_factory):
+def baseline_and_two_shards(postgres_url, klass, tmp_path_factory):
     """The class graded by one `grade --jobs 1` into a fresh gradebook (the baseline), and, at the
     same time, by shards 1/2 and 2/2 into another, each in a course folder of its own. Returns
     (baseline course folder, its URL, the shards' folders, their URL)."""
     base = tmp_path_factory.mktemp("two-shards")
     baseline, shard_dirs = base / "baseline", [base / "shard-1", base / "shard-2"]
-    baseline_url, shards_url = shard_runs.new_database(server, "baseline"), shard_runs.new_database(server, "two")
+    baseline_url, shards_url = shard_runs.new_database(postgres_url, "baseline"), shard_runs.new_database(postgres_url, "two")
     runs = [shard_runs.start_grade(klass[0], baseline, baseline_url, base / "baseline.log", "--jobs", "1")]
     runs += [shard_runs.start_grade(klass[0], folder, shards_url, base / f"shard-{k}.log", "--shard", f"{k}/2", "--jobs", "1")
              for k, folder in enumerate(shard_dirs, 1)]
@@ -134,8 +120,8 @@ def test_two_shards_without_a_shared_folder_give_the_baseline_once_gathered(base
     assert shard_runs.csv_rows(gathered / "grades.csv") == baseline_csv
 
 
-def test_four_shards_in_a_shared_folder_one_killed_and_rerun_give_the_baseline(server, klass, baseline_csv, tmp_path):
-    url, course = shard_runs.new_database(server, "four"), tmp_path / "course"
+def test_four_shards_in_a_shared_folder_one_killed_and_rerun_give_the_baseline(postgres_url, klass, baseline_csv, tmp_path):
+    url, course = shard_runs.new_database(postgres_url, "four"), tmp_path / "course"
     victim = max((Shard(k, 4) for k in range(1, 5)), key=lambda s: len(students_of(klass, s)))
     runs = {shard: shard_runs.start_grade(klass[0], course, url, tmp_path / f"shard-{shard.index}.log",
                                           "--shard", str(shard), "--jobs", "1") for shard in (Shard(k, 4) for k in range(1, 5))}
@@ -164,14 +150,14 @@ def test_four_shards_in_a_shared_folder_one_killed_and_rerun_give_the_baseline(s
     assert shard_runs.csv_rows(course / "grades.csv") == baseline_csv
 
 
-def test_overlapping_shards_are_idempotent(server, klass, baseline_csv, tmp_path):
+def test_overlapping_shards_are_idempotent(postgres_url, klass, baseline_csv, tmp_path):
     """1/2 twice, 2/2 and 1/1 at once, on two students of the class (one in each half), both labs each."""
     both = [s for s in sorted({s for s, _ in klass[1]}) if all((s, lab.id) in klass[1] for lab in LABS)]
     chosen = [next(s for s in both if shard_of(s, 2) == k) for k in (1, 2)]
     small = tmp_path / "class"
     for student in chosen:
         shutil.copytree(klass[0] / student, small / student)
-    url, course = shard_runs.new_database(server, "overlap"), tmp_path / "course"
+    url, course = shard_runs.new_database(postgres_url, "overlap"), tmp_path / "course"
     runs = [shard_runs.start_grade(small, course, url, tmp_path / f"run-{n}.log", "--shard", spec, "--jobs", "1")
             for n, spec in enumerate(("1/2", "1/2", "2/2", "1/1"))]
     for run in runs:
@@ -186,10 +172,10 @@ def _set_up(workdir, by_lab, barrier) -> None:
     grading.set_up(LABS, workdir, by_lab)
 
 
-def test_processes_setting_up_one_gradebook_at_once_all_succeed(server, klass, tmp_path, monkeypatch):
+def test_processes_setting_up_one_gradebook_at_once_all_succeed(postgres_url, klass, tmp_path, monkeypatch):
     """nbgrader alone fails here: its tables, the course, the labs and students created twice, and
     generate_assignment's cells deleted by one process while another writes them."""
-    url = shard_runs.new_database(server, "set-up")
+    url = shard_runs.new_database(postgres_url, "set-up")
     monkeypatch.setenv("GRADEBOOK_URL", url)  # the spawned processes inherit it
     by_lab = intake.class_list(klass[0], LABS)
     context = multiprocessing.get_context("spawn")
