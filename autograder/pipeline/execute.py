@@ -117,7 +117,6 @@ class GradingExecute(Execute):
 
     def _execute_cells(self, tests: dict[int, compare.HiddenTest], checks: dict) -> tuple[NotebookNode, dict]:
         """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""
-        earlier: set[str] = set()
         self._output = OutputBudget(self.max_output_bytes, self.max_notebook_output_bytes)
         notes: list[str] = []
         deadline = time.monotonic() + self.notebook_timeout
@@ -140,8 +139,11 @@ class GradingExecute(Execute):
                            "restarted the kernel, re-ran the cells above, and went on without this one.")
                 try:
                     if index in tests:
-                        self._execute_test_cell(cell, index, tests[index], checks[index], frozenset(earlier))
-                        earlier.add(tests[index].blank)
+                        # the blanks whose hidden tests come before this one in the notebook, however
+                        # those cells ended: a blank whose own test cell hung or killed the kernel is
+                        # still served by the reference to the blanks after it, as partial credit needs
+                        earlier = frozenset(test.blank for at, test in tests.items() if at < index)
+                        self._execute_test_cell(cell, index, tests[index], checks[index], earlier)
                     else:
                         self.execute_cell(cell, index, store_history=True)
                 except DeadKernelError:
