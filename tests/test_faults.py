@@ -64,19 +64,19 @@ def test_feedback_shows_the_graders_note_first(graded):
     assert "The kernel died in cell" in html
 
 
-
 def test_a_blank_that_kills_its_kernel_costs_no_later_blank_that_calls_it(tmp_path):
     """Partial credit outlives a dead kernel: run_filter's reference calls predict, so run_filter's
     hidden test calls the reference's predict although predict's own test cell killed the kernel
     (before, such a fault also cost the later blank: castaway-bob's 200-submission class showed it)."""
     blank, fault = "predict", faults.get("kernel-dies")
-    order = cells.blank_names(cells.read(LAB.source_notebook))
+    order = LAB.blanks()
     callers = [b for b in order[order.index(blank) + 1:] if blank in called_blanks(LAB.reference(), b, order)]
     assert callers, f"no blank after {blank} calls it: choose one that a later blank's reference calls"
     faults.write_fault(fault, LAB, blank, tmp_path / "class")
     [row] = grading.grade(tmp_path / "class", tmp_path / "course", jobs=1)
     assert synthetic_class.fault_outcome(LAB, fault, blank).errors(row) == [], (row.reasons, row.notes)
     assert all(row.cells[f"test_{b}"] > 0 for b in callers)
+
 
 REGRADED = ("kernel-dies", "memory-hog", "numpy-warning", "reordered", "not-json")
 """The faults graded again: every kind of recovery and note except those that depend on the
