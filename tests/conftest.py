@@ -3,6 +3,7 @@
 import pytest
 
 from random_draws import SEEDS
+from time_per_file import write_summary
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -25,8 +26,10 @@ def pytest_generate_tests(metafunc: pytest.Metafunc) -> None:
 
 def pytest_terminal_summary(terminalreporter: pytest.TerminalReporter) -> None:
     """Say where the browser test saved its screenshots (tests/test_student_browser.py records the
-    folder as the property ``screenshots``), also when it ran in an xdist worker and passed."""
+    folder as the property ``screenshots``), also when it ran in an xdist worker and passed; then
+    the time per test file and worker (tests/time_per_file.py)."""
     folders = sorted({value for reports in terminalreporter.stats.values() for report in reports
                       for name, value in getattr(report, "user_properties", ()) if name == "screenshots"})
     for folder in folders:
         terminalreporter.write_line(f"Screenshots of the browser test: {folder}")
+    write_summary(terminalreporter)

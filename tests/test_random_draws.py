@@ -80,13 +80,13 @@ def test_every_statement_is_within_the_limit_and_covers_21_seeds():
 
 
 def _pytest(folder: Path) -> subprocess.CompletedProcess:
-    """pytest on ``folder`` alone, in a fresh process, with only this kit's seed hook."""
+    """pytest on ``folder`` alone, in a fresh process, with only the hooks of tests/conftest.py."""
     return subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider", "-p", "no:xdist",
                            "--rootdir", str(folder), str(folder)], capture_output=True, text=True, cwd=folder)
 
 
 def test_a_seeded_test_runs_on_21_seeds_and_an_unmarked_one_is_refused(tmp_path):
-    for name in ("conftest.py", "random_draws.py"):
+    for name in ("conftest.py", "random_draws.py", "time_per_file.py"):
         shutil.copy(TESTS / name, tmp_path / name)
     (tmp_path / "test_demo.py").write_text(
         "import numpy as np\nfrom random_draws import random_draws\n\n"
