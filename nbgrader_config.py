@@ -23,6 +23,7 @@ from autograder.kernel.manager import SandboxedKernelManager  # noqa: E402
 from autograder.integrity.flag import FlagCheating  # noqa: E402
 from autograder.pipeline.inert_html import InertHtml  # noqa: E402
 from autograder.pipeline.restore import RestoreLabCells  # noqa: E402
+from autograder.pipeline.verdicts import GraderScores  # noqa: E402
 from course.checks import NOT_WRITTEN  # noqa: E402
 from nbconvert.preprocessors import ClearMetadataPreprocessor, CSSHTMLHeaderPreprocessor  # noqa: E402
 from nbgrader.preprocessors import (  # noqa: E402
@@ -35,7 +36,6 @@ from nbgrader.preprocessors import (  # noqa: E402
     LimitOutput,
     OverwriteCells,
     OverwriteKernelspec,
-    SaveAutoGrades,
 )
 
 c = get_config()  # noqa: F821 (provided by traitlets when it loads this file)
@@ -89,6 +89,9 @@ c.Autograde.sanitize_preprocessors = [
 ]
 # After execution, the integrity findings (static scan and the kernel's monitor) take away the
 # points of every blank a submission games, and flag it for review (autograder/integrity/flag.py).
+# The score of each test cell is the grader's verdict alone (GraderScores, in place of nbgrader's
+# SaveAutoGrades, which reads the score from what the kernel left in the cell's outputs; see
+# autograder/pipeline/verdicts.py).
 c.Autograde.autograde_preprocessors = [
     GradingExecute,
     InertHtml,
@@ -96,7 +99,7 @@ c.Autograde.autograde_preprocessors = [
     IgnorePattern,
     ClearMetadataPreprocessor,
     LimitOutput,
-    SaveAutoGrades,
+    GraderScores,
     AssignLatePenalties,
     CheckCellMetadata,
 ]

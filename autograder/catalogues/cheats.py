@@ -415,6 +415,32 @@ def _hardcode_visible(lab: Lab) -> NotebookNode:
     return nb
 
 
+# -- forging the score: output that nbgrader would read as the test cell's score -------------------
+
+FORGED_SCORES: dict[str, str] = {
+    "forged-result-text": 'def validate(function):\n    return "full marks"\n',
+    "forged-result-over-max": "def validate(function):\n    return 1e9\n",
+    "forged-result-points": "def validate(function):\n    return 2.0\n",
+    "forged-result-negative": "def validate(function):\n    return -100.0\n",
+    "forged-stderr": "import sys\n\n\ndef validate(function):\n    print('a line on stderr', file=sys.stderr)\n",
+    "forged-display-hook": "get_ipython().events.register('pre_run_cell', lambda *args: get_ipython().displayhook('full marks'))\n",
+    "forged-iopub-result": """def validate(function):
+    kernel = get_ipython().kernel
+    content = dict(data=dict([("text/plain", "1000")]), metadata=dict(), execution_count=1)
+    kernel.session.send(kernel.iopub_socket, "execute_result", content, parent=kernel.get_parent(),
+                        ident=kernel._topic("execute_result"))
+""",
+}
+"""A student's cell, added after the set-up cell, that makes the kernel put in every test cell an
+output that nbgrader alone would read as its score (STACK.md): a result value (text, a number over
+the maximum, exactly the points, a negative number), a line on stderr, a result from the display
+hook before the cell runs, or a result message sent on the kernel's own channel. The score is the
+grader's verdict (autograder/pipeline/verdicts.py), so none of them changes a score, up or down."""
+RAISING = ("forged-result-text", "forged-result-over-max", "forged-result-points", "forged-display-hook",
+           "forged-iopub-result")
+"""The forgeries that would raise a score: catalogued as cheats."""
+
+
 CHEATS: tuple[Cheat, ...] = (
     Cheat("import-reference", "reaching the reference through `import`: the answer calls solutions.<lab>",
           "blank", frozenset({STATIC, SANDBOX}), _IMPORT, exact=True),
@@ -475,6 +501,12 @@ CHEATS: tuple[Cheat, ...] = (
           "blank", frozenset({OVERWRITE}), _retag_test, plants_mistake=True),
     Cheat("hardcode-visible", "hard-coded outputs for the visible cases of process_noise",
           "blank", frozenset({HIDDEN_TESTS}), _hardcode_visible, labs=("train-kf",), aim="process_noise"),
+    *(Cheat(name, "an output of the kernel's in every test cell that nbgrader would read as its score",
+            "blank", frozenset({GRADER}), _added_cell(FORGED_SCORES[name]), plants_mistake=True)
+      for name in RAISING if name != "forged-display-hook"),
+    Cheat("forged-display-hook", "a result from the display hook before every cell, which nbgrader would read as "
+          "a test cell's score", "all", frozenset({STATIC, GRADER}), _added_cell(FORGED_SCORES["forged-display-hook"]),
+          plants_mistake=True),
 )
 
 

@@ -1,8 +1,9 @@
 """Taking away the points that a dishonest submission games, and flagging it for review.
 
 Runs right after GradingExecute and before nbgrader saves the scores. It scans the submission's
-code (autograder/integrity/scan.py), puts an error in the test cell of every blank a finding games (so
-nbgrader scores it 0, and the gradebook and grades.csv agree), and writes each reason as a "Flagged
+code (autograder/integrity/scan.py), records a failing verdict for the test cell of every blank a finding
+games (autograder/pipeline/verdicts.py: the score is 0 whatever the kernel showed), shows the reason
+there as an error, and writes each reason as a "Flagged
 for review" note at the top of the notebook, where the instructor's table and the feedback show it.
 """
 
@@ -15,6 +16,7 @@ from nbgrader.preprocessors import NbGraderPreprocessor
 from autograder import cells
 from autograder.integrity.scan import Finding, static_findings
 from autograder.labs import Lab
+from autograder.pipeline import verdicts
 from autograder.pipeline.restore import add_grader_notes
 
 FLAG = "Flagged for review:"
@@ -38,6 +40,7 @@ class FlagCheating(NbGraderPreprocessor):
         for cell in nb.cells:
             if cell.cell_type == "code" and "grade_id" in cells.meta(cell) and cells.grade_id(cell) in gamed:
                 why = " ".join(gamed[cells.grade_id(cell)])
+                verdicts.record(resources, cells.grade_id(cell), passed=False, why=why)
                 cell.outputs.append(new_output("error", ename=ERROR_NAME, evalue=f"This test was not counted. {why}",
                                                traceback=[f"{ERROR_NAME}: This test was not counted. {why}"]))
         add_grader_notes(nb, [f"{FLAG} {f.reason.rstrip('.')}. {_cost(f)}" for f in findings])

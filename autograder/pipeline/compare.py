@@ -249,16 +249,21 @@ def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[
     characters the student's function printed (and warned) in all, of which the outputs keep the
     first ``max_chars``.
 
+    The outputs are what the student's function printed, as stdout text (whatever stream it wrote
+    to: text from the kernel never scores), then, if the check failed, one error output with the
+    check's message: the grader's verdict (autograder/pipeline/verdicts.py) is that there is no
+    error. A warning the check let through fails it too, as nbgrader's stderr rule used to. What
+    the check returns is not shown: a test cell's score is its verdict, never a value.
+
     Raises PeerTimeout when the kernel does not answer in time and KernelStopped when it stops
     answering; every other failure is the student's, and becomes an error output.
     """
-    out, err = Capped(max_chars), Capped(max_chars)
+    out = Capped(max_chars)
     outputs: list[NotebookNode] = []
-    value = None
-    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(err), warnings.catch_warnings(record=True) as caught:
+    with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
-            value = check(StudentFunction(peer, test.blank, earlier))
+            check(StudentFunction(peer, test.blank, earlier))
         except (PeerTimeout, KernelStopped):
             raise
         except PeerGone:
@@ -269,14 +274,15 @@ def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[
             notes = getattr(error, "__notes__", [])
             outputs.append(error_output(type(error).__name__, "\n".join([str(error), *notes]), getattr(error, "where", "")))
     for w in caught:
-        err.write(f"{w.filename}:{w.lineno}: {w.category.__name__}: {w.message}\n")
-    stdout = out.getvalue()
-    texts = (("stdout", stdout), ("stderr", err.getvalue()[: max_chars - len(stdout)]))
-    streams = [new_output("stream", name=name, text=text) for name, text in texts if text]
-    result = []
-    if value is not None and not outputs:
-        result = [new_output("execute_result", data={"text/plain": repr(value)}, execution_count=None)]
-    return streams + outputs + result, out.written + err.written
+        out.write(f"{w.category.__name__}: {w.message}\n")
+    if caught and not outputs:
+        first = caught[0]
+        outputs.append(error_output("AssertionError", f"{test.blank} gave the warning {first.category.__name__}: "
+                                    f"{first.message}. A graded function must run without warnings: find the "
+                                    "computation that triggers it and fix it."))
+    printed = out.getvalue()
+    streams = [new_output("stream", name="stdout", text=printed)] if printed else []
+    return streams + outputs, out.written
 
 
 class Capped(io.TextIOBase):

@@ -42,7 +42,7 @@ from traitlets import Float, Integer
 
 from autograder import cells
 from autograder.kernel import sandbox
-from autograder.pipeline import compare, confined_check
+from autograder.pipeline import compare, confined_check, verdicts
 from autograder.pipeline.output_caps import OutputBudget
 from autograder.pipeline.restore import add_grader_notes
 
@@ -118,6 +118,7 @@ class GradingExecute(Execute):
     def _execute_cells(self, tests: dict[int, compare.HiddenTest], checks: dict) -> tuple[NotebookNode, dict]:
         """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""
         self._output = OutputBudget(self.max_output_bytes, self.max_notebook_output_bytes)
+        self.resources[verdicts.RESOURCES_KEY] = {}
         notes: list[str] = []
         deadline = time.monotonic() + self.notebook_timeout
         failed: set[int] = set()
@@ -132,6 +133,7 @@ class GradingExecute(Execute):
                     why = (f"the submission used up its time limit of {self.notebook_timeout} s"
                            if restarts <= self.max_restarts else "the kernel had to be restarted too often")
                     _add_error(cell, NOT_RUN, f"This cell was not run: {why}.")
+                    self._fail(cell, f"it was not run: {why}")
                     if not any(note.startswith("The cells from") for note in notes):
                         notes.append(f"The cells from cell {_name(cell, index)} on were not run: {why}.")
                     continue
@@ -152,9 +154,11 @@ class GradingExecute(Execute):
                     _add_error(cell, KERNEL_DIED, "The kernel died while running this cell (it crashed, "
                                "called os._exit, or went over the memory limit). The grader restarted it, "
                                "re-ran the cells above, and went on without this one.")
+                    self._fail(cell, "the kernel died while it ran")
                 except CellTimeoutError:
                     notes.append(f"Cell {_name(cell, index)} ran for more than {self.timeout} s and was stopped.")
                     _add_error(cell, TIMEOUT_ERROR, stopped)
+                    self._fail(cell, f"it ran for more than {self.timeout} s and was stopped")
                 else:
                     timeouts = [o for o in cell.outputs if o.output_type == "error" and o.ename == TIMEOUT_ERROR]
                     if not timeouts:
@@ -164,6 +168,7 @@ class GradingExecute(Execute):
                     # the KeyboardInterrupt that stopping it raised is the grader's doing, not the student's
                     cell.outputs = [o for o in cell.outputs if o.get("ename") != "KeyboardInterrupt"]
                     notes.append(f"Cell {_name(cell, index)} ran for more than {self.timeout} s and was stopped.")
+                    self._fail(cell, f"it ran for more than {self.timeout} s and was stopped")
                 failed.add(index)
                 restarts += 1
                 self._restart_and_replay(index, failed, deadline)
@@ -173,9 +178,12 @@ class GradingExecute(Execute):
         return self.nb, self.resources
 
     def _execute_test_cell(self, cell: NotebookNode, index: int, test: compare.HiddenTest, check, earlier: frozenset[str]) -> None:
-        """Run the visible part of a test cell in the kernel, then, unless it failed, its hidden test
-        here (autograder/pipeline/compare.py); the cell gets the outputs of both. Raises CellTimeoutError or
-        DeadKernelError as ``execute_cell`` does."""
+        """Run the visible part of a test cell in the kernel, then its hidden test here
+        (autograder/pipeline/compare.py), and record the grader's verdict (autograder/pipeline/verdicts.py).
+        The cell shows what the visible part showed, made unable to score (``verdicts.display_only``),
+        then what the student's function printed during the hidden test, then the hidden test's
+        failure if it failed. Raises CellTimeoutError or DeadKernelError as ``execute_cell`` does;
+        a visible part that was stopped is left for the caller to report."""
         start = time.monotonic()
         source = cell.source
         cell.source = compare.split(source)[0]
@@ -183,8 +191,9 @@ class GradingExecute(Execute):
             self.execute_cell(cell, index, store_history=True)
         finally:
             cell.source = source
-        if any(o.output_type == "error" for o in cell.outputs):
-            return  # the visible checks failed (or the cell was stopped): the hidden test would too
+        if any(o.output_type == "error" and o.get("ename") == TIMEOUT_ERROR for o in cell.outputs):
+            return  # stopped: the caller restarts the kernel and records the failure
+        cell.outputs = [verdicts.display_only(o) for o in cell.outputs]
         deadline = start + self.timeout if self.timeout else None
         listener = compare.Listener(getattr(self.km, "private_folder", None))  # the sandbox lets the kernel reach it
         msg_id = self.kc.execute(compare.serve_code(listener.path, test), silent=True,
@@ -192,27 +201,37 @@ class GradingExecute(Execute):
         try:
             peer, why_not = compare.connect(listener, deadline, lambda: self._replied(msg_id))
             if peer is None:
-                cell.outputs.append(compare.error_output("AssertionError", why_not))
+                outputs = [compare.error_output("AssertionError", why_not)]
             else:
                 try:
                     room = self._output.room(index)
                     outputs, printed = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
                                                           deadline, self._memory_bytes())
-                    cell.outputs += outputs
                     self._output.count(cell, index, printed, min(printed, room))
                 except compare.KernelStopped:
                     if not self._finished_alive(msg_id):
                         raise DeadKernelError("Kernel died") from None
-                    cell.outputs.append(compare.error_output(
+                    outputs = [compare.error_output(
                         "AssertionError", f"The hidden test of {test.blank} could not finish: your code ended the "
-                        "grader's connection to the kernel (with sys.exit, or by closing sockets)."))
+                        "grader's connection to the kernel (with sys.exit, or by closing sockets).")]
                 finally:
                     compare.stop(peer)
         except compare.PeerTimeout:
             raise CellTimeoutError.error_from_timeout_and_cell("Cell execution timed out", self.timeout, cell) from None
         finally:
             listener.close()
+        failures = [o for o in outputs if o.output_type == "error"]
+        cell.outputs += outputs
+        if failures:
+            self._fail(cell, f"{failures[0].ename}: {failures[0].evalue}")
+        else:
+            verdicts.record(self.resources, cells.grade_id(cell), passed=True)
         self._wait_served(msg_id)
+
+    def _fail(self, cell: NotebookNode, why: str) -> None:
+        """Record that the test cell ``cell`` (if it is one) fails, and why."""
+        if cells.is_autograded_test(cell):
+            verdicts.record(self.resources, cells.grade_id(cell), passed=False, why=why)
 
     def _replied(self, msg_id: str) -> bool:
         """Whether the kernel has finished the silent execution ``msg_id`` (then it will not connect)."""

@@ -110,20 +110,16 @@ ANSI = re.compile(r"\x1b\[[0-9;]*m")
 
 
 def _notes_and_reasons(autograded: Path) -> tuple[tuple[str, ...], dict[str, str]]:
-    """The grader's notes of an autograded notebook, and for each graded cell its first error or
-    its stderr output (the reasons nbgrader gives a cell 0)."""
+    """The grader's notes of an autograded notebook, and for each graded cell its first error: the
+    grader's reason for a failing verdict, the only error a test cell holds (autograder/pipeline/verdicts.py)."""
     nb = nbformat.read(autograded, as_version=4)
     reasons = {}
     for cell in nb.cells:
         if cell.cell_type != "code" or not cells.meta(cell).get("grade"):
             continue
         errors = [o for o in cell.outputs if o.output_type == "error"]
-        stderr = [o for o in cell.outputs if o.output_type == "stream" and o.name == "stderr"]
         if errors:
             reasons[cells.grade_id(cell)] = ANSI.sub("", f"{errors[0].ename}: {errors[0].evalue}")
-        elif stderr:
-            first = ANSI.sub("", stderr[0].text).strip().splitlines()[0]
-            reasons[cells.grade_id(cell)] = f"the cell wrote to stderr, which nbgrader scores 0 ({first})"
     return tuple(grader_notes(nb)), reasons
 
 

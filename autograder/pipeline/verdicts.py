@@ -1,0 +1,87 @@
+"""The grader's verdict on each autograded test cell: the one thing its score is made of.
+
+nbgrader scores a test cell from its outputs (STACK.md): the first error or stderr stream gives 0,
+the first result value is read as the score, and anything else is full marks. Whatever a student's
+kernel can put in a graded cell would then be part of the score. Here it is not, by construction:
+
+- ``GradingExecute`` records a ``Verdict`` per test cell in the grader's process, in nbgrader's
+  ``resources`` (never in the notebook): passed when the hidden test's check ran to its end on the
+  student's function without failing, and failed otherwise (the check failed, the cell was
+  stopped or not run, the kernel died, the function warned); ``FlagCheating`` records a failure for
+  every blank a finding games.
+- ``GraderScores`` (in place of nbgrader's SaveAutoGrades) writes each test cell's score to the
+  gradebook from that verdict alone: its points if it passed, 0 otherwise, and 0 for a test cell
+  with no verdict. It never reads an output.
+- What the kernel showed in a test cell stays visible to the student, but every such output is
+  turned into one that cannot score (``display_only``): a result becomes displayed data, an error
+  or stderr becomes stdout text. The only error in a test cell is then the grader's own, so
+  nbgrader's own reading of the cell (``determine_grade``, in any tool that still reads it) gives
+  the same score as the verdict.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from nbformat import NotebookNode
+from nbformat.v4 import new_output
+from nbgrader.preprocessors import SaveAutoGrades
+
+from autograder import cells
+
+RESOURCES_KEY = "kit_verdicts"
+"""Where the verdicts are kept in nbgrader's resources: grade id -> Verdict."""
+
+
+@dataclass(frozen=True)
+class Verdict:
+    """The grader's verdict on one test cell, and in a sentence why it failed."""
+
+    passed: bool
+    why: str = ""
+
+
+def record(resources: dict, grade_id: str, passed: bool, why: str = "") -> None:
+    """Record the verdict on the test cell ``grade_id``; a failure is never overturned by a later pass."""
+    verdicts = resources.setdefault(RESOURCES_KEY, {})
+    earlier = verdicts.get(grade_id)
+    if earlier is not None and not earlier.passed:
+        return
+    verdicts[grade_id] = Verdict(passed, why)
+
+
+def verdict(resources: dict, grade_id: str) -> Verdict | None:
+    """The recorded verdict on the test cell ``grade_id``, or None if the grader recorded none."""
+    return resources.get(RESOURCES_KEY, {}).get(grade_id)
+
+
+def display_only(output: NotebookNode) -> NotebookNode:
+    """A kernel's output as one that nbgrader cannot read as a score: a result as displayed data,
+    an error or stderr as stdout text; displayed data and stdout as they are."""
+    kind = output.get("output_type")
+    if kind == "execute_result":
+        return new_output("display_data", data=dict(output.get("data", {})), metadata=dict(output.get("metadata", {})))
+    if kind == "error":
+        lines = output.get("traceback") or [f"{output.get('ename', '')}: {output.get('evalue', '')}"]
+        return new_output("stream", name="stdout", text="\n".join(str(line) for line in lines) + "\n")
+    if kind == "stream":
+        return new_output("stream", name="stdout", text=str(output.get("text", "")))
+    return output  # displayed data
+
+
+class GraderScores(SaveAutoGrades):
+    """nbgrader's SaveAutoGrades, with each autograded test cell scored from the grader's verdict
+    alone (see the module doc); written answers are left to nbgrader (and the hand grader)."""
+
+    def _add_score(self, cell: NotebookNode, resources: dict) -> None:
+        if not cells.is_autograded_test(cell):
+            return super()._add_score(cell, resources)
+        grade_id = cells.grade_id(cell)
+        grade = self.gradebook.find_grade(grade_id, self.notebook_id, self.assignment_id, self.student_id)
+        found = verdict(resources, grade_id)
+        if found is None:
+            self.log.error("The grader recorded no verdict for test cell %s of %s; it scores 0.", grade_id,
+                           self.student_id)
+        grade.auto_score = float(cell.metadata["nbgrader"]["points"]) if found is not None and found.passed else 0.0
+        grade.needs_manual_grade = grade.manual_score is not None
+        self.gradebook.db.commit()
