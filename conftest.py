@@ -19,6 +19,9 @@ import pytest
 from autograder.labs import ROOT, Lab, all_labs
 
 os.environ["PYTHONPATH"] = os.pathsep.join(p for p in (str(ROOT), os.environ.get("PYTHONPATH")) if p)
+# Every test run grades with the same grading secret, so that each submission gets the same hidden
+# cases in every run (autograder/pipeline/grading_secret.py); tests/test_case_seeds.py tries other seeds.
+os.environ["KIT_GRADING_SECRET_FILE"] = str(ROOT / "tests" / "grading-secret-for-tests")
 
 REFERENCE_TESTS = re.compile(r"test_(\w+)_reference\.py")
 """A lab's own test file, ``tests/test_<module>_reference.py``."""

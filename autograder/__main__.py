@@ -49,6 +49,10 @@ def build_parser() -> argparse.ArgumentParser:
                                  "yet or their autograded notebooks and feedback pages are not in WORKDIR")
     export.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")
     export.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
+    audit = commands.add_parser("audit", help="list the graded test cells whose score came from the student's kernel "
+                                "rather than from the grader's verdict (possible with versions before the verdicts; "
+                                "README: Versions that graded wrongly), so that exactly those submissions are regraded")
+    audit.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")
     feedback = commands.add_parser("feedback", help="after grading written answers in formgrader: rewrite every "
                                    "feedback page and the grades CSV from the gradebook, without grading again")
     feedback.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")
@@ -144,6 +148,10 @@ def main(argv: list[str] | None = None) -> int:
         if missing:
             print(incomplete(missing, out), file=sys.stderr)
             return 1
+    elif args.command == "audit":
+        from autograder.pipeline.audit import run_audit
+
+        return run_audit(args.workdir.resolve())
     elif args.command == "feedback":
         from autograder.pipeline.feedback import regenerate
 

@@ -154,7 +154,7 @@ def test_the_grader_answers_only_for_earlier_blanks_and_never_for_the_one_under_
     for a blank graded later, and its own run when it calls itself."""
     reference = type(np)("reference")
     exec("def step(x):\n    return x + 100.0\ndef later(x):\n    return x + 1000.0\n"
-         "def run(x, depth=0):\n    return step(later(x))\n", reference.__dict__)  # the reference's run calls both
+         "def run(x, depth=0):\n    return step(x) + later(x)\n", reference.__dict__)  # the reference's run calls both
     source = ("def step(x):\n    return x + 1.0\n"
               "def later(x):\n    return x + 10.0\n"
               "def run(x, depth=0):\n    return step(x) + later(x) + (run(x, 1) if depth == 0 else 0.0)\n")
@@ -165,6 +165,31 @@ def test_the_grader_answers_only_for_earlier_blanks_and_never_for_the_one_under_
     # is the notebook's own run, which sees the notebook's own step, as in a local isolate
     assert isolated(0.0) == (100.0 + 10.0) + (1.0 + 10.0)
     assert namespace["step"](0.0) == 1.0  # the notebook's own names are left alone
+
+
+def test_a_served_blank_answers_only_the_calls_the_reference_makes(kernel):
+    """The served reference is no oracle: it answers a call of the student's run only if the
+    reference's own run makes that call on the same arguments (to rounding), as often as it makes
+    it; every other call is answered by the student's own step in the kernel. So an honest run is
+    isolated from a wrong step of its own, and a run that asks the served step about inputs of its
+    choosing learns only what its own step says."""
+    reference = type(np)("reference")
+    exec("def step(x, rng):\n    return x + 100.0 + rng.standard_normal()\n"
+         "def run(x, rng):\n    return [step(x, rng), step(2.0 * x, rng)]\n", reference.__dict__)
+    honest = ("def step(x, rng):\n    return x - 5.0\n"  # a wrong step of the student's own
+              "def run(x, rng):\n    return [step(x, rng), step(x + x * (1 + 1e-12), rng)]\n")
+    student = isolate(kernel(_define(honest), "run", earlier=frozenset({"step"})), reference, ("step", "run"))
+    want = reference.run(np.array([1.0, 2.0]), np.random.default_rng(5))
+    got = student(np.array([1.0, 2.0]), np.random.default_rng(5))
+    assert np.allclose(got[0], want[0]) and np.allclose(got[1], want[1])  # both calls served, to rounding
+    harvest = ("def step(x, rng):\n    return -1.0\n"
+               "def run(x, rng):\n"
+               "    return [step(x, rng), step(x, rng), step(x + 7.0, rng), step(2.0 * x, np.random.default_rng(9))]\n")
+    student = isolate(kernel(_define(harvest), "run", earlier=frozenset({"step"})), reference, ("step", "run"))
+    first, again, chosen, other_state = student(np.array([1.0]), np.random.default_rng(5))
+    assert first[0] > 50.0, "the call the reference makes is served"
+    # the same call again (the reference makes it once), inputs of its own, a generator in another state
+    assert again == chosen == other_state == -1.0
 
 
 def test_errors_come_back_by_type_with_the_students_line(kernel):

@@ -17,6 +17,7 @@ import pytest
 
 from autograder import cells
 from autograder.hidden_tests import diagnosis
+from autograder.hidden_tests.isolate import isolate
 from autograder.hidden_tests.diagnosis import LEAD, diagnose, diagnosed, mistake_function
 from autograder.catalogues.mistakes import Mistake, catalogue
 from lab_code import define, hidden_tests
@@ -136,6 +137,7 @@ def _toy_lab(monkeypatch, mistakes: tuple[Mistake, ...], seed: int):
     monkeypatch.setattr(inspect, "getsource", lambda function: source)
 
     def check_twice(func) -> None:
+        func = isolate(func, reference, hidden.BLANKS)  # as every hidden test does: the diagnosis sees its calls
         rng = np.random.default_rng(seed)
         for n in (1, 4):
             x = rng.standard_normal(n)

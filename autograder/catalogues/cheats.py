@@ -439,6 +439,8 @@ grader's verdict (autograder/pipeline/verdicts.py), so none of them changes a sc
 RAISING = ("forged-result-text", "forged-result-over-max", "forged-result-points", "forged-display-hook",
            "forged-iopub-result")
 """The forgeries that would raise a score: catalogued as cheats."""
+SHELL_FORGERIES = ("forged-display-hook", "forged-iopub-result")
+"""Those that reach the IPython shell, which the integrity scan flags (it costs every blank)."""
 
 
 CHEATS: tuple[Cheat, ...] = (
@@ -503,10 +505,10 @@ CHEATS: tuple[Cheat, ...] = (
           "blank", frozenset({HIDDEN_TESTS}), _hardcode_visible, labs=("train-kf",), aim="process_noise"),
     *(Cheat(name, "an output of the kernel's in every test cell that nbgrader would read as its score",
             "blank", frozenset({GRADER}), _added_cell(FORGED_SCORES[name]), plants_mistake=True)
-      for name in RAISING if name != "forged-display-hook"),
-    Cheat("forged-display-hook", "a result from the display hook before every cell, which nbgrader would read as "
-          "a test cell's score", "all", frozenset({STATIC, GRADER}), _added_cell(FORGED_SCORES["forged-display-hook"]),
-          plants_mistake=True),
+      for name in RAISING if name not in SHELL_FORGERIES),
+    *(Cheat(name, "an output from the IPython shell (its display hook, or a result message sent on its kernel's "
+            "channel) in every test cell, which nbgrader would read as its score", "all", frozenset({STATIC, GRADER}),
+            _added_cell(FORGED_SCORES[name]), plants_mistake=True) for name in SHELL_FORGERIES),
 )
 
 

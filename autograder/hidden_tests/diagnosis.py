@@ -9,18 +9,19 @@ describes the mistake in words and shows none of the reference's numbers or code
 
 How a match is found, only after a failure and only for that blank's mistakes:
 
-1. the cases: the same check runs once more on the reference function, wrapped so that every call
-   the check makes (its seeded inputs, copied before the call) and what the reference returned
-   are recorded;
+1. the cases: while the check runs, every call it makes of the student's (isolated) function is
+   recorded (``isolate.observed``): a copy of its arguments taken before the call, and what the
+   student's function gave. The diagnosis never calls the student's function again, so it shows
+   nothing about a case the student's function was not already given in that test (a kernel that
+   prints what it is called with learns nothing more from a diagnosis);
 2. each mistake's function is the model answer (the reference's source in ``solutions/``, which a
    test keeps identical to the notebook's answer cell) with the mistake's edit, executed in the
    reference module's namespace, so that it sees the reference for every other blank, as the
    student's function does through ``isolate``;
-3. the student's function (isolated as in the hidden test, warnings silenced, output discarded)
-   and the candidate mistakes are called on copies of every recorded input. A mistake matches if
-   its results equal the student's on every call, within ``RTOL``/``ATOL``: the returned values,
-   anything the call wrote into a dict argument (``info``), the state a random generator argument
-   is left in, and the type of the exception where a call raises.
+3. the reference and the candidate mistakes are called on copies of every recorded input. A mistake
+   matches if its results equal the student's on every call, within ``RTOL``/``ATOL``: the
+   returned values, anything the call wrote into a dict argument (``info``), the state a random
+   generator argument is left in, and the type of the exception where a call raises.
 
 A diagnosis is given only if the student's results differ from the reference's somewhere (a
 failure for another reason, a warning or a wrong type, is left alone) and exactly one mistake
@@ -34,10 +35,9 @@ give no diagnosis.
 The diagnosis never changes a score: it edits the message of the exception the test raised, and
 re-raises it. It gives up silently when it runs out of time (``BUDGET_S``, and ``CELL_SHARE`` of the
 grading cell's time limit for the test and the diagnosis together), or on any error of its own. A
-diagnosis that runs out of time is checked only between calls: one call of the reference or of the
-student's function can overrun it. The cost falls only on failing submissions: one more run of the
-check on the reference (reentry-pf's pf_step, failing early, also computes the posterior
-ensemble the check would have computed later, about 6 s), and the calls replayed.
+diagnosis that runs out of time is checked only between calls: one call of the reference or of a
+mistake can overrun it. The cost falls on failing submissions (the reference's and the mistakes'
+calls on the recorded cases), apart from a copy of each case's arguments while the check runs.
 """
 
 from __future__ import annotations
@@ -57,7 +57,7 @@ from typing import Any, Callable
 
 import numpy as np
 
-from autograder.hidden_tests.isolate import isolate
+from autograder.hidden_tests import isolate
 from autograder.labs import lab_of
 from autograder.catalogues.mistakes import Mistake, catalogue
 
@@ -93,10 +93,12 @@ def diagnosed(check: Callable) -> Callable:
     @functools.wraps(check)
     def diagnosing_check(func: Callable, *args, **kwargs):
         start = time.monotonic()
+        calls: list[tuple[tuple, Any]] = []
         try:
-            return check(func, *args, **kwargs)
+            with isolate.observed(_recorder(calls)):
+                return check(func, *args, **kwargs)
         except Exception as error:
-            mistake = diagnose(func, check, args, kwargs, _budget(time.monotonic() - start))
+            mistake = _diagnosis(check, calls, _budget(time.monotonic() - start))
             if mistake is not None:
                 _add_to_message(error, f"{LEAD.format(blank=blank)} {mistake.hint}")
             raise
@@ -114,11 +116,43 @@ def diagnose(func: Callable, check: Callable, args: tuple = (), kwargs: dict | N
              budget_s: float = BUDGET_S) -> Mistake | None:
     """The one catalogued mistake of the blank that ``check`` grades (``check_<blank>``, the
     undecorated hidden test in ``solutions.<module>.hidden_tests``, called with ``args`` and
-    ``kwargs``) whose results equal ``func``'s on every case that ``check`` tries, or None."""
+    ``kwargs``) whose results equal ``func``'s on every case that ``check`` gave ``func``, or None."""
+    calls: list[tuple[tuple, Any]] = []
+    with contextlib.suppress(Exception), isolate.observed(_recorder(calls)):
+        check(func, *args, **(kwargs or {}))
+    return _diagnosis(check, calls, budget_s)
+
+
+def _recorder(calls: list) -> Callable:
+    """An observer (isolate.observed) that makes each call and appends (a copy of its arguments
+    taken before the call, its outcome) to ``calls``; an outcome it cannot compare is None."""
+    def observe(function: Callable, args: tuple, kwargs: dict):
+        try:
+            snapshot = _copy((args, kwargs))
+        except Exception:  # noqa: BLE001 (arguments it cannot copy: this case is not recorded)
+            snapshot = None
+        try:
+            result = function(*args, **kwargs)
+        except Exception as error:
+            if snapshot is not None:
+                calls.append((snapshot, ("raises", type(error))))
+            raise
+        if snapshot is not None:
+            try:
+                calls.append((snapshot, _leaves((result, _written(args, kwargs)))))
+            except Exception:  # noqa: BLE001 (a result it cannot compare)
+                calls.append((snapshot, None))
+        return result
+
+    return observe
+
+
+def _diagnosis(check: Callable, calls: list, budget_s: float) -> Mistake | None:
+    """The diagnosis of a failed check from the calls it made (``_recorder``), or None."""
     deadline = time.monotonic() + budget_s
     try:
         with _quiet():
-            return _diagnose(func, check, args, kwargs or {}, deadline)
+            return _diagnose(check, calls, deadline)
     except Exception:  # noqa: BLE001 (out of time, an unsupported result, a crash: no diagnosis, same score)
         return None
 
@@ -138,37 +172,18 @@ def mistake_function(reference: types.ModuleType, mistake: Mistake) -> Callable:
     return namespace[mistake.blank]
 
 
-def _diagnose(func, check, args, kwargs, deadline) -> Mistake | None:
-    blank, hidden = _blank(check), sys.modules[check.__module__]
+def _diagnose(check, calls, deadline) -> Mistake | None:
+    blank = _blank(check)
     lab = lab_of(check.__module__)
     reference = lab.reference()
     mistakes = [m for m in catalogue(lab) if m.blank == blank]
-    if not mistakes:
+    if not mistakes or not calls or any(outcome is None for _, outcome in calls):
         return None
-    calls = _record(check, getattr(reference, blank), blank, args, kwargs, deadline)
-    student = isolate(func, reference, hidden.BLANKS, warnings_fail=False)
-    results = [_outcome(student, call_args, deadline) for call_args, _ in calls]
-    if all(_same(got, want) for got, (_, want) in zip(results, calls)):
+    results = [outcome for _, outcome in calls]
+    if _matches(getattr(reference, blank), calls, results, deadline):
         return None  # it fails for another reason than its results: a warning, an edited input, ...
     matches = [m for m in mistakes if _matches(mistake_function(reference, m), calls, results, deadline)]
     return matches[0] if len(matches) == 1 else None
-
-
-def _record(check, function, blank, args, kwargs, deadline) -> list[tuple[tuple, Any]]:
-    """(copy of the arguments, outcome) of every call ``check`` makes of the reference ``function``."""
-    calls = []
-
-    def recorder(*call_args, **call_kwargs):
-        if time.monotonic() > deadline:
-            raise _OutOfTime
-        snapshot = _copy((call_args, call_kwargs))
-        result = function(*call_args, **call_kwargs)
-        calls.append((snapshot, _leaves((result, _written(call_args, call_kwargs)))))
-        return result
-
-    recorder.__name__ = recorder.__qualname__ = blank
-    check(recorder, *args, **kwargs)
-    return calls
 
 
 def _outcome(function, call_args, deadline):

@@ -14,11 +14,12 @@ cell ran first; here it is the same every time, and the student is told why.
 
 from __future__ import annotations
 
+import contextlib
 import functools
+import sys
 import types
 import warnings
-import sys
-from typing import Callable, Iterable
+from typing import Callable, Iterable, Iterator
 
 
 def called_blanks(reference: types.ModuleType, name: str, blanks: Iterable[str]) -> frozenset[str]:
@@ -34,14 +35,47 @@ def called_blanks(reference: types.ModuleType, name: str, blanks: Iterable[str])
     return frozenset(blank for blank in blanks if blank in names and blank != name)
 
 
+_observer: Callable | None = None
+"""While a diagnosed check runs (autograder/hidden_tests/diagnosis.py): called as ``observer(function,
+args, kwargs)`` in place of each call of an isolated function, so that the diagnosis sees every case
+the student's function saw and what it gave, without calling it again."""
+
+
+@contextlib.contextmanager
+def observed(observer: Callable) -> Iterator[None]:
+    """Route every call of an isolated function through ``observer`` inside the block."""
+    global _observer
+    before, _observer = _observer, observer
+    try:
+        yield
+    finally:
+        _observer = before
+
+
+def _observable(function: Callable) -> Callable:
+    """``function``, called through the observer when one is set (``observed``)."""
+    @functools.wraps(function)
+    def call(*args, **kwargs):
+        observer = _observer
+        return function(*args, **kwargs) if observer is None else observer(function, args, kwargs)
+
+    return call
+
+
 def isolate(func: Callable, reference: types.ModuleType, blanks: Iterable[str], *, warnings_fail: bool = True) -> Callable:
     """A copy of ``func`` that sees the reference's version of each other blank in ``blanks`` that
     the reference's own version of ``func`` calls (``called_blanks``); other names are its own.
 
     The notebook's namespace is left alone: only the copy sees the reference functions. With
     ``warnings_fail`` (the default) a warning in the copy fails with a message; a check that turns
-    warnings into failures with a more specific hint of its own passes False.
+    warnings into failures with a more specific hint of its own passes False. Every call of the copy
+    can be observed (``observed``), as the diagnosis does.
     """
+    return _observable(_isolated(func, reference, blanks, warnings_fail))
+
+
+def _isolated(func: Callable, reference: types.ModuleType, blanks: Iterable[str], warnings_fail: bool) -> Callable:
+    """``isolate``'s copy of ``func``, not yet observable."""
     compare = sys.modules.get("autograder.pipeline.compare")  # imported by the grader only, not in a kernel run by hand
     if compare is not None and isinstance(func, compare.StudentFunction):  # grading: the function is in the kernel
         return func.isolated(reference, blanks, warnings_fail)

@@ -509,6 +509,30 @@ def _target_key(target):
 # -- the kernel's side --------------------------------------------------------------------------
 
 
+NOT_SERVED = "NotServed"
+"""What the grader raises for a call of a served blank that it leaves to the student's own blank."""
+
+
+def _served_or_own(peer: Peer, name: str, namespace: dict) -> types.FunctionType:
+    """The stand-in for the served blank ``name``: the grader answers the calls that the reference
+    makes too; the student's own ``name`` (from the notebook) answers the others."""
+    stub = peer.stub(("served", name))
+
+    def served_or_own(*args, **kwargs):
+        try:
+            return stub(*args, **kwargs)
+        except RaisedElsewhere as error:
+            if type(error).__name__ != NOT_SERVED:
+                raise
+        own = namespace.get(name)
+        if not callable(own):
+            raise NameError(f"name {name!r} is not defined")
+        return own(*args, **kwargs)
+
+    served_or_own.__name__ = served_or_own.__qualname__ = name
+    return served_or_own
+
+
 def serve(path: str, name: str, namespace: dict | None = None) -> None:
     """In the grading kernel: connect to the grader at ``path`` and call the student's function
     ``name`` (from the notebook's namespace) for the grader until it says stop.
@@ -540,7 +564,7 @@ def serve(path: str, name: str, namespace: dict | None = None) -> None:
             if header.get("op") != "call":
                 raise ProtocolError(f"an unexpected message {header.get('op')!r}")
             served = [str(other) for other in header.get("served", []) if other != name]
-            stand_ins = {other: peer.stub(("served", other)) for other in served}
+            stand_ins = {other: _served_or_own(peer, other, namespace) for other in served}
             copy = types.FunctionType(function.__code__, {**function.__globals__, **stand_ins}, function.__name__,
                                       function.__defaults__, function.__closure__)
             copy.__kwdefaults__ = function.__kwdefaults__

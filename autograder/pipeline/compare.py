@@ -19,9 +19,11 @@ a check pass without returning the reference's values, and it never holds the re
 
 Partial credit stays isolated (autograder/hidden_tests/isolate.py, ``isolate``): in the kernel, the student's ``f``
 calls stand-ins for the other blanks that the reference's ``f`` calls, which the grader answers with
-the reference, only while this test runs, never for ``f`` itself, and only for blanks whose own
-hidden test came earlier in the notebook, so that no test can collect the reference's answers for a
-later one, nor have a blank it does not need answer for it.
+the reference, only while this test runs, never for ``f`` itself, only for blanks whose own hidden
+test came earlier in the notebook, so that no test can collect the reference's answers for a later
+one, nor have a blank it does not need answer for it, and only for the calls that the reference's
+own ``f`` makes on the same arguments (autograder/pipeline/served_calls.py): any other call is
+answered by the student's own blank in the kernel.
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ from nbformat.v4 import new_output
 from autograder.hidden_tests.isolate import called_blanks
 from autograder.kernel import side
 from autograder.kernel.side import Peer, PeerGone, PeerTimeout, ProtocolError, Wire, warning_class
+from autograder.pipeline import served_calls
 
 BEGIN, END = "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS"
 HIDDEN_MODULE = re.compile(r"solutions\.[a-z0-9_]+\.hidden_tests")
@@ -173,20 +176,26 @@ class StudentFunction:
     """
 
     def __init__(self, peer: Peer, name: str, earlier: frozenset[str], served: dict[str, Callable] | None = None,
-                 warnings_fail: bool = False):
+                 warnings_fail: bool = False, reference: Callable | None = None):
         self.peer, self.__name__, self.__qualname__ = peer, name, name
         self.earlier, self.served, self.warnings_fail = earlier, served or {}, warnings_fail
+        self.reference = reference
+        """The reference's version of this blank, whose own calls of the served blanks are the only
+        ones the grader answers with the reference (autograder/pipeline/served_calls.py)."""
 
     def isolated(self, reference: types.ModuleType, blanks, warnings_fail: bool) -> "StudentFunction":
         """The same function, seeing the reference's version of the other blanks that came earlier
         and that the reference's own version calls (autograder/hidden_tests/isolate.py, ``called_blanks``)."""
         served = {name: getattr(reference, name) for name in called_blanks(reference, self.__name__, blanks)
                   if name in self.earlier}
-        return StudentFunction(self.peer, self.__name__, self.earlier, served, warnings_fail)
+        return StudentFunction(self.peer, self.__name__, self.earlier, served, warnings_fail,
+                               getattr(reference, self.__name__, None))
 
     def __call__(self, *args, **kwargs):
         peer = self.peer
-        peer.targets = {("served", name): function for name, function in self.served.items()}
+        use = (served_calls.ReferenceUse.of(self.reference, self.served, args, kwargs)
+               if self.served and self.reference is not None else served_calls.ReferenceUse({}))
+        peer.targets = {("served", name): use.answerer(name, function) for name, function in self.served.items()}
         buffers: list[bytes] = []
         payload = peer.codec.encode_arguments(args, kwargs, buffers)
         peer.wire.send({"op": "call", "target": "student", "served": sorted(self.served), **payload}, buffers)

@@ -2,7 +2,8 @@
 
 ``GradingExecute`` runs a submission cell by cell, like nbgrader's Execute, and adds:
 
-- hidden tests run in the grader's process, never in the student's kernel (autograder/pipeline/compare.py):
+- hidden tests run in the grader's process, never in the student's kernel (autograder/pipeline/compare.py),
+  on cases drawn from the submission's own seed, which the kernel never sees (grading_secret.py):
   a test cell's visible part runs in the kernel, then its check runs here against the student's
   function, which the kernel only calls, in a forked child capped in memory and killed at the
   cell's deadline (autograder/pipeline/confined_check.py), with what the student's function printed kept
@@ -42,7 +43,8 @@ from traitlets import Float, Integer
 
 from autograder import cells
 from autograder.kernel import sandbox
-from autograder.pipeline import compare, confined_check, verdicts
+from autograder.hidden_tests import cases
+from autograder.pipeline import compare, confined_check, grading_secret, verdicts
 from autograder.pipeline.output_caps import OutputBudget
 from autograder.pipeline.restore import add_grader_notes
 
@@ -112,7 +114,9 @@ class GradingExecute(Execute):
         compare.prepare(tests.values())
         self.reset_execution_trackers()
         self._check_assign_resources(resources)
-        with _scratch_copy(self.resources):
+        # the hidden cases of this submission, drawn from a seed that its kernel never sees
+        seed = cases.seed_for(grading_secret.secret(), grading_secret.submission_content(nb))
+        with _scratch_copy(self.resources), cases.seeded(seed):
             return self._execute_cells(tests, checks)
 
     def _execute_cells(self, tests: dict[int, compare.HiddenTest], checks: dict) -> tuple[NotebookNode, dict]:

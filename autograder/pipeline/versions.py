@@ -21,6 +21,7 @@ from packaging.requirements import Requirement
 
 from autograder.kernel import sandbox
 from autograder.labs import ROOT
+from autograder.pipeline import grading_secret
 
 LOCK = ROOT / "environment.lock"
 ENVIRONMENT = ROOT / "environment.txt"
@@ -134,10 +135,18 @@ def environment() -> dict:
     }
 
 
+def hidden_cases() -> dict[str, str]:
+    """What a regrade needs to draw every submission's hidden cases again: the same secret (named by
+    its fingerprint, never written here) and the same file (autograder/pipeline/grading_secret.py)."""
+    return {"secret_file": str(grading_secret.secret_file()),
+            "secret_fingerprint": grading_secret.fingerprint(grading_secret.secret()),
+            "seed": "HMAC-SHA256 of the submission's cell types and sources under the secret, first 8 bytes"}
+
+
 def record(grades_csv: Path) -> Path:
     """Write the environment record beside a grades CSV (``grades.csv`` -> ``grades.versions.json``)."""
     path = Path(grades_csv).with_suffix(".versions.json")
-    record = {**environment(), "sandbox": sandbox.status().summary}
+    record = {**environment(), "sandbox": sandbox.status().summary, "hidden_cases": hidden_cases()}
     path.write_text(json.dumps(record, indent=2) + "\n")
     if record["differs_from_lock"]:
         differ = ", ".join(f"{name} {v['installed']} (locked {v['locked']})" if v["installed"] else

@@ -1,0 +1,119 @@
+"""Which calls of a served blank the grader answers with the reference.
+
+While the hidden test of blank ``f`` runs, the student's ``f`` calls stand-ins for the earlier blanks
+that the reference's ``f`` calls (``g``), and the grader answers them with the reference's ``g``, so
+that a mistake in ``g`` costs only ``g``'s points. Answering *any* call would make the served ``g`` an
+oracle: a kernel could ask it about inputs of its own choosing and print the answers. So, for each
+call of the student's ``f``, the grader first runs the reference's ``f`` on a copy of the same
+arguments with every served blank recorded (``ReferenceUse.of``), and answers a call of a served blank
+only if its arguments match one the reference made in that run (numbers within a relative 1e-6, a
+random generator in the same state, the same structure), each as many times as the reference made
+it. Every other call is answered by the student's own ``g`` in the kernel (the stand-in is told
+``side.NOT_SERVED``): an honest student whose ``f`` calls ``g`` as the reference does is isolated from
+their own ``g``, and whatever else a student's ``f`` asks is answered by their own code, never by the
+reference.
+"""
+
+from __future__ import annotations
+
+import copy
+import dataclasses
+import types
+from collections.abc import Callable
+
+import numpy as np
+
+RTOL = 1e-6
+"""Relative tolerance of a match: a correct ``f`` computes its calls' arguments to rounding."""
+
+
+class NotServed(Exception):
+    """A call of a served blank that the reference's ``f`` does not make: its name (side.NOT_SERVED)
+    tells the kernel's stand-in to call the student's own blank instead."""
+
+
+def _matches(got, want) -> bool:
+    """Whether two argument structures agree (see the module doc)."""
+    if callable(want) and not isinstance(want, type):
+        return callable(got)
+    if isinstance(want, np.random.Generator):
+        return isinstance(got, np.random.Generator) and got.bit_generator.state == want.bit_generator.state
+    if isinstance(want, (tuple, list)):
+        return isinstance(got, (tuple, list)) and len(got) == len(want) and all(map(_matches, got, want))
+    if isinstance(want, dict):
+        return isinstance(got, dict) and got.keys() == want.keys() and all(_matches(got[k], want[k]) for k in want)
+    if dataclasses.is_dataclass(want) and not isinstance(want, type):
+        return (type(got).__qualname__ == type(want).__qualname__ and dataclasses.is_dataclass(got)
+                and all(_matches(getattr(got, f.name, None), getattr(want, f.name)) for f in dataclasses.fields(want)))
+    if isinstance(want, (bool, str, type(None), np.bool_)):
+        return type(got) is type(want) and got == want
+    if isinstance(want, (int, float, complex, np.number, np.ndarray)):
+        try:
+            a, b = np.asarray(got), np.asarray(want)
+        except Exception:  # noqa: BLE001
+            return False
+        if a.shape != b.shape or a.dtype.kind not in "biufc" or b.dtype.kind not in "biufc":
+            return False
+        scale = float(np.max(np.abs(b[np.isfinite(b)]), initial=0.0))
+        return bool(np.allclose(a, b, rtol=RTOL, atol=RTOL * max(scale, 1e-300), equal_nan=True))
+    return False
+
+
+class ReferenceUse:
+    """The calls the reference's ``f`` made of each served blank, on one call's arguments."""
+
+    def __init__(self, calls: dict[str, list[tuple[tuple, dict]]] | None):
+        self.calls = calls
+        """blank -> the (args, kwargs) of each call not yet answered; None: answer every call."""
+
+    @classmethod
+    def of(cls, reference_function: Callable, served: dict[str, Callable], args: tuple, kwargs: dict) -> "ReferenceUse":
+        """Run ``reference_function`` (the reference's ``f``, whose module holds the served blanks) on
+        a copy of ``args`` and ``kwargs``, recording each call it makes of a served blank. Arguments
+        that cannot be copied give a ReferenceUse that answers every call, as before this guard."""
+        try:
+            call_args, call_kwargs = copy.deepcopy((args, kwargs))
+        except Exception:  # noqa: BLE001 (an argument that cannot be copied: no guard)
+            return cls(None)
+        calls: dict[str, list[tuple[tuple, dict]]] = {name: [] for name in served}
+
+        def recording(name: str, function: Callable) -> Callable:
+            def call(*a, **k):
+                try:
+                    calls[name].append(copy.deepcopy((a, k)))
+                except Exception:  # noqa: BLE001 (arguments that cannot be copied are not served)
+                    pass
+                return function(*a, **k)
+            return call
+
+        # a copy of the reference's f that sees recording versions of the served blanks (as isolate does)
+        f = reference_function
+        recorded = types.FunctionType(f.__code__, {**f.__globals__, **{name: recording(name, function) for name, function
+                                                                         in served.items()}},
+                                      f.__name__, f.__defaults__, f.__closure__)
+        recorded.__kwdefaults__ = f.__kwdefaults__
+        try:
+            recorded(*call_args, **call_kwargs)
+        except Exception:  # noqa: BLE001 (the reference may reject the case: what it called until then counts)
+            pass
+        return cls(calls)
+
+    def take(self, name: str, args: tuple, kwargs: dict) -> bool:
+        """Whether to answer this call of ``name`` with the reference (it is then used up)."""
+        if self.calls is None:
+            return True
+        for index, (want_args, want_kwargs) in enumerate(self.calls.get(name, [])):
+            if _matches(args, want_args) and _matches(kwargs, want_kwargs):
+                del self.calls[name][index]
+                return True
+        return False
+
+    def answerer(self, name: str, function: Callable) -> Callable:
+        """What the grader calls for the kernel's stand-in of ``name``."""
+        def answer(*args, **kwargs):
+            if not self.take(name, args, kwargs):
+                raise NotServed(f"{name} is called here as the reference's own {name} is not: your own {name} answers")
+            return function(*args, **kwargs)
+
+        answer.__name__ = name
+        return answer
