@@ -137,6 +137,7 @@ def test_plain_nbgrader_zip_collect_uses_the_collector(download, tmp_path):
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     subprocess.run([sys.executable, "-m", "nbgrader", "zip_collect", LAB.id,
                     "--collector=autograder.pipeline.collect.StudentIdCollector",
+                    "--extractor=autograder.pipeline.collect.SafeExtractor",
                     f"--StudentIdCollector.students_file={students}"],
                    cwd=course, env=env, check=True, capture_output=True)
     assert sorted(p.name for p in (course / "submitted").iterdir()) == ["s001", "s002", "s003"]
