@@ -36,6 +36,7 @@ from traitlets.config import Config
 
 from autograder.labs import ROOT, Lab, get_lab
 from autograder.pipeline.archives import RATIO_FLOOR, Limits, Refusal, Unpacker
+from autograder.pipeline.intake import STUDENT_ID
 
 DEFAULT_PATTERN = (
     r"(?:^|/)(?P<student_id>[^/_]+)_"
@@ -43,8 +44,6 @@ DEFAULT_PATTERN = (
 )
 """A file ``<lms name>_<anything>.ipynb``, or ``<lms name>_<YYYY-MM-DD-HH-MM-SS>_<anything>.ipynb``
 with the submission time, anywhere in the download."""
-STUDENT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
-"""Our student ids are folder names: letters, digits, ``_``, ``.`` and ``-``."""
 
 
 class IntakeError(RuntimeError):
