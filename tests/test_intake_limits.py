@@ -104,15 +104,22 @@ def test_an_archive_inside_the_archive_is_not_unpacked(tmp_path, notebook):
 
 
 def test_an_upload_of_too_many_files_is_refused_whole(tmp_path, notebook):
-    """A folder download: alice's notebook and bob's zip of 30 files, with at most 20 files unpacked."""
+    """A folder download: alice's notebook and bob's zip of 30 files, with at most 20 files unpacked;
+    refused from the zip's end record, and from its directory when the end record says 1 entry."""
     download = tmp_path / "lms"
     download.mkdir()
     (download / "alice_train-kf.ipynb").write_text(notebook)
-    (download / "bob_upload.zip").write_bytes(zip_bytes({f"bob/{i}.txt": b"" for i in range(30)}))
+    upload = zip_bytes({f"bob/{i}.txt": b"" for i in range(30)})
+    (download / "bob_upload.zip").write_bytes(upload)
     report, out = run(tmp_path, download, Limits(max_files=20))
     assert report.refused == [("bob_upload.zip", "bob (s002)",
-                               "it holds 30 files, more than the 20 left of the limit of 20")]
-    assert (download / "bob_upload.zip").exists()
+                               "it holds 30 entries, more than the 20 files left of the limit of 20")]
+    assert (download / "bob_upload.zip").read_bytes() == upload
+
+    end = upload.rindex(b"PK\x05\x06")
+    (download / "bob_upload.zip").write_bytes(upload[:end + 8] + b"\x01\x00\x01\x00" + upload[end + 12:])
+    report, out = run(tmp_path, download, Limits(max_files=20))
+    assert report.refused == [("bob_upload.zip", "bob (s002)", "it holds 30 files, more than the 20 left of the limit of 20")]
 
 
 def test_an_upload_past_the_total_is_refused_whole(tmp_path, notebook):

@@ -9,7 +9,9 @@ it writes anything, and refuses, with the reason:
 - a member that would unpack to more than ``max_file_bytes``, or to more than RATIO_FLOOR bytes at
   more than ``max_ratio`` times its compressed size (a tar: the whole archive's ratio);
 - a whole archive whose members would take the download past ``max_files`` files or
-  ``max_bytes`` bytes unpacked, and one that is not a readable zip or tar.
+  ``max_bytes`` bytes unpacked, and one that is not a readable zip or tar; a zip already from its
+  end record, before zipfile reads its directory into memory, when that record declares too many
+  entries or a directory larger than DIRECTORY_BYTES_PER_FILE for each file allowed.
 It reads each member through a count that stops, and refuses the member, once it holds more than
 its declared size (zipfile and tarfile stop there too). A tar is read in order, so a member of a tar that is too large refuses the
 whole tar (skipping it would mean decompressing it). Nothing of the download is changed: a refused
@@ -18,6 +20,7 @@ file is still where it was.
 
 from __future__ import annotations
 
+import os
 import shutil
 import stat
 import tarfile
@@ -30,6 +33,9 @@ ARCHIVE_SUFFIXES = (".zip", ".gz", ".tgz", ".tar", ".bz2", ".tbz2", ".xz", ".txz
 RATIO_FLOOR = 10_000_000
 """The compression ratio is checked only for what unpacks to more than this many bytes: a smaller file
 cannot be a bomb, and a notebook of repeated output compresses several hundred times."""
+DIRECTORY_BYTES_PER_FILE = 1024
+"""The most a zip's central directory may take per file allowed: zipfile holds the whole directory in
+memory (a 17 MB zip of 200,000 empty files took 200 MB), so a larger one is refused before it is read."""
 CHUNK = 1 << 20
 
 
@@ -71,6 +77,23 @@ class _Member:
     kind: str
     """file, dir, symlink, hardlink or special."""
     entry: zipfile.ZipInfo | tarfile.TarInfo
+
+
+def _zip_directory(path: Path) -> tuple[int, int]:
+    """The number of entries and the size in bytes of a zip's central directory, as its end record
+    says (zip64's too), read before zipfile reads the directory."""
+    with open(path, "rb") as handle:
+        size = handle.seek(0, os.SEEK_END)
+        handle.seek(max(0, size - 22 - 65_535))  # the end record, after at most a 65,535-byte comment
+        tail = handle.read()
+        at = tail.rfind(b"PK\x05\x06")
+        entries = int.from_bytes(tail[at + 10:at + 12], "little")
+        directory = int.from_bytes(tail[at + 12:at + 16], "little")
+        if (entries == 0xFFFF or directory == 0xFFFFFFFF) and tail[max(at - 20, 0):at - 16] == b"PK\x06\x07":
+            handle.seek(int.from_bytes(tail[at - 12:at - 4], "little"))  # zip64's end record
+            record = handle.read(56)
+            entries, directory = int.from_bytes(record[32:40], "little"), int.from_bytes(record[40:48], "little")
+    return entries, directory
 
 
 def _zip_kind(info: zipfile.ZipInfo) -> str:
@@ -146,6 +169,13 @@ class Unpacker:
         member by member, within the limits left; raises Refused to refuse it whole."""
         try:
             if zipfile.is_zipfile(source):
+                entries, directory = _zip_directory(source)
+                if entries > self._files_left:
+                    raise Refused(f"it holds {entries:,} entries, more than the {self._files_left:,} files left of the "
+                                  f"limit of {self.limits.max_files:,}")
+                if directory > DIRECTORY_BYTES_PER_FILE * self._files_left:
+                    raise Refused(f"its directory takes {directory:,} bytes, more than {DIRECTORY_BYTES_PER_FILE:,} for "
+                                  f"each of the {self._files_left:,} files left of the limit of {self.limits.max_files:,}")
                 with zipfile.ZipFile(source) as archive:
                     members = [_Member(i.filename, i.file_size, i.compress_size, _zip_kind(i), i)
                                for i in archive.infolist()]
