@@ -179,14 +179,19 @@ def test_links_in_a_zip_and_in_a_tar_are_refused(tmp_path, notebook):
 
 
 def test_the_command_names_the_student_and_exits_nonzero(tmp_path, notebook, capsys):
+    """The refusal on the terminal, and a file name with an escape sequence shown quoted, not acted on."""
     download = tmp_path / "lms.zip"
-    class_zip(download, notebook, {"export/bob_upload.zip": zip_bytes({"x.ipynb": b"{}"})})
+    class_zip(download, notebook, {"export/bob_upload.zip": zip_bytes({"x.ipynb": b"{}"}),
+                                   "export/\x1b[2Jbob_evil.zip": b""})
     students = tmp_path / "students.csv"
     students.write_text(STUDENTS)
     argv = ["collect", "train-kf", str(download), "--students", str(students), "--out", str(tmp_path / "out")]
     assert main(argv) == 1
+    printed = capsys.readouterr().out
     assert ("REFUSED lms/export/bob_upload.zip from bob (s002): it is an archive inside an archive, which is not "
-            "unpacked; it is left in the download") in capsys.readouterr().out
+            "unpacked; it is left in the download") in printed
+    assert "REFUSED 'lms/export/\\x1b[2Jbob_evil.zip' from '\\x1b[2Jbob, not in the student list'" in printed
+    assert "\x1b" not in printed
     assert main([*argv, "--max-file-mb", "0.001"]) == 1
     assert "more than the 1,000 a file may" in capsys.readouterr().out
 

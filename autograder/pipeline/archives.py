@@ -13,9 +13,9 @@ it writes anything, and refuses, with the reason:
   end record, before zipfile reads its directory into memory, when that record declares too many
   entries or a directory larger than DIRECTORY_BYTES_PER_FILE for each file allowed.
 It reads each member through a count that stops, and refuses the member, once it holds more than
-its declared size (zipfile and tarfile stop there too). A tar is read in order, so a member of a tar that is too large refuses the
-whole tar (skipping it would mean decompressing it). Nothing of the download is changed: a refused
-file is still where it was.
+its declared size (zipfile and tarfile stop there too). A tar is read in order, so a member of a tar
+that is too large refuses the whole tar (skipping it would mean decompressing it). Nothing of the
+download is changed: a refused file is still where it was.
 """
 
 from __future__ import annotations
@@ -186,8 +186,9 @@ class Unpacker:
                     for member in self._check(self._tar_members(archive, source.stat().st_size), folder):
                         self._write(lambda m=member: archive.extractfile(m.entry), member, dest, folder)
         except (zipfile.BadZipFile, tarfile.TarError, EOFError, OSError, ValueError) as error:
-            reason = " ".join(str(error).split())[:160]
-            raise Refused(f"it is not a readable zip or tar archive ({type(error).__name__}: {reason})") from None
+            # tarfile's ReadError lists every compression it tried: it only means "not a tar"
+            detail = "" if isinstance(error, tarfile.ReadError) else f" ({type(error).__name__}: {error})"
+            raise Refused(f"it is not a readable zip or tar archive{detail}") from None
 
     def _tar_members(self, archive: tarfile.TarFile, packed: int) -> list[_Member]:
         """A tar's directory, read header by header and given up (refusing the tar) as soon as it
@@ -199,7 +200,8 @@ class Unpacker:
             member = _Member(info.name, info.size, None, _tar_kind(info), info)
             members.append(member)
             if len(members) > self._files_left:  # folders and links count too: each header costs a read
-                raise Refused(f"it holds more than the {self._files_left:,} files left of the limit of {limits.max_files:,}")
+                raise Refused(f"it holds more than the {self._files_left:,} files left of the limit "
+                              f"of {limits.max_files:,}")
             if member.kind != "file":
                 continue
             total += member.size
@@ -207,7 +209,8 @@ class Unpacker:
                 raise Refused(f"its member {member.name!r} unpacks to {member.size:,} bytes, more than the "
                               f"{limits.max_file_bytes:,} a file may")
             if total > self._bytes_left:
-                raise Refused(f"it unpacks to more than the {self._bytes_left:,} bytes left of the limit of {limits.max_bytes:,}")
+                raise Refused(f"it unpacks to more than the {self._bytes_left:,} bytes left of the limit "
+                              f"of {limits.max_bytes:,}")
             if total > RATIO_FLOOR and total > limits.max_ratio * max(packed, 1):
                 raise Refused(f"it unpacks to more than {total:,} bytes from {packed:,}, more than {limits.max_ratio:g} "
                               "times its compressed size")
@@ -249,7 +252,8 @@ class Unpacker:
         except Exception as error:  # Refused, or any of the archive's or the disk's errors (corrupt, encrypted, ...)
             if opened:
                 target.unlink(missing_ok=True)
-            reason = str(error) if isinstance(error, Refused) else f"it could not be unpacked ({type(error).__name__}: {error})"
+            reason = str(error) if isinstance(error, Refused) else \
+                f"it could not be unpacked ({type(error).__name__}: {error})"
             self.refused.append(Refusal(f"{folder}/{member.name}", reason, folder))
             return
         finally:

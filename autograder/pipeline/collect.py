@@ -7,8 +7,8 @@ each file's path, and maps the name to our student id with a CSV (``lms_name,stu
 result is the layout ``python -m autograder grade`` takes:
 ``SUBMISSIONS/<student>/<lab>/<lab>.ipynb``, with nbgrader's ``timestamp.txt`` beside it when the
 LMS gives a submission time. Every file that is not collected is reported with the reason.
-The download is unpacked within limits (SafeExtractor, in place of nbgrader's extractor): a refused file is reported with the student it belongs to, where its name says, and
-stays in the download.
+The download is unpacked within limits (SafeExtractor, in place of nbgrader's extractor): a refused
+file is reported with the student it belongs to, where its name says, and stays in the download.
 
 Plain nbgrader works too, into the course's ``submitted/``:
 ``nbgrader zip_collect <lab> --collector=autograder.pipeline.collect.StudentIdCollector
@@ -196,18 +196,24 @@ class IntakeReport:
     renamed: list[tuple[str, str]]
     """(file, student): a notebook collected under the lab's name although named differently."""
     refused: list[tuple[str, str | None, str]] = field(default_factory=list)
-    """(file, whose, reason): what the download's limits kept from being unpacked (archives.SafeExtractor)."""
+    """(file, whose, reason): what the download's limits kept from being unpacked (SafeExtractor)."""
 
     def lines(self) -> list[str]:
         out = [f"{self.lab}: collected {len(self.students)} submission(s)."]
-        out += [f"REFUSED {path}{f' from {whose}' if whose else ''}: {reason}; it is left in the download"
+        out += [f"REFUSED {_shown(path)}{f' from {_shown(whose)}' if whose else ''}: {reason}; it is left in the download"
                 for path, whose, reason in self.refused]
-        out += [f"NOT COLLECTED {path}: {reason}" for path, reason in self.skipped]
+        out += [f"NOT COLLECTED {_shown(path)}: {reason}" for path, reason in self.skipped]
         out += [f"superseded {path}: {student} submitted a newer file" for path, student in self.superseded]
         out += [f"renamed {path}: collected as {student}'s {self.lab}.ipynb" for path, student in self.renamed]
         if self.missing:
             out.append(f"no submission from: {', '.join(self.missing)}")
         return out
+
+
+def _shown(path: str) -> str:
+    """A path from the download as the terminal shows it: quoted as Python writes it if it holds a
+    character that is not printable (an escape sequence in a file name would act on the terminal)."""
+    return path if path.isprintable() else repr(path)
 
 
 def _superseded(collected: list[Collected]) -> list[tuple[str, str]]:
@@ -226,7 +232,7 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
     """Collect an LMS download of ``lab`` (a zip or a folder) into ``out/<student>/<lab>/<lab>.ipynb``.
 
     nbgrader's ZipCollectApp does the work in a scratch course folder whose ``submitted/`` is
-    ``out``, its archives unpacked within ``limits`` (archives.SafeExtractor). A student's folder
+    ``out``, its archives unpacked within ``limits`` (SafeExtractor). A student's folder
     in ``out`` is replaced by the newest file of this download.
     Raises IntakeError when nbgrader refuses (e.g. two files of one student and no times to
     choose between them).
