@@ -73,6 +73,7 @@ def test_a_member_too_compressed_is_refused(tmp_path, notebook):
     [(path, whose, reason)] = report.refused
     assert (path, whose) == ("lms/export/bob_train-kf.ipynb", "bob (s002)")
     assert reason.startswith("it unpacks to 20,000,000 bytes from ") and "more than 100 times" in reason
+    assert zipfile.ZipFile(download).read("export/bob_train-kf.ipynb") == bytes(20_000_000)
 
 
 def test_a_member_larger_than_it_declares_is_refused(tmp_path, notebook):
@@ -89,7 +90,7 @@ def test_a_member_larger_than_it_declares_is_refused(tmp_path, notebook):
     report, out = run(tmp_path, download)
     assert report.refused == [("lms/export/bob_train-kf.ipynb", "bob (s002)", "it could not be unpacked "
                                "(BadZipFile: Bad CRC-32 for file 'export/bob_train-kf.ipynb')")]
-    assert not (out / "s002").exists()
+    assert not (out / "s002").exists() and download.read_bytes() == bytes(data)
 
 
 def test_an_archive_inside_the_archive_is_not_unpacked(tmp_path, notebook):
@@ -176,6 +177,8 @@ def test_links_in_a_zip_and_in_a_tar_are_refused(tmp_path, notebook):
         ("bob_zipped/bob_train-kf.ipynb", "bob (s002)", "it is a symbolic link"),
     ]
     assert not [p for p in tmp_path.rglob("*") if p.is_symlink()]
+    assert tarfile.open(download / "bob_tarred.tar.gz").getnames() == ["bob_soft.ipynb", "bob_hard.ipynb"]
+    assert zipfile.ZipFile(download / "bob_zipped.zip").namelist() == ["bob_train-kf.ipynb"]
 
 
 def test_the_command_names_the_student_and_exits_nonzero(tmp_path, notebook, capsys):
