@@ -128,3 +128,8 @@ c.LatePenalty.max_percent = 50.0
 from autograder.pipeline.export import GradesExport  # noqa: E402
 
 c.ExportApp.plugin_class = GradesExport
+
+# `nbgrader zip_collect` unpacks an LMS download within limits: no archive inside an archive, no
+# link, no path out of the folder, capped size, file count and compression ratio; what it refuses
+# is logged and stays in the download (autograder/pipeline/archives.py).
+c.ZipCollectApp.extractor_plugin = "autograder.pipeline.collect.SafeExtractor"

@@ -10,6 +10,7 @@ from typing import TYPE_CHECKING
 
 from autograder import default_jobs
 from autograder.labs import ROOT
+from autograder.pipeline.archives import RATIO_FLOOR, Limits
 
 if TYPE_CHECKING:
     from autograder.pipeline.shards import Shard
@@ -36,7 +37,8 @@ def build_parser() -> argparse.ArgumentParser:
     bundle = commands.add_parser("bundle", help="write the solution-free tree that students get, and check it for leaks")
     bundle.add_argument("out", type=Path, help="a new folder")
     grade = commands.add_parser("grade", help="autograde SUBMISSIONS/<student>/<lab>/<lab>.ipynb; write grades and feedback")
-    grade.add_argument("submissions", type=Path, help="the folder of submissions, SUBMISSIONS/<student>/<lab>/<lab>.ipynb")
+    grade.add_argument("submissions", type=Path, help="the folder of submissions, SUBMISSIONS/<student>/<lab>/<lab>.ipynb "
+                       "(a <student> folder not named by a student id, letters, digits and _ . -, is skipped and listed)")
     grade.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder to grade in (default: the course root)")
     grade.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
     grade.add_argument("--jobs", type=int, default=default_jobs(), help=JOBS_HELP)
@@ -72,6 +74,19 @@ def build_parser() -> argparse.ArgumentParser:
     collect.add_argument("--out", type=Path, required=True, help="the SUBMISSIONS folder to write")
     collect.add_argument("--pattern", default=None, help="regular expression for the LMS's file names, with the groups student_id and (optionally) timestamp")
     collect.add_argument("--timezone", default="UTC", help="the time zone of the submission times in file names (default: UTC)")
+    limits = Limits()
+    collect.add_argument("--max-total-mb", type=float, default=limits.max_bytes / 1e6, metavar="MB",
+                         help="refuse an archive that would take what the download unpacks past this many MB in all "
+                         "(default: %(default)g)")
+    collect.add_argument("--max-file-mb", type=float, default=limits.max_file_bytes / 1e6, metavar="MB",
+                         help="refuse a member of an archive that unpacks to more than this many MB (default: %(default)g)")
+    collect.add_argument("--max-files", type=int, default=limits.max_files, metavar="N",
+                         help="refuse an archive that would take the files the download unpacks past this many in all "
+                         "(default: %(default)s)")
+    collect.add_argument("--max-ratio", type=float, default=limits.max_ratio, metavar="R",
+                         help=f"refuse what unpacks to more than {RATIO_FLOOR / 1e6:g} MB at more than this many times its "
+                         "compressed size (default: %(default)g). Archives inside archives, links, and paths that leave "
+                         "the folder are always refused")
     similarity = commands.add_parser("similarity", help="list students' answers that are alike after normalisation, for review (changes no grade)")
     similarity.add_argument("folder", type=Path, help="a SUBMISSIONS folder, or a course folder that has submitted/")
     similarity.add_argument("--threshold", type=float, default=0.8, help="list pairs scoring at least this (1 = identical; default 0.8)")
@@ -177,7 +192,8 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "collect":
         from autograder.pipeline.collect import run_collect
 
-        return run_collect(args.lab, args.download, args.students, args.out, args.pattern, args.timezone)
+        limits = Limits(round(args.max_total_mb * 1e6), round(args.max_file_mb * 1e6), args.max_files, args.max_ratio)
+        return run_collect(args.lab, args.download, args.students, args.out, args.pattern, args.timezone, limits)
     elif args.command == "similarity":
         from autograder.integrity.similarity import run_similarity
 

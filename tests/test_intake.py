@@ -9,7 +9,7 @@ import zipfile
 import nbformat
 import pytest
 
-from autograder.pipeline import intake
+from autograder.pipeline import grading, intake
 from autograder.catalogues import submissions
 from autograder.__main__ import main
 from autograder.pipeline.collect import IntakeError, collect
@@ -137,7 +137,29 @@ def test_plain_nbgrader_zip_collect_uses_the_collector(download, tmp_path):
     env = {**os.environ, "PYTHONPATH": str(ROOT)}
     subprocess.run([sys.executable, "-m", "nbgrader", "zip_collect", LAB.id,
                     "--collector=autograder.pipeline.collect.StudentIdCollector",
+                    "--extractor=autograder.pipeline.collect.SafeExtractor",
                     f"--StudentIdCollector.students_file={students}"],
                    cwd=course, env=env, check=True, capture_output=True)
     assert sorted(p.name for p in (course / "submitted").iterdir()) == ["s001", "s002", "s003"]
     assert tag(course / "submitted/s001/train-kf/train-kf.ipynb") == "alice-new"
+
+
+def test_grade_skips_a_folder_not_named_by_a_student_id_and_grades_the_rest(tmp_path, monkeypatch, capsys):
+    """`=2+5` (a formula in a spreadsheet) and `-rm` are listed on the terminal and never reach the
+    gradebook; s001 beside them is graded. Grading itself is stubbed: only the intake runs."""
+    klass = tmp_path / "class"
+    for student in ("=2+5", "s001", "-rm"):
+        submissions.write(submissions.solved(LAB), klass, student, LAB)
+    seen = {}
+    monkeypatch.setattr(grading, "check_reference_available", lambda labs: None)
+    monkeypatch.setattr(grading, "set_up", lambda labs, workdir, by_lab: seen.setdefault("registered", by_lab))
+    monkeypatch.setattr(grading, "autograde", lambda by_lab, workdir, jobs=None: dict.fromkeys(seen.setdefault("graded", by_lab), ""))
+    monkeypatch.setattr(grading, "read_grades", lambda workdir, labs, students=None: [])
+    grading.grade(klass, tmp_path / "course", tmp_path / "grades.csv", jobs=1)
+    assert seen == {"registered": {"train-kf": ["s001"]}, "graded": {"train-kf": ["s001"]}}
+    assert sorted(p.name for p in (tmp_path / "course/submitted").iterdir()) == ["s001"]
+    printed = capsys.readouterr().out
+    for name in ("-rm", "=2+5"):
+        assert (f"Skipped: The folder {str(klass / name)!r} is not named by a student id (letters, digits, _ . -, "
+                "beginning with a letter or a digit); it was not graded.") in printed
+    assert "Not graded: 2 folders not named by a student id (listed above)." in printed

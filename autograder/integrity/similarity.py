@@ -15,14 +15,13 @@ The report only lists pairs for review. It reads notebooks and never changes a g
 from __future__ import annotations
 
 import ast
-import csv
 import difflib
 import re
 from dataclasses import dataclass
 from itertools import combinations
 from pathlib import Path
 
-from autograder import cells
+from autograder import cells, csv_cells
 from autograder.labs import Lab, all_labs
 
 THRESHOLD = 0.8
@@ -241,8 +240,9 @@ def compare(folder: Path, labs: list[Lab] | None = None, threshold: float = THRE
 
 
 def write_csv(report: Report, path: Path) -> None:
+    """One row per pair of students, text that a spreadsheet would read as a formula neutralised (``csv_cells``)."""
     with open(path, "w", newline="") as handle:
-        writer = csv.writer(handle)
+        writer = csv_cells.writer(handle)
         writer.writerow(["lab", "blank", "student_a", "student_b", "score", "tokens", "model_answer"])
         for p in report.pairs:
             writer.writerow([p.lab, p.blank, p.student_a, p.student_b, f"{p.score:g}", p.tokens, "yes" if p.model_answer else ""])

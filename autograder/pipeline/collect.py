@@ -7,31 +7,36 @@ each file's path, and maps the name to our student id with a CSV (``lms_name,stu
 result is the layout ``python -m autograder grade`` takes:
 ``SUBMISSIONS/<student>/<lab>/<lab>.ipynb``, with nbgrader's ``timestamp.txt`` beside it when the
 LMS gives a submission time. Every file that is not collected is reported with the reason.
+The download is unpacked within limits (SafeExtractor, in place of nbgrader's extractor): a refused
+file is reported with the student it belongs to, where its name says, and stays in the download.
 
 Plain nbgrader works too, into the course's ``submitted/``:
 ``nbgrader zip_collect <lab> --collector=autograder.pipeline.collect.StudentIdCollector
---StudentIdCollector.students_file=students.csv``.
+--StudentIdCollector.students_file=students.csv --extractor=autograder.pipeline.collect.SafeExtractor``.
 """
 
 from __future__ import annotations
 
 import csv
+import os
 import re
 import shutil
 import tempfile
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from datetime import datetime, timezone
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from zoneinfo import ZoneInfo, ZoneInfoNotFoundError
 
 from nbgrader.apps import ZipCollectApp
 from nbgrader.coursedir import CourseDirectory
-from nbgrader.plugins import FileNameCollectorPlugin
+from nbgrader.plugins import ExtractorPlugin, FileNameCollectorPlugin
 from nbgrader.utils import capture_log
-from traitlets import Unicode
+from traitlets import Float, Int, Unicode
 from traitlets.config import Config
 
 from autograder.labs import ROOT, Lab, get_lab
+from autograder.pipeline.archives import RATIO_FLOOR, Limits, Refusal, Unpacker
+from autograder.pipeline.intake import STUDENT_ID
 
 DEFAULT_PATTERN = (
     r"(?:^|/)(?P<student_id>[^/_]+)_"
@@ -39,8 +44,6 @@ DEFAULT_PATTERN = (
 )
 """A file ``<lms name>_<anything>.ipynb``, or ``<lms name>_<YYYY-MM-DD-HH-MM-SS>_<anything>.ipynb``
 with the submission time, anywhere in the download."""
-STUDENT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
-"""Our student ids are folder names: letters, digits, ``_``, ``.`` and ``-``."""
 
 
 class IntakeError(RuntimeError):
@@ -69,6 +72,43 @@ def parse_time(text: str, zone: str) -> datetime:
     the LMS's time zone, in UTC."""
     fields = [int(part) for part in re.findall(r"\d+", text)]
     return datetime(*fields[:6], tzinfo=ZoneInfo(zone)).astimezone(timezone.utc)
+
+
+class SafeExtractor(ExtractorPlugin):
+    """nbgrader's extractor within limits (archives.Unpacker): each archive of the archive folder (by
+    nbgrader's ``zip_ext``) is unpacked into a folder of its name, and any other file copied, as
+    nbgrader does; a symbolic link is refused. ``refused`` lists what was not unpacked or copied."""
+
+    max_bytes = Int(Limits.max_bytes, help="Bytes unpacked from all the download's archives together.").tag(config=True)
+    max_file_bytes = Int(Limits.max_file_bytes, help="Bytes of one unpacked file.").tag(config=True)
+    max_files = Int(Limits.max_files, help="Files unpacked from all the download's archives together.").tag(config=True)
+    max_ratio = Float(Limits.max_ratio, help=f"Unpacked over compressed size, for what unpacks to more than "
+                      f"{RATIO_FLOOR:,} bytes.").tag(config=True)
+
+    def __init__(self, **kwargs) -> None:
+        super().__init__(**kwargs)
+        self.refused: list[Refusal] = []
+
+    def extract(self, archive_path: str, extracted_path: str) -> None:
+        unpacker = Unpacker(Limits(self.max_bytes, self.max_file_bytes, self.max_files, self.max_ratio))
+        top = Path(archive_path)
+        for root, folders, files in os.walk(top):
+            links = [name for name in folders if (Path(root) / name).is_symlink()]
+            for name in sorted(files + links):
+                source = Path(root) / name
+                relative = source.relative_to(top)
+                target = Path(extracted_path) / relative.parent
+                target.mkdir(parents=True, exist_ok=True)
+                if source.is_symlink():
+                    unpacker.refused.append(Refusal(relative.as_posix(), "it is a symbolic link"))
+                elif source.suffix in self.zip_ext:
+                    stem = source.stem.removesuffix(".tar")
+                    unpacker.unpack(source, target / stem, (relative.parent / stem).as_posix(), relative.as_posix())
+                else:
+                    shutil.copy(source, target / name)
+        self.refused = unpacker.refused
+        for refusal in self.refused:
+            self.log.warning("Refused %s: %s", refusal.path, refusal.reason)
 
 
 @dataclass
@@ -127,6 +167,19 @@ class StudentIdCollector(FileNameCollectorPlugin):
         self.collected.append(Collected(relative, info["student_id"], time))
         return info
 
+    def owner(self, refusal: Refusal) -> str | None:
+        """Whose a refused file is, as ``lms name (student id)``: the LMS name the pattern finds in its
+        path, or else in its archive's, read as if it were a notebook; None if neither says."""
+        for path in (refusal.path, refusal.archive):
+            try:
+                match = path and re.search(self.named_regexp, PurePosixPath(path).with_suffix(".ipynb").as_posix())
+            except ValueError:  # a path whose last part cannot take a suffix ("..")
+                match = None
+            if match:
+                name = match.group("student_id")
+                return f"{name} ({self.students[name]})" if name in self.students else f"{name}, not in the student list"
+        return None
+
 
 @dataclass
 class IntakeReport:
@@ -142,15 +195,25 @@ class IntakeReport:
     """Students in the student list who submitted nothing."""
     renamed: list[tuple[str, str]]
     """(file, student): a notebook collected under the lab's name although named differently."""
+    refused: list[tuple[str, str | None, str]] = field(default_factory=list)
+    """(file, whose, reason): what the download's limits kept from being unpacked (SafeExtractor)."""
 
     def lines(self) -> list[str]:
         out = [f"{self.lab}: collected {len(self.students)} submission(s)."]
-        out += [f"NOT COLLECTED {path}: {reason}" for path, reason in self.skipped]
+        out += [f"REFUSED {_shown(path)}{f' from {_shown(whose)}' if whose else ''}: {reason}; it is left in the download"
+                for path, whose, reason in self.refused]
+        out += [f"NOT COLLECTED {_shown(path)}: {reason}" for path, reason in self.skipped]
         out += [f"superseded {path}: {student} submitted a newer file" for path, student in self.superseded]
         out += [f"renamed {path}: collected as {student}'s {self.lab}.ipynb" for path, student in self.renamed]
         if self.missing:
             out.append(f"no submission from: {', '.join(self.missing)}")
         return out
+
+
+def _shown(path: str) -> str:
+    """A path from the download as the terminal shows it: quoted as Python writes it if it holds a
+    character that is not printable (an escape sequence in a file name would act on the terminal)."""
+    return path if path.isprintable() else repr(path)
 
 
 def _superseded(collected: list[Collected]) -> list[tuple[str, str]]:
@@ -165,11 +228,12 @@ def _superseded(collected: list[Collected]) -> list[tuple[str, str]]:
 
 
 def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: str | None = None,
-            zone: str = "UTC") -> IntakeReport:
+            zone: str = "UTC", limits: Limits = Limits()) -> IntakeReport:
     """Collect an LMS download of ``lab`` (a zip or a folder) into ``out/<student>/<lab>/<lab>.ipynb``.
 
     nbgrader's ZipCollectApp does the work in a scratch course folder whose ``submitted/`` is
-    ``out``. A student's folder in ``out`` is replaced by the newest file of this download.
+    ``out``, its archives unpacked within ``limits`` (SafeExtractor). A student's folder
+    in ``out`` is replaced by the newest file of this download.
     Raises IntakeError when nbgrader refuses (e.g. two files of one student and no times to
     choose between them).
     """
@@ -184,7 +248,7 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
     with tempfile.TemporaryDirectory() as scratch:
         archive = Path(scratch) / "downloaded" / lab.id / "archive"
         if download.is_dir():
-            shutil.copytree(download, archive)
+            shutil.copytree(download, archive, symlinks=True)  # a link is refused, not followed
         else:
             archive.mkdir(parents=True)
             shutil.copy2(download, archive)
@@ -196,6 +260,11 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
         config.ZipCollectApp.force = True
         config.ZipCollectApp.log_level = "ERROR"  # every file not collected is in the report
         config.ExtractorPlugin.force = True
+        config.ZipCollectApp.extractor_plugin = SafeExtractor
+        config.SafeExtractor.max_bytes = limits.max_bytes
+        config.SafeExtractor.max_file_bytes = limits.max_file_bytes
+        config.SafeExtractor.max_files = limits.max_files
+        config.SafeExtractor.max_ratio = limits.max_ratio
         config.ZipCollectApp.collector_plugin = StudentIdCollector
         config.StudentIdCollector.students_file = str(students_file)
         config.StudentIdCollector.timezone = zone
@@ -204,6 +273,7 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
         app = ZipCollectApp(coursedir=CourseDirectory(config=config), config=config)
         result = capture_log(app)
         collector: StudentIdCollector | None = app.collector_plugin_inst
+        extractor: SafeExtractor | None = app.extractor_plugin_inst
         if not result["success"]:
             errors = "\n".join(line for line in result.get("log", "").splitlines() if line.startswith("[ERROR]"))
             files: dict[str, list[str]] = {}
@@ -220,18 +290,19 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
         _superseded(collector.collected),
         sorted(set(collector.students.values()) - set(students)),
         [(c.path, c.student) for c in collector.collected if not c.path.endswith(lab.notebook_name)],
+        [(r.path, collector.owner(r), r.reason) for r in extractor.refused],
     )
 
 
 def run_collect(lab_id: str, download: Path, students_file: Path, out: Path, pattern: str | None = None,
-                zone: str = "UTC") -> int:
+                zone: str = "UTC", limits: Limits = Limits()) -> int:
     """``python -m autograder collect``: collect and print the report. Exit status 1 if a file was
-    not collected, 2 if nothing could be collected."""
+    refused or not collected, 2 if nothing could be collected."""
     try:
-        report = collect(get_lab(lab_id), download, students_file, out, pattern, zone)
+        report = collect(get_lab(lab_id), download, students_file, out, pattern, zone, limits)
     except (IntakeError, ValueError, OSError) as error:
         print(f"collect: {error}")
         return 2
     print("\n".join(report.lines()))
     print(f"Submissions: {out}. Grade them with: python -m autograder grade {out}")
-    return 1 if report.skipped else 0
+    return 1 if report.skipped or report.refused else 0

@@ -3,7 +3,6 @@ grading environment beside it."""
 
 from __future__ import annotations
 
-import csv
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -12,7 +11,7 @@ import nbformat
 from nbgrader.api import Gradebook, MissingEntry
 from nbgrader.coursedir import CourseDirectory
 
-from autograder import cells
+from autograder import cells, csv_cells
 from autograder.integrity.flag import FLAG
 from autograder.labs import ROOT, Lab
 from autograder.pipeline import versions
@@ -131,12 +130,13 @@ def write_grades(rows: list[GradeRow], path: Path) -> None:
 
 def write_csv(rows: list[GradeRow], path: Path) -> None:
     """One row per student and lab, one column per graded cell (empty: not in this lab, or not
-    graded by hand yet), the late penalty, the total so far (less the penalty), and the total possible."""
+    graded by hand yet), the late penalty, the total so far (less the penalty), and the total possible.
+    Text that a spreadsheet would read as a formula is neutralised (``csv_cells``)."""
     columns: list[str] = []
     for row in rows:
         columns += [c for c in row.cells if c not in columns]
     with open(path, "w", newline="") as handle:
-        writer = csv.writer(handle)
+        writer = csv_cells.writer(handle)
         writer.writerow(["student", "lab", *columns, "late_penalty", "total", "max_score", "flagged", "notes"])
         for row in rows:
             scores = ["" if row.cells.get(c) is None else f"{row.cells[c]:g}" for c in columns]

@@ -19,7 +19,7 @@ from autograder.kernel import sandbox
 from autograder.labs import ROOT, Lab
 from autograder.pipeline import compare, late, shards
 from autograder.pipeline.grades import GradeRow, all_graded_labs, read_grades, write_grades
-from autograder.pipeline.intake import class_list, import_submissions
+from autograder.pipeline.intake import class_list, import_submissions, not_student_ids
 from autograder.pipeline.nbgrader_apps import course_config, feedback_page, generate_release, gradebook_url, run_app
 from autograder.pipeline.shards import Shard
 from autograder.pipeline.table import print_table
@@ -103,7 +103,8 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
           shard: Shard | None = None) -> list[GradeRow]:
     """Autograde ``submissions/<student>/<lab>/<lab>.ipynb`` in the course ``workdir``.
 
-    Refuses to start unless this process can import the hidden tests and the reference. Grades only the
+    Refuses to start unless this process can import the hidden tests and the reference, and skips
+    (saying so) a student folder not named by a student id. Grades only the
     submissions given (with ``jobs`` processes), so that regrading one student leaves everyone
     else's grades as they were; with ``shard``, only that shard's students' (README: Large classes),
     into a PostgreSQL gradebook (else it raises shards.NotShared).
@@ -117,6 +118,9 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     for folder in sorted(p for p in submissions.glob("*/*") if p.is_dir() and p.name not in known):
         print(f"Skipped {folder}: there is no lab called {folder.name}.")
     labs = [Lab(lab_id) for lab_id in sorted(known & {p.name for p in submissions.glob("*/*") if p.is_dir()})]
+    rejected = not_student_ids(submissions, labs)
+    for line in rejected:
+        print(f"Skipped: {line}")
     check_reference_available(labs)
     print(sandbox_line())
     print(f"Setting up the course folder {workdir} for {count(len(labs), 'lab')} (nbgrader generate_assignment).")
@@ -147,6 +151,8 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     out_csv = out_csv or workdir / f"grades{shard.suffix if shard else ''}.csv"
     write_grades(rows, out_csv)
     print_table(rows, failures)
+    if rejected:
+        print(f"Not graded: {count(len(rejected), 'folder')} not named by a student id (listed above).")
     print(f"Grades: {out_csv}. Feedback: {workdir / 'feedback'}.")
     if shard is not None:
         print(f"When every shard is done: `python -m autograder export --workdir {workdir}` writes the class's "

@@ -4,6 +4,7 @@ becomes nbgrader's ``submitted/<student>/<lab>/``, each file read defensively.""
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import tempfile
 from collections.abc import Callable
@@ -19,6 +20,8 @@ from autograder.pipeline.restore import add_grader_notes, forget_grader_notes
 MAX_SUBMISSION_BYTES = 50_000_000
 """The largest notebook file the grader reads (a lab's solved notebook, figures and all, is under 2 MB):
 a larger one is graded as empty, since reading it could take the grader's memory."""
+STUDENT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
+"""Our student ids are folder names: letters, digits, ``_``, ``.`` and ``-``, beginning with a letter or a digit."""
 
 def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
     """The notebook in a student's ``folder`` for ``lab``, and notes on anything wrong with it.
@@ -69,8 +72,20 @@ def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
 
 
 def class_list(submissions: Path, labs: list[Lab]) -> dict[str, list[str]]:
-    """Lab id -> the students with a folder ``submissions/<student>/<lab>/``, for these labs."""
-    return {lab.id: sorted(p.parent.name for p in submissions.glob(f"*/{lab.id}") if p.is_dir()) for lab in labs}
+    """Lab id -> the students with a folder ``submissions/<student>/<lab>/``, for these labs; a
+    folder not named by a student id is left out (``not_student_ids``)."""
+    return {lab.id: sorted(p.parent.name for p in submissions.glob(f"*/{lab.id}")
+                           if p.is_dir() and STUDENT_ID.fullmatch(p.parent.name)) for lab in labs}
+
+
+def not_student_ids(submissions: Path, labs: list[Lab]) -> list[str]:
+    """A line for each folder of ``submissions`` with one of these labs in it whose name is not a
+    student id (``=2+5``, a formula to a spreadsheet): it is not graded. The path is quoted as Python
+    writes it, so that a control character in the name shows rather than acts on the terminal."""
+    names = {p.parent.name for lab in labs for p in submissions.glob(f"*/{lab.id}")
+             if p.is_dir() and not STUDENT_ID.fullmatch(p.parent.name)}
+    return [f"The folder {str(submissions / name)!r} is not named by a student id (letters, digits, _ . -, "
+            "beginning with a letter or a digit); it was not graded." for name in sorted(names)]
 
 
 def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
