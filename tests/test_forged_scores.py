@@ -23,6 +23,7 @@ from autograder.catalogues.cheats import FORGED_SCORES, _add_cell_after_setup
 from autograder.integrity.flag import FLAG
 from autograder.labs import ROOT, Lab
 from autograder.pipeline import grading
+from autograder.pipeline.audit import audit
 from over_labs import LABS, about, chosen
 
 HONEST_LAB = Lab("train-kf")
@@ -50,15 +51,16 @@ def graded(request, tmp_path_factory):
     if chosen(request.config, [HONEST_LAB]):
         for name in FORGED_SCORES:
             submissions.write(_forged(submissions.solved(HONEST_LAB), name), folder, f"solved-{name}", HONEST_LAB)
-    rows = grading.grade(folder, tmp_path_factory.mktemp("course"), jobs=2)
-    return {(row.student, row.lab): row for row in rows}
+    workdir = tmp_path_factory.mktemp("course")
+    rows = grading.grade(folder, workdir, jobs=2)
+    return {(row.student, row.lab): row for row in rows}, workdir
 
 
 @about(*LABS)
 @pytest.mark.parametrize("name", FORGED_SCORES)
 def test_a_blank_notebook_that_forges_its_score_scores_nothing(graded, request, name):
     for lab in chosen(request.config, LABS):
-        row = graded[f"blank-{name}", lab.id]
+        row = graded[0][f"blank-{name}", lab.id]
         scores = {cell: row.cells[cell] for cell in _tests(lab)}
         assert set(scores.values()) == {0.0}, f"{lab.id}, {name}: {scores}"
 
@@ -68,12 +70,20 @@ def test_a_blank_notebook_that_forges_its_score_scores_nothing(graded, request, 
 def test_a_solved_notebook_keeps_its_marks_whatever_its_kernel_shows(graded, request, name):
     if not chosen(request.config, [HONEST_LAB]):
         pytest.skip("train-kf is not among the labs chosen with --lab")
-    row = graded[f"solved-{name}", HONEST_LAB.id]
+    row = graded[0][f"solved-{name}", HONEST_LAB.id]
     flagged = [note for note in row.notes if note.startswith(FLAG)]
     for cell, points in _tests(HONEST_LAB).items():
         # a flag that costs every blank (README: the scan's findings) takes them all; nothing else does
         want = 0.0 if any("every blank" in note for note in flagged) else points
         assert row.cells[cell] == want, f"{name}: {cell} scored {row.cells[cell]}, not {want} ({flagged})"
+
+
+@about(*LABS)
+def test_the_audit_finds_no_kernel_made_score_in_a_class_graded_by_this_version(graded):
+    """``python -m autograder audit`` on the forgeries graded above: every recorded score is the
+    grader's verdict (tests/test_audit.py shows it finding those of a version before the verdicts)."""
+    suspects, unchecked = audit(graded[1])
+    assert suspects == [] and unchecked == [], (suspects, unchecked)
 
 
 @about(HONEST_LAB)

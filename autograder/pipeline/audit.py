@@ -22,6 +22,7 @@ from nbgrader.coursedir import CourseDirectory
 
 from autograder import cells
 from autograder.pipeline.nbgrader_apps import course_config
+from course.checks import count
 
 
 @dataclass(frozen=True)
@@ -48,7 +49,7 @@ def _shown(cell) -> str:
     """The first output of the cell that nbgrader reads as a score, in words."""
     for output in cell.outputs:
         if output.output_type == "execute_result":
-            return f"a result value, {str(output.get('data', {}).get('text/plain', ''))[:40]!r}"
+            return f"a result value, {str(output.get('data', {}).get('text/plain', ''))[:40]}"
         if output.output_type == "error":
             return f"an error, {output.get('ename', '')}"
         if output.output_type == "stream" and output.get("name") == "stderr":
@@ -96,8 +97,8 @@ def run_audit(workdir: Path) -> int:
     for student, lab in sorted(set(unchecked)):
         print(f"{student} {lab}: no autograded notebook in {workdir / 'autograded'}, so it could not be checked")
     if by_submission:
-        print(f"{len(by_submission)} graded submissions have test cells whose score came from the student's kernel, "
-              "not from the grader's verdict. Regrade them with this version: put each in a SUBMISSIONS folder of "
+        print(f"{count(len(by_submission), 'graded submission')} with test cells whose score came from the student's "
+              "kernel, not from the grader's verdict. Regrade them with this version: put each in a SUBMISSIONS folder of "
               "its own and run `python -m autograder grade SUBMISSIONS` (the other grades stay as they are).")
         return 1
     print("Every graded test cell's score is the grader's verdict." if not unchecked else
