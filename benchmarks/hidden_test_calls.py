@@ -4,7 +4,8 @@
 Starts one kernel as grading does (SandboxedKernelManager, the kernel-side module sent as source),
 defines an identity function and one that calls a served blank, and times, for arguments of several
 sizes: a call from the grader into the kernel and back, and a call that also calls the grader back
-once (a blank that uses another blank's reference). Prints the median of each over REPEATS calls.
+once (a blank that uses another blank's reference, which the grader first runs on the same
+arguments to know which calls it serves). Prints the median of each over REPEATS calls.
 
     .venv/bin/python benchmarks/hidden_test_calls.py
 """
@@ -27,6 +28,16 @@ from autograder.kernel.manager import SandboxedKernelManager  # noqa: E402
 REPEATS = 200
 SIZES = {"3 x 3": (3, 3), "3 x 1,000": (3, 1_000), "3 x 10,000 (a particle cloud)": (3, 10_000)}
 DEFINITIONS = "def echo(x):\n    return x\n\ndef uses_other(x):\n    return other(x)\n"
+
+
+def other(x):
+    """The reference's version of the served blank."""
+    return x
+
+
+def uses_other(x):
+    """The reference's version of the blank under test: it calls the served blank once."""
+    return other(x)
 
 
 def _median_ms(call, argument, repeats: int = REPEATS) -> float:
@@ -69,7 +80,8 @@ def main() -> None:
         msg_id = run(compare.serve_code(listener.path, compare.HiddenTest("benchmark", f"check_{name}", name)))
         peer, why_not = compare.connect(listener, time.monotonic() + 60, lambda: False)
         assert peer is not None, why_not
-        student = compare.StudentFunction(peer, name, frozenset({"other"}), {"other": lambda x: x})
+        # the grader serves ``other`` to the calls that the reference's own version makes (served_calls.py)
+        student = compare.StudentFunction(peer, name, frozenset({"other"}), {"other": other}, reference=uses_other)
         for label, shape in SIZES.items():
             rows.append((name, label, _median_ms(student, np.ones(shape))))
         compare.stop(peer)
