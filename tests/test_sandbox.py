@@ -304,6 +304,21 @@ def test_a_sandboxed_kernel_runs_the_labs_work_and_reaches_nothing_else(graded_c
     assert not planted.exists() and not (graded_class["work"] / "grades.csv").exists()
 
 
+def test_a_grading_kernel_gets_none_of_the_graders_secrets_in_its_environment(graded_class, monkeypatch):
+    """The grader's environment may name the gradebook with its password (GRADEBOOK_URL), hold
+    PGPASSWORD or name the grading secret's file; a kernel could print them into its feedback page.
+    It gets only the variables a Python program needs (manager.KERNEL_ENVIRONMENT), and
+    NBGRADER_EXECUTION, which course.checks reads."""
+    secrets = {"GRADEBOOK_URL": "postgresql+psycopg://grader:hunter2@db:5432/course", "PGPASSWORD": "hunter2",
+               "KIT_GRADING_SECRET_FILE": "/srv/secret", "AWS_SECRET_ACCESS_KEY": "hunter2"}
+    for name, value in {**secrets, "NBGRADER_EXECUTION": "autograde", "OPENBLAS_NUM_THREADS": "1"}.items():
+        monkeypatch.setenv(name, value)
+    printed = run_in_kernel("import os, json\nprint(json.dumps(dict(os.environ)))", graded_class["alice"])
+    seen = json.loads(printed)
+    assert not set(secrets) & set(seen) and "hunter2" not in printed, seen
+    assert seen["NBGRADER_EXECUTION"] == "autograde" and seen["OPENBLAS_NUM_THREADS"] == "1", seen
+
+
 def test_with_kit_sandbox_off_the_kernel_still_runs_and_reaches_everything(monkeypatch, graded_class, tcp_server):
     monkeypatch.setenv("KIT_SANDBOX", "off")
     assert sandbox.status().summary.startswith("NOT SANDBOXED")

@@ -96,6 +96,12 @@ def _empty(lab: Lab, blank: str) -> tuple[str, bytes]:
     return _file(lab, nbformat.v4.new_notebook())
 
 
+def _hidden_markers(lab: Lab, blank: str) -> tuple[str, bytes]:
+    nb = submissions.solved(lab)
+    nb.cells.insert(2, new_code_cell(f"x = 1\n{cells.BEGIN_HIDDEN}\nprint('a test of my own')\n{cells.END_HIDDEN}"))
+    return _file(lab, nb)
+
+
 def _wrong_name(lab: Lab, blank: str) -> tuple[str, bytes]:
     return f"{lab.id} (1).ipynb", _solved_bytes(lab)
 
@@ -115,6 +121,8 @@ FAULTS = (
               lab, blank, "import time\nwhile True:\n    try:\n        time.sleep(0.5)\n    except KeyboardInterrupt:\n        pass"),
           "blank", "CellTimeoutError"),
     Fault("loud-cell", "a cell that prints 100 MB", _loud_cell, None, "the grader kept the first"),
+    Fault("hidden-markers", "a cell of the student's own that holds the hidden-test markers around code of theirs "
+          "(nbgrader gave up on the whole submission)", _hidden_markers, None, ""),
     Fault("kernel-dies", "a blank that kills its kernel (os._exit(1))",
           lambda lab, blank: _with_code_in_blank(lab, blank, "import os\nos._exit(1)"), "blank", "KernelDied"),
     Fault("memory-hog", "a blank that asks for 50 GB of memory",

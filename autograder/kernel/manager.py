@@ -164,7 +164,10 @@ class SandboxedKernelManager(AsyncKernelManager):
         if fonts is not None:
             shutil.copy(fonts, self._private / "matplotlib")
         kernel_cmd, kw = await super()._async_pre_start_kernel(**kw)
-        kw["env"].pop("PYTHONPATH", None)  # the kernel imports what is installed (course), nothing of the course root
+        # the grader's environment may hold secrets (GRADEBOOK_URL with a password, PGPASSWORD, the
+        # grading secret's file): the kernel gets only what a Python program needs to run alike
+        # everywhere, and no PYTHONPATH (it imports what is installed, `course`, nothing of the root)
+        kw["env"] = kernel_environment(kw["env"])
         kw["env"].update(
             TMPDIR=str(self._private / "tmp"),
             HOME=str(self._private / "home"),
@@ -188,6 +191,21 @@ class SandboxedKernelManager(AsyncKernelManager):
         if not restart and self._private is not None:
             shutil.rmtree(self._private, ignore_errors=True)
             self._private = None
+
+
+KERNEL_ENVIRONMENT = ("PATH", "LANG", "LANGUAGE", "TZ", "NBGRADER_EXECUTION", "JPY_PARENT_PID",
+                      "PYDEVD_DISABLE_FILE_VALIDATION", "SOURCE_DATE_EPOCH")
+"""The variables of the grader's environment that a grading kernel gets, with those that begin with
+``KERNEL_ENVIRONMENT_PREFIXES``: the locale, the time zone, whether nbgrader is grading (course.checks
+reads it), and the numerical libraries' settings (threads, and OpenBLAS's core type, which some
+machines need to compute right)."""
+KERNEL_ENVIRONMENT_PREFIXES = ("LC_", "OPENBLAS_", "OMP_", "MKL_", "NUMEXPR_", "VECLIB_")
+
+
+def kernel_environment(environment: dict[str, str]) -> dict[str, str]:
+    """The part of ``environment`` that a grading kernel is started with (``KERNEL_ENVIRONMENT``)."""
+    return {name: value for name, value in environment.items()
+            if name in KERNEL_ENVIRONMENT or name.startswith(KERNEL_ENVIRONMENT_PREFIXES)}
 
 
 def _refuse_course_root(paths: list[str]) -> None:

@@ -49,6 +49,7 @@ from typing import Callable, Iterable
 from nbformat import NotebookNode
 from nbformat.v4 import new_output
 
+from autograder import cells
 from autograder.hidden_tests.isolate import called_blanks
 from autograder.kernel import side
 from autograder.kernel.side import Peer, PeerGone, PeerTimeout, ProtocolError, Wire, warning_class
@@ -143,10 +144,12 @@ def hidden_test(code: str) -> HiddenTest:
 
 
 def hidden_tests(nb: NotebookNode) -> dict[int, HiddenTest]:
-    """Cell index -> hidden test, for every code cell with a hidden block."""
+    """Cell index -> hidden test, for every autograded test cell with a hidden block. Only those: a
+    cell of the student's own that holds hidden-block markers is just code to the grader (the
+    sanitize step restores every test cell from the gradebook)."""
     found = {}
     for index, cell in enumerate(nb.cells):
-        if cell.cell_type == "code":
+        if cells.is_autograded_test(cell):
             _, code = split(cell.source)
             if code is not None:
                 found[index] = hidden_test(code)

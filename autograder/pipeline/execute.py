@@ -114,10 +114,12 @@ class GradingExecute(Execute):
         compare.prepare(tests.values())
         self.reset_execution_trackers()
         self._check_assign_resources(resources)
-        # the hidden cases of this submission, drawn from a seed that its kernel never sees
-        seed = cases.seed_for(grading_secret.secret(), grading_secret.submission_content(nb))
-        with _scratch_copy(self.resources), cases.seeded(seed):
-            return self._execute_cells(tests, checks)
+        with _scratch_copy(self.resources) as scratch:
+            # the hidden cases of this submission, drawn from a seed that its kernel never sees, of
+            # everything the kernel can read of the submission: its cells and its folder's files
+            seed = cases.seed_for(grading_secret.secret(), grading_secret.submission_content(nb, scratch))
+            with cases.seeded(seed):
+                return self._execute_cells(tests, checks)
 
     def _execute_cells(self, tests: dict[int, compare.HiddenTest], checks: dict) -> tuple[NotebookNode, dict]:
         """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""

@@ -1,7 +1,8 @@
 """The course's grading secret, from which each submission's hidden cases are drawn.
 
 Each submission's hidden cases come from its own seed (autograder/hidden_tests/cases.py):
-HMAC-SHA256 of the submission's content (its cells' types and sources, after the sanitize step)
+HMAC-SHA256 of the submission's content (its cells' types and sources, after the sanitize step, and
+every file in its folder, the submitted notebook included: everything its kernel can read of it)
 under this secret. The same file regraded gets the same cases and the same score; a changed file
 gets new cases; and without the secret, nobody can tell which cases a submission will get, so what
 one submission learns about its cases (by printing what its function is called with into its
@@ -67,6 +68,15 @@ def fingerprint(value: bytes) -> str:
     return hashlib.sha256(b"estimation-lab-kit grading secret\0" + value).hexdigest()[:16]
 
 
-def submission_content(nb: NotebookNode) -> bytes:
-    """What a submission's seed is computed from: its cells' types and sources, in order."""
-    return json.dumps([[cell.cell_type, cell.source] for cell in nb.cells], ensure_ascii=False).encode()
+def submission_content(nb: NotebookNode, folder: str | os.PathLike | None = None) -> bytes:
+    """What a submission's seed is computed from: everything its kernel can read of it. That is its
+    cells' types and sources, in order, and the name and bytes of every file in ``folder`` (the
+    kernel's working folder: the submitted notebook itself, whose metadata and outputs a cell could
+    read, and any file submitted beside it). A submission that kept its sources and changed what
+    they read would otherwise keep its cases."""
+    digest = hashlib.sha256(json.dumps([[cell.cell_type, cell.source] for cell in nb.cells], ensure_ascii=False).encode())
+    for path in sorted(Path(folder).iterdir()) if folder is not None else ():
+        if path.is_file() and not path.is_symlink():
+            digest.update(b"\0file\0" + path.name.encode(errors="surrogateescape") + b"\0")
+            digest.update(hashlib.sha256(path.read_bytes()).digest())
+    return digest.digest()
