@@ -79,8 +79,12 @@ for kind, value in {DATA!r}.items():
 publish_display_data({{"image/png": {PNG!r}}}, metadata={METADATA!r})
 publish_display_data({{"image/png": {PNG + '" onerror="' + JS!r}, "image/jpeg": {'x" onerror="' + JS!r}}})
 print({MARKUP[0]!r}, {TEX[0]!r})
+kernel = get_ipython().kernel
+kernel.session.send(kernel.iopub_socket, "stream", {{"name": {'stdout" onmouseover="' + JS!r}, "text": "named stream"}},
+                    parent=kernel.get_parent(), ident=b"stream")
 """
-"""A code cell of the submission: every kind of displayed data, hostile metadata, a broken PNG."""
+"""A code cell of the submission: every kind of displayed data, hostile metadata, a broken PNG, and
+a stream message forged on the kernel's own channel, with a hostile stream name."""
 MATHJAX_CDN = "https://cdnjs.cloudflare.com/ajax/libs/mathjax/"
 LIVE_IN_SUBMISSION = """root => {
     const bad = [];
