@@ -7,11 +7,12 @@ opens terminals and changes grades. The kit's feedback pages render the same not
 template sanitises what it renders, so ``InertHtml`` makes the notebook's content such that what
 nbconvert renders from it is the sanitiser's output (``autograder.pipeline.sanitise``):
 
-- a Markdown cell renders (``markdown2html | strip_files_prefix``, as both templates do) either to
-  exactly what the sanitiser makes of that rendering, and is kept as written, or its source
-  becomes that sanitised HTML on one line (newlines written ``&#10;``), which Markdown passes
-  through unchanged; the notebook keeps whichever of the two renders to itself, else the
-  answer's text as plain, escaped text;
+- a Markdown cell is kept as written if its rendering (``markdown2html | strip_files_prefix``, as
+  both templates do) is exactly what the sanitiser makes of it (an unanswered written answer is,
+  so nbgrader's checksum still tells it from an answer). Otherwise its source becomes that
+  sanitised HTML in a ``<div>`` on one line (newlines written ``&#10;``), if that renders to
+  itself (Markdown passes such a block through); else the cell's text escaped in a ``<pre>``, if
+  that renders to itself; else nothing;
 - a raw cell holds the sanitised HTML of its source;
 - an output keeps only plain text (which nbconvert escapes) and PNG or JPEG images, whose data is
   checked as base64 and whose metadata keeps only whole-number widths and heights: nbconvert
@@ -38,6 +39,7 @@ SHOWN = ("text/plain", "image/png", "image/jpeg")
 """The kinds of displayed data an output keeps."""
 IMAGES = ("image/png", "image/jpeg")
 SIZE = re.compile(r"[0-9]{1,5}")
+"""An image's width or height as the metadata may give it."""
 _exporter = HTMLExporter()
 
 
