@@ -69,7 +69,8 @@ HONEST = ("Honest answer: the variance is $x^2$, and\n\n$$\\hat{\\mathbf{x}}_{k|
           "See [NumPy](https://numpy.org/doc/).\n\n| a | b |\n|---|---|\n| 1 | 2 |\n")
 DATA = {"text/html": MARKUP[0], "text/markdown": f"[x](javascript:{JS}) {MARKUP[0]}", "text/latex": TEX[0],
         "image/svg+xml": f"<svg onload=\"{JS}\"/>", "application/javascript": JS, "application/pdf": "JVBERi0=",
-        "application/json": {"a": MARKUP[0]}}
+        "application/json": {"a": MARKUP[0]},
+        "application/vnd.jupyter.widget-view+json": {"model_id": f"</script><script>{JS}</script>", "version_major": 2}}
 METADATA = {"image/png": {"width": f"1 onerror={JS}", "height": f"1 onload={JS}", "unconfined": True, "alt": MARKUP[0]},
             "filenames": {"image/png": f"{EVIL}/f.png"}, "isolated": True}
 OUTPUTS = f"""from IPython.display import publish_display_data
