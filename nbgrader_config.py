@@ -109,7 +109,12 @@ c.Autograde.autograde_preprocessors = [
 # under a failed visible check says why, long messages wrap (autograder/pipeline/feedback.py).
 from autograder.pipeline.feedback import NBGRADER_TEMPLATES, TEMPLATE, TEMPLATE_PATHS, TEMPLATES, FeedbackGrades  # noqa: E402
 
-c.GenerateFeedback.preprocessors = [FeedbackGrades, CSSHTMLHeaderPreprocessor, ClearHiddenTests]
+# InertHtml again and the template's `kit_sanitise`: what a page renders from a submission is
+# sanitised HTML, also from a notebook graded before the sanitiser (autograder/pipeline/sanitise.py).
+from autograder.pipeline.sanitise import sanitise  # noqa: E402
+
+c.GenerateFeedback.preprocessors = [InertHtml, FeedbackGrades, CSSHTMLHeaderPreprocessor, ClearHiddenTests]
+c.GenerateFeedback.HTMLExporter.filters = {"kit_sanitise": sanitise}
 c.GenerateFeedback.HTMLExporter.template_name = TEMPLATE
 c.GenerateFeedback.HTMLExporter.extra_template_basedirs = [str(NBGRADER_TEMPLATES), str(TEMPLATES)]
 c.GenerateFeedback.HTMLExporter.extra_template_paths = TEMPLATE_PATHS

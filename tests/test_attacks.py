@@ -549,7 +549,8 @@ def test_a_submissions_html_is_inert_where_the_instructor_views_it(runs):
     """nbgrader's formgrader shows a graded notebook as a page of the instructor's Jupyter server, and
     rendered a script in a student's Markdown answer or displayed output as live HTML: it ran as the
     instructor, with the server's API (the reference, terminals, the grades). The course's autograde
-    runs InertHtml right after the kernel; the page then holds the text, and no script."""
+    runs InertHtml right after the kernel; the page then holds the text, and no script
+    (tests/test_hostile_pages.py opens formgrader and the feedback page in Chromium)."""
     preprocessors = nbgrader_apps.course_config().Autograde.autograde_preprocessors
     assert preprocessors[preprocessors.index(GradingExecute) + 1] is InertHtml
     nb = copy.deepcopy(runs["wire"][0])
@@ -563,4 +564,4 @@ def test_a_submissions_html_is_inert_where_the_instructor_views_it(runs):
         "index": 0, "total": 1, "base_url": "/", "notebook_id": TRAIN.id, "nbgrader": {}})
     for live in ("<script>alert(", "<img src=x onerror", "alert('js')\n</script>"):  # as tags, not as text
         assert live not in page, live
-    assert "$x&lt; y$" in page, "the answer's text reads as written"
+    assert "$x&lt;y$" in page, "the answer's text reads as written"
