@@ -430,11 +430,18 @@ FORGED_SCORES: dict[str, str] = {
     kernel.session.send(kernel.iopub_socket, "execute_result", content, parent=kernel.get_parent(),
                         ident=kernel._topic("execute_result"))
 """,
+    "forged-execution-count": """def validate(function):
+    kernel = get_ipython().kernel
+    for kind in ("execute_input", "execute_result"):
+        content = dict(code="", data=dict(), metadata=dict(), execution_count="not a number")
+        kernel.session.send(kernel.iopub_socket, kind, content, parent=kernel.get_parent(), ident=kernel._topic(kind))
+""",
 }
 """A student's cell, added after the set-up cell, that makes the kernel put in every test cell an
 output that nbgrader alone would read as its score (STACK.md): a result value (text, a number over
 the maximum, exactly the points, a negative number), a line on stderr, a result from the display
-hook before the cell runs, or a result message sent on the kernel's own channel. The score is the
+hook before the cell runs, or a result message sent on the kernel's own channel; or an execution
+count that is not a number, which made nbgrader give up on the whole submission. The score is the
 grader's verdict (autograder/pipeline/verdicts.py), so none of them changes a score, up or down."""
 RAISING = ("forged-result-text", "forged-result-over-max", "forged-result-points", "forged-display-hook",
            "forged-iopub-result")

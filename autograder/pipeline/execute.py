@@ -36,7 +36,7 @@ import time
 from jupyter_core.utils import ensure_async, run_sync
 from nbclient import NotebookClient
 from nbclient.exceptions import CellTimeoutError, DeadKernelError
-from nbformat import NotebookNode
+from nbformat import NotebookNode, ValidationError
 from nbformat.v4 import new_output
 from nbgrader.preprocessors import Execute
 from traitlets import Float, Integer
@@ -179,6 +179,7 @@ class GradingExecute(Execute):
                 restarts += 1
                 self._restart_and_replay(index, failed, deadline)
         notes += self._output.notes(lambda i: _name(self.nb.cells[i], i))
+        _whole_execution_counts(self.nb)
         add_grader_notes(self.nb, notes)
         self.set_widgets_metadata()
         return self.nb, self.resources
@@ -294,6 +295,16 @@ class GradingExecute(Execute):
         await self.async_start_new_kernel_client()
 
     def process_message(self, msg: dict, cell: NotebookNode, cell_index: int) -> NotebookNode | None:
+        """``_capped_message``, which drops a message that nbclient cannot make a valid output of: a
+        kernel can send anything on its own channel (an execution count or a stream's text that is
+        not what nbformat allows), nbclient then raised, and nbgrader gave up on the whole submission."""
+        try:
+            return self._capped_message(msg, cell, cell_index)
+        except (ValidationError, KeyError, TypeError, ValueError, AttributeError) as error:
+            self.log.warning("A %s message from the kernel was dropped: %s", msg.get("msg_type"), str(error)[:200])
+            return None
+
+    def _capped_message(self, msg: dict, cell: NotebookNode, cell_index: int) -> NotebookNode | None:
         """nbclient's handling of a kernel message, with output capped: printed text, displayed data
         and results together keep at most ``max_output_bytes`` characters of a cell and
         ``max_notebook_output_bytes`` of the notebook, then the cell says that the rest was dropped
@@ -368,6 +379,21 @@ def _cut_error(content: dict) -> dict:
     """An error's content with its name, message and traceback lines cut to compare.MAX_MESSAGE_CHARS."""
     return {**content, **{key: compare.cut(str(content.get(key, ""))) for key in ("ename", "evalue")},
             "traceback": [compare.cut(str(line)) for line in content.get("traceback", [])]}
+
+
+def _whole_execution_counts(nb: NotebookNode) -> None:
+    """Every execution count in the notebook a whole number or None: the kernel writes them (a forged
+    message can say anything), and nbconvert rejects a notebook whose count is not a number, which
+    made nbgrader give up on the whole submission."""
+    def whole(value):
+        return value if isinstance(value, int) and not isinstance(value, bool) and value >= 0 else None
+
+    for cell in nb.cells:
+        if cell.cell_type == "code":
+            cell.execution_count = whole(cell.get("execution_count"))
+            for output in cell.outputs:
+                if output.get("output_type") == "execute_result":
+                    output["execution_count"] = whole(output.get("execution_count"))
 
 
 def _add_error(cell: NotebookNode, ename: str, evalue: str) -> None:
