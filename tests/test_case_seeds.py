@@ -1,7 +1,7 @@
 """Every hidden check is right on every submission seed, not only on the default one.
 
 The grader draws each submission's hidden cases from a seed of its own (autograder/hidden_tests/cases.py),
-so every seed is one a student can get: on the default seed and on ``SEEDS``, the reference and the
+so every seed is one a student can get: on the default seed and 50 others (``CASE_SEEDS``), the reference and the
 notebook's model answer (as ``define`` compiles it) pass every blank's hidden check, and every
 catalogued mistake (``mistakes.py``) fails its own blank's check the way its entry says (the hidden
 test's AssertionError, or the exception named by ``raises``). The diagnosis is left out
@@ -24,28 +24,15 @@ import pytest
 
 from autograder import cells
 from autograder.catalogues.mistakes import catalogue
-from autograder.hidden_tests import cases
-from lab_code import define, hidden_tests
+from lab_code import CASE_SEEDS, define, failure_on_seed, hidden_tests
 from over_labs import LABS
 
-SEEDS = (cases.DEFAULT_SEED, *range(1, 51))
-"""The default submission seed and 50 others."""
-MISTAKE_SEEDS = {"nonlinear-filters": SEEDS[:11], "reentry-pf": SEEDS[:11]}
-"""Fewer seeds for the mistakes of a lab whose checks are slow (the default: all of ``SEEDS``)."""
+MISTAKE_SEEDS = {"nonlinear-filters": CASE_SEEDS[:11], "reentry-pf": CASE_SEEDS[:11]}
+"""Fewer seeds for the mistakes of a lab whose checks are slow (the default: all of ``CASE_SEEDS``)."""
 
 
 def _answers(lab) -> dict[str, str]:
     return cells.model_answers(cells.read(lab.source_notebook))
-
-
-def _failure(check, function, seed: int) -> BaseException | None:
-    """What ``check`` raises on ``function`` with the cases of submission seed ``seed`` (None: it passes)."""
-    with cases.seeded(seed):
-        try:
-            check(function)
-        except Exception as error:  # noqa: BLE001 (which exception, on which seed, is what the tests report)
-            return error
-    return None
 
 
 BLANKS = [(lab, blank) for lab in LABS for blank in lab.blanks()]
@@ -56,8 +43,8 @@ def test_the_reference_and_the_model_answer_pass_on_every_seed(lab, blank):
     check = getattr(hidden_tests(lab), f"check_{blank}").__wrapped__
     answers = {"the reference": getattr(lab.reference(), blank), "the model answer": define(lab, _answers(lab)[blank], blank)}
     failures = [f"{who} on seed {seed}: {type(error).__name__}: {error}"
-                for who, function in answers.items() for seed in SEEDS
-                if (error := _failure(check, function, seed)) is not None]
+                for who, function in answers.items() for seed in CASE_SEEDS
+                if (error := failure_on_seed(check, function, seed)) is not None]
     assert not failures, "\n".join(failures)
 
 
@@ -69,8 +56,8 @@ def test_each_mistake_fails_its_blanks_check_on_every_seed(lab, mistake):
     check = getattr(hidden_tests(lab), f"check_{mistake.blank}").__wrapped__
     wrong = define(lab, mistake.apply(_answers(lab)[mistake.blank]), mistake.blank)
     problems = []
-    for seed in MISTAKE_SEEDS.get(lab.id, SEEDS):
-        error = _failure(check, wrong, seed)
+    for seed in MISTAKE_SEEDS.get(lab.id, CASE_SEEDS):
+        error = failure_on_seed(check, wrong, seed)
         if error is None:
             problems.append(f"seed {seed}: passes")
         elif type(error) is not mistake.raises:
