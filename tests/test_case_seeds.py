@@ -10,12 +10,14 @@ test's AssertionError, or the exception named by ``raises``). The diagnosis is l
 One item per lab and blank (the correct answers) and per mistake; a failure lists the seeds it
 fails on.
 
-Cost, measured on one worker of a 2-core machine (at fair-a): train-kf 2 s, castaway-bob 13 s,
-nonlinear-filters 52 s, with 51 seeds for the correct answers and ``MISTAKE_SEEDS`` for the mistakes.
-nonlinear-filters' bootstrap_pf_step check takes about 0.3 s per seed and answer (a 100,000-particle
-noise check), so its mistakes run on 10 seeds. The particle filter's statistical check fails a correct
-step with probability 5e-7 per seed (its module's docstring): over the fixed seeds here that is
-below 1e-4, and a failure would repeat on every run.
+Cost, the whole file on one worker of the shared 2-core machine at a load average of about 6.5 (fair-a):
+140 s, of which train-kf 3 s, castaway-bob 11 s, nonlinear-filters 51 s, reentry-pf 51 s and reentry-srekf
+24 s (the reentry labs before their checks draw from the submission seed). nonlinear-filters' bootstrap_pf_step
+check, with its 100,000-particle noise test, takes about 0.4 s per seed and answer: 41 s of its lab's 51 s
+go to the reference and the model answer on 51 seeds, so its mistakes, like reentry-pf's, run on 11 seeds
+(51 seeds would add about 20 s each). The particle filter step's statistical check fails a correct step
+with probability 5e-7 per seed (its module's docstring); the seeds here are fixed, so a failure would
+repeat on every run.
 """
 
 from __future__ import annotations
