@@ -321,8 +321,8 @@ def _check_pf_noise(func: Callable) -> None:
     X = _pf_particles(rng, NOISE_N)
     logw = np.full(NOISE_N, -np.log(NOISE_N))
     label = "bootstrap_pf_step's process noise (a flat likelihood, no resampling)"
-    X_new, _ = _pf_call(func, X, logw, np.array([-1000.0, np.pi]), np.random.default_rng(int(rng.integers(2**63))), f, h, Q,
-                        np.diag([1e12, 1e12]), 0.0, label)
+    step_rng = np.random.default_rng(int(rng.integers(2**63)))  # the generator the step draws its noise from
+    X_new, _ = _pf_call(func, X, logw, np.array([-1000.0, np.pi]), step_rng, f, h, Q, np.diag([1e12, 1e12]), 0.0, label)
     u = np.linalg.solve(L, (X_new - f(X)).T).T
     directions = np.array([[1.0, 1.0, 0.0], [0.0, 1.0, -1.0], [1.0, -1.0, 1.0]])
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)
