@@ -162,18 +162,17 @@ VISIBLY_FAILED = {
 that moves, a full R, a current that changes in time, ...): the visible checks must keep failing them."""
 
 
-@pytest.mark.parametrize("lab_id", sorted(VISIBLY_FAILED))
-def test_the_visible_checks_fail_the_mistakes_they_were_given_a_case_for(lab_id: str, monkeypatch):
+@pytest.mark.parametrize("lab", [Lab(lab_id) for lab_id in sorted(VISIBLY_FAILED)], ids=sorted(VISIBLY_FAILED))
+def test_the_visible_checks_fail_the_mistakes_they_were_given_a_case_for(lab: Lab, monkeypatch):
     """Runs the solved notebook's cells up to the last visible check in this process, each listed mistake before
     its blank's visible checks, as the test above does."""
     import matplotlib.pyplot as plt
 
-    lab = Lab(lab_id)
     matplotlib.use("Agg")
     monkeypatch.chdir(lab.source_notebook.parent)
     nb = cells.read(lab.source_notebook)
     mistakes = {f"{m.blank}/{m.slug}": m for m in catalogue(lab)}
-    listed = [mistakes[key] for key in VISIBLY_FAILED[lab_id]]
+    listed = [mistakes[key] for key in VISIBLY_FAILED[lab.id]]
     answers = {cells.grade_id(c): c.source for c in nb.cells if cells.is_code_answer(c)}
     code_cells = [c for c in nb.cells if c.cell_type == "code" and not cells.meta(c).get("grade")]
     last_check = max(i for i, c in enumerate(code_cells) if cells.meta(c).get("grade_id", "").startswith("check_"))
@@ -189,4 +188,4 @@ def test_the_visible_checks_fail_the_mistakes_they_were_given_a_case_for(lab_id:
             plt.close("all")
         assert _run(cell.source, namespace) is None, f"{gid or cell.id} fails on the solved notebook"
         plt.close("all")
-    assert not passed_wrongly, f"these mistakes pass the visible checks of {lab_id}: {passed_wrongly}"
+    assert not passed_wrongly, f"these mistakes pass the visible checks of {lab.id}: {passed_wrongly}"
