@@ -1,11 +1,13 @@
-"""A lab's hidden tests, and a student's answer defined as its answer cell would define it: shared by
-tests/test_hidden_tests.py and tests/test_diagnosis.py."""
+"""A lab's hidden tests, a student's answer defined as its answer cell would define it, and a hidden test run
+with the cases of one submission seed: shared by tests/test_hidden_tests.py, tests/test_diagnosis.py,
+tests/test_case_seeds.py and tests/test_alternatives.py."""
 
 from __future__ import annotations
 
 from collections.abc import Callable
 from types import ModuleType
 
+from autograder.hidden_tests import cases
 from autograder.labs import Lab
 
 
@@ -25,3 +27,18 @@ def define(lab: Lab, code: str, name: str) -> Callable:
     namespace = dict(vars(lab.reference()))
     exec(compile(code, answer_file(name), "exec"), namespace)
     return namespace[name]
+
+
+CASE_SEEDS = (cases.DEFAULT_SEED, *range(1, 51))
+"""The submission seeds a hidden check must be right on in the tests: the default seed and 50 others."""
+
+
+def failure_on_seed(check: Callable, function: Callable, seed: int) -> BaseException | None:
+    """What the hidden test ``check`` raises on ``function`` with the cases of submission seed ``seed``
+    (None: it passes)."""
+    with cases.seeded(seed):
+        try:
+            check(function)
+        except Exception as error:  # noqa: BLE001 (which exception, on which seed, is what the tests report)
+            return error
+    return None

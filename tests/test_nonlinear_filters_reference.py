@@ -12,6 +12,7 @@ from numpy.polynomial.hermite_e import hermegauss
 from scipy.integrate import quad_vec, solve_ivp
 
 import solutions.nonlinear_filters.reference as ref
+from autograder.hidden_tests import cases
 from autograder.release import data
 from solutions.nonlinear_filters import hidden_tests as checks
 from course import air_traffic, cut
@@ -353,9 +354,10 @@ def test_the_shipped_sweep_has_a_lost_and_a_diverged_fraction_per_interval():
 
 @random_draws(false_fail=5e-7, why="five chi-square checks of the whitened process noise, each failing a correct step with probability 1e-7")
 def test_the_reference_step_passes_the_hidden_noise_check_on_other_seeds(seed):
-    # Grading runs this statistical hidden check on one fixed case; here the reference passes it on
-    # 21 other cases and noise draws.
-    checks._check_pf_noise(ref.bootstrap_pf_step, seeds=(seed, seed + 1000))
+    # Grading runs this statistical hidden check on the case of the submission's seed; here the
+    # reference passes it on 21 other submission seeds.
+    with cases.seeded(seed):
+        checks._check_pf_noise(ref.bootstrap_pf_step)
 
 
 PF_ERRORS = data.RECORDS_DIR / ref.PF_ERRORS_FILE

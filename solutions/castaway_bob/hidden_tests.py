@@ -1,6 +1,6 @@
 """Hidden tests of the castaway-bob lab: each ``check_<blank>`` compares a student's blank with
-``solutions.castaway_bob.reference`` on seeded random cases (sizes, parameters, currents) that differ from
-the notebook's examples."""
+``solutions.castaway_bob.reference`` on random cases (sizes, parameters, currents) that differ from the
+notebook's examples, drawn from the submission seed (``cases.rng``, one stream per check)."""
 
 from __future__ import annotations
 
@@ -9,6 +9,7 @@ from typing import Callable
 import numpy as np
 
 import solutions.castaway_bob.reference as ref
+from autograder.hidden_tests import cases
 from autograder.hidden_tests.diagnosis import diagnosed
 from autograder.hidden_tests.isolate import isolate
 from autograder.labs import lab_of
@@ -24,7 +25,7 @@ SIZES = ((1, 1), (2, 2), (4, 2), (5, 3), (6, 1))
 @diagnosed
 def check_transition_matrix(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(5101)
+    rng = cases.rng(5101)
     for dt, alpha in zip(rng.uniform(1.0, 300.0, 5), rng.uniform(0.3, 0.999, 5)):
         label = f"transition_matrix({dt:.3f}, {alpha:.3f})"
         A = check_array(func(float(dt), float(alpha)), label, (4, 4), "A maps the state [x, y, wx, wy] to the next one.")
@@ -41,7 +42,7 @@ def check_observation_matrix(func: Callable) -> None:
 @diagnosed
 def check_trailing_mean(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(5102)
+    rng = cases.rng(5102)
     for n, order in ((1, 3), (2, 3), (7, 1), (9, 2), (40, 3), (25, 5), (6, 10)):
         y = rng.normal(0.0, 50.0, (n, 2)) + 1000.0 * rng.standard_normal(2)
         label = f"trailing_mean(y, order={order}) on {count(n, 'random fix')}"
@@ -57,7 +58,7 @@ def _matrix_cases(rng: np.random.Generator):
 @diagnosed
 def check_kalman_gain(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    for n, m, P, H, R in _matrix_cases(np.random.default_rng(5103)):
+    for n, m, P, H, R in _matrix_cases(cases.rng(5103)):
         label = f"kalman_gain(P, H, R) with n = {n}, m = {m}"
         K = check_array(func(P.copy(), H.copy(), R.copy()), label, (n, m),
                         "K maps an innovation (m,) to a state correction (n,), so it is n x m.")
@@ -67,7 +68,7 @@ def check_kalman_gain(func: Callable) -> None:
 @diagnosed
 def check_joseph_covariance(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(5104)
+    rng = cases.rng(5104)
     for n, m, P, H, R in _matrix_cases(rng):
         # an arbitrary gain, not the optimal one: (13) holds for every K, the simple form does not
         K = rng.standard_normal((n, m))
@@ -80,7 +81,7 @@ def check_joseph_covariance(func: Callable) -> None:
 @diagnosed
 def check_kalman_step(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(5105)
+    rng = cases.rng(5105)
     for (n, m, P, H, R), with_input in zip(_matrix_cases(rng), (False, True, True, False, True)):
         x, Q, y = rng.standard_normal(n), random_spd(rng, n), rng.standard_normal(m)
         A = np.eye(n) + 0.3 * rng.standard_normal((n, n))
@@ -105,7 +106,7 @@ def _random_fixes(rng: np.random.Generator, n: int, speed: float) -> np.ndarray:
 @diagnosed
 def check_run_rank2(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(5106)
+    rng = cases.rng(5106)
     for n, sigma_walk, sigma_gps in ((1, 30.0, 50.0), (2, 10.0, 50.0), (15, 45.0, 20.0), (80, 25.0, 70.0)):
         y = _random_fixes(rng, n, rng.uniform(0.0, 0.6))
         label = f"run_rank2 on {count(n, 'random fix')} with sigma_walk = {sigma_walk}, sigma_gps = {sigma_gps}"
@@ -135,10 +136,10 @@ def _random_current(rng: np.random.Generator) -> Callable[[np.ndarray, float], n
 @diagnosed
 def check_run_rank4(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(5107)
-    cases = ((1, 0.9, 0.02, 50.0, 60.0), (3, 0.95, 0.01, 50.0, 60.0), (20, 0.8, 0.05, 30.0, 30.0),
+    rng = cases.rng(5107)
+    runs = ((1, 0.9, 0.02, 50.0, 60.0), (3, 0.95, 0.01, 50.0, 60.0), (20, 0.8, 0.05, 30.0, 30.0),
              (60, 0.97, 0.02, 60.0, 120.0))
-    for n, alpha, sigma_F, sigma_gps, dt in cases:
+    for n, alpha, sigma_F, sigma_gps, dt in runs:
         current = _random_current(rng)
         t = rng.uniform(0.0, 3000.0) + dt * np.arange(n)
         y = _random_fixes(rng, n, 0.4)
@@ -153,7 +154,7 @@ def check_run_rank4(func: Callable) -> None:
                     f"the covariances of {label}", show_expected=False, rtol=1e-6, atol=1e-9)
     # and on a drift in the shipped ocean, with the default parameters
     flow = ocean.load()
-    drift = ocean.simulate_drift(flow, np.random.default_rng(5108), n_fixes=30)
+    drift = ocean.simulate_drift(flow, cases.rng(5108), n_fixes=30)
     xs, Ps = check_pair(func(drift.fixes.copy(), flow, drift.t.copy()), "run_rank4(y, flow, t)", "estimates", "covariances")
     want_x, want_P = ref.run_rank4(drift.fixes, flow, drift.t)
     check_close(check_array(xs, "the estimates of a drift in the ocean", (30, 4)), want_x,
@@ -165,7 +166,7 @@ def check_run_rank4(func: Callable) -> None:
 @diagnosed
 def check_track_rmse(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(5109)
+    rng = cases.rng(5109)
     for n in (1, 2, 10, 120):
         truth = rng.uniform(-5e3, 5e3, (n, 2))
         estimates = truth + rng.normal(0.0, 40.0, (n, 2)) * rng.uniform(0.2, 3.0, (n, 1))
@@ -178,7 +179,7 @@ def check_track_rmse(func: Callable) -> None:
 @diagnosed
 def check_ellipse_area(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(5110)
+    rng = cases.rng(5110)
     for shape, n_sigma in (((), 2.0), ((5,), 2.0), ((3, 4), 1.0), ((7,), 3.0)):
         P = np.array([random_spd(rng, 2) * rng.uniform(10.0, 3000.0) for _ in range(int(np.prod(shape)))])
         P = P.reshape(shape + (2, 2))

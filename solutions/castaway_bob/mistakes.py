@@ -74,6 +74,14 @@ MISTAKES = (
     Mistake("run_rank4", "flow-at-fix", "evaluates the current at the last GPS fix instead of the last estimate",
             "flow(xs[k - 1, :2], t[k - 1])", "flow(y[k - 1], t[k - 1])",
             hint="Your run_rank4 behaves as if it evaluated the current at the last GPS fix instead of the last estimate."),
+    Mistake("run_rank4", "flow-at-new-time", "takes the current at the time of the new fix, t[k], instead of t[k-1]",
+            "flow(xs[k - 1, :2], t[k - 1])", "flow(xs[k - 1, :2], t[k])",
+            hint="Your run_rank4 behaves as if it took the current at the time of the new fix, t[k]: the current that carries Bob "
+                 "from fix k - 1 to fix k is the one at t[k-1]."),
+    Mistake("run_rank4", "flow-at-predicted-position", "takes the current at the predicted position x + dt w instead of the last estimate",
+            "flow(xs[k - 1, :2], t[k - 1])", "flow(xs[k - 1, :2] + dt * xs[k - 1, 2:], t[k - 1])",
+            hint="Your run_rank4 behaves as if it took the current at the position predicted one step ahead: take it where the "
+                 "last estimate puts Bob, at the start of the step."),
     Mistake("run_rank4", "no-dt", "adds the current's velocity, not the distance it carries Bob in dt",
             "dt * flow(xs[k - 1, :2], t[k - 1])", "flow(xs[k - 1, :2], t[k - 1])",
             hint="Your run_rank4 behaves as if it added the current's velocity, not the distance the current carries Bob in dt."),

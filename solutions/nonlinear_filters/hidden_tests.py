@@ -1,13 +1,15 @@
 """Hidden tests of the nonlinear-filters lab: each ``check_<blank>`` compares a student's blank with
-``solutions.nonlinear_filters.reference`` on seeded random cases of several sizes.
+``solutions.nonlinear_filters.reference`` on random cases of several sizes, drawn from the submission
+seed (``cases.rng``, one stream per check; the seed of a generator handed to the student is drawn
+from that stream too).
 
 Point sets are compared as sets (any order of the points is right). The filter steps are compared
 on random nonlinear f and h (a linear f and h make them the Kalman filter, and the reference is
 exactly that). The particle filter step is random; its checks are exact where the step is
 determined (weights, which runs resample, systematic resampling's offspring counts, with a
 negligible process noise), and one statistical check tests the process noise. Its false-fail
-probability for a correct step is at most 5 x 1e-7 = 5e-7 (five chi-square tails, see
-``_check_pf_noise``).
+probability for a correct step is at most 5 x 1e-7 = 5e-7 on every submission seed (five chi-square
+tails, see ``_check_pf_noise``).
 """
 
 from __future__ import annotations
@@ -18,6 +20,7 @@ import numpy as np
 from scipy import stats
 
 import solutions.nonlinear_filters.reference as ref
+from autograder.hidden_tests import cases
 from autograder.hidden_tests.diagnosis import diagnosed
 from autograder.hidden_tests.isolate import isolate
 from autograder.labs import lab_of
@@ -67,20 +70,34 @@ def check_cut4_points(func: Callable) -> None:
         _check_rule(func(n), ref.cut4_points(n), f"cut4_points({n})")
 
 
+def _symmetric_rule(rng: np.random.Generator, n: int, half: int) -> tuple[np.ndarray, np.ndarray]:
+    """A random rule of 2 half points +-z_i with equal weights on each pair: every odd moment is exact (0),
+    the even ones are not, so at an odd degree it is exact and one degree lower it is not."""
+    Z, w = rng.standard_normal((half, n)), rng.dirichlet(np.ones(half))
+    return np.vstack((Z, -Z)), np.concatenate((w, w)) / 2
+
+
 @diagnosed
 def check_moment_error(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1501)
-    cases = [(ref.cut4_points(4), d) for d in (2, 4, 6)] + [(cut.cut8_points(), 8), (ref.unscented_points(2), 4)]
+    rng = cases.rng(1501)
+    rules = [(ref.cut4_points(4), d) for d in (2, 4, 6)] + [(cut.cut8_points(), 8), (ref.unscented_points(2), 4)]
+    # rules exact at this degree but not below: only the monomials of exactly this degree count
+    rules += [(ref.cubature_points(3), 5), (ref.unscented_points(3, 2.0), 5)]
     for n, N, degree in [(1, 3, 1), (1, 5, 4), (2, 6, 3), (3, 7, 2), (4, 9, 5), (5, 11, 4), (6, 8, 3)]:
-        cases.append(((rng.standard_normal((N, n)), rng.dirichlet(np.ones(N))), degree))
-    for (Z, w), degree in cases:
+        rules.append(((rng.standard_normal((N, n)), rng.dirichlet(np.ones(N))), degree))
+    for n, half, degree in [(1, 3, 3), (2, 4, 5), (3, 5, 3), (4, 6, 7)]:
+        rules.append((_symmetric_rule(rng, n, half), degree))
+    for (Z, w), degree in rules:
         label = f"moment_error on a rule of {len(w)} points in {Z.shape[1]} dimensions, degree {degree}"
         value = func(Z.copy(), w.copy(), degree)
         try:
             value = float(value)
         except (TypeError, ValueError):
             raise AssertionError(f"{label} should return one number (a float), not {type(value).__name__}.") from None
+        # Two correct answers differ by rounding: at most about 1e-16 times the sum of |w_i z_i^a|, below 1e-12
+        # for these points (a few units from the origin) and degrees (<= 8), so atol = 1e-11 holds for every
+        # correct answer where the error is 0, and rtol = 1e-8 where it is not.
         check_close(value, ref.moment_error(Z, w, degree), label, rtol=1e-8, atol=1e-11, show_expected=False)
 
 
@@ -116,7 +133,7 @@ def _check_mean_cov(result, reference, n: int, label: str, hint: str = "") -> No
 @diagnosed
 def check_sigma_point_predict(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1502)
+    rng = cases.rng(1502)
     for n in range(1, 7):
         m, P, Q = rng.standard_normal(n), 0.5 * random_spd(rng, n), random_spd(rng, n)
         f = _random_map(rng, n, n)
@@ -138,7 +155,7 @@ def _bearing_case(rng: np.random.Generator) -> tuple:
 @diagnosed
 def check_sigma_point_update(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1503)
+    rng = cases.rng(1503)
     for n, p in [(1, 1), (2, 1), (3, 2), (4, 3), (5, 2), (6, 3)]:
         m, P, R, y = rng.standard_normal(n), 0.5 * random_spd(rng, n), random_spd(rng, p), rng.standard_normal(p)
         h = _random_map(rng, n, p)
@@ -157,7 +174,7 @@ def check_sigma_point_update(func: Callable) -> None:
 @diagnosed
 def check_ekf_update(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1504)
+    rng = cases.rng(1504)
     for n, p in [(1, 1), (2, 1), (3, 2), (4, 3), (5, 2), (6, 3)]:
         m, P, R, y = rng.standard_normal(n), random_spd(rng, n), random_spd(rng, p), rng.standard_normal(p)
         A, B, c = rng.standard_normal((p, n)), 0.3 * rng.standard_normal((p, n)), rng.standard_normal(p)
@@ -210,17 +227,18 @@ def _pf_call(func: Callable, X, logw, y, rng, f, h, Q, R, ess_fraction: float, l
 
 def _check_pf_weights(func: Callable) -> None:
     """Exact: without resampling (ess_fraction = 0), the particles are f(X) and the log-weights the reference's."""
-    rng = np.random.default_rng(1505)
+    rng = cases.rng(1505)
+    step_seed = int(rng.integers(2**63))  # the seed of the generator the step draws from
     f, h = _pf_model(rng)
     X = _pf_particles(rng, PF_N)
     logw = _normalised(rng.standard_normal(PF_N))
     y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([30.0**2, 0.05**2])
     label = "bootstrap_pf_step with ess_fraction=0 (no resampling) and bearings near +-pi"
-    X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(1), f, h, TINY_Q, R, 0.0, label)
+    X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, 0.0, label)
     check_close(X_new, f(X), f"the particles from {label}",
                 "With a negligible Q, each particle should move to f(x) and keep its place in the array.",
                 rtol=1e-9, atol=1e-6, show_expected=False)
-    _, want = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(1), f, h, TINY_Q, R, (1,), 0.0)
+    _, want = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, (1,), 0.0)
     check_close(np.logaddexp.reduce(logw_new), 0.0, f"log(sum of the weights) from {label}",
                 "Return normalised log-weights: subtract the log of the sum of the weights.", atol=1e-9,
                 show_expected=False)
@@ -231,33 +249,35 @@ def _check_pf_weights(func: Callable) -> None:
 
 def _check_pf_no_resampling(func: Callable) -> None:
     """Exact: when the effective sample size stays above the threshold, nothing is resampled."""
-    rng = np.random.default_rng(1506)
+    rng = cases.rng(1506)
+    step_seed = int(rng.integers(2**63))  # the seed of the generator the step draws from
     f, h = _pf_model(rng)
     X = _pf_particles(rng, PF_N)
     logw = _normalised(0.3 * rng.standard_normal(PF_N))
     y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([1e8, 1e2])
     label = "bootstrap_pf_step with weights whose effective sample size stays above 0.7 N"
-    X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(2), f, h, TINY_Q, R, 0.7, label)
+    X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, 0.7, label)
     check_close(X_new, f(X), f"the particles from {label}",
                 "Resample only when the effective sample size 1/sum(w^2) falls below ess_fraction * N.",
                 rtol=1e-9, atol=1e-6, show_expected=False)
-    _, want = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(2), f, h, TINY_Q, R, (1,), 0.7)
+    _, want = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, (1,), 0.7)
     check_close(logw_new, want, f"the log-weights from {label}", "Without resampling the weights are kept.",
                 rtol=1e-7, atol=1e-6, show_expected=False)
 
 
 def _check_pf_resampling(func: Callable) -> None:
     """Exact: systematic resampling gives parent i floor(N w_i) or ceil(N w_i) offspring, and equal weights."""
-    rng = np.random.default_rng(1507)
+    rng = cases.rng(1507)
+    step_seed = int(rng.integers(2**63))  # the seed of the generator the step draws from
     f, h = _pf_model(rng)
     X = _pf_particles(rng, PF_N)
     logw = _normalised(np.zeros(PF_N))
     y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([20.0**2, 0.03**2])
-    _, logw_ref = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(3), f, h, TINY_Q, R, (1,), 0.0)
+    _, logw_ref = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, (1,), 0.0)
     w = np.exp(logw_ref)
     assert 1.0 / np.sum(w**2) < 0.7 * PF_N, "test set-up: this case must need resampling"
     label = "bootstrap_pf_step with weights whose effective sample size falls below 0.7 N"
-    X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(3), f, h, TINY_Q, R, 0.7, label)
+    X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, 0.7, label)
     check_close(logw_new, np.full(PF_N, -np.log(PF_N)), f"the log-weights after resampling from {label}",
                 "After resampling every particle has weight 1/N, so log-weight -log(N).", atol=1e-9, show_expected=False)
     moved = f(X)
@@ -283,16 +303,16 @@ def _chi2_outside(value: float, dof: int, alpha: float) -> bool:
     return not (stats.chi2.ppf(alpha / 2, dof) <= value <= stats.chi2.isf(alpha / 2, dof))
 
 
-def _check_pf_noise(func: Callable, seeds: tuple[int, int] = (1508, 4)) -> None:
+def _check_pf_noise(func: Callable) -> None:
     """Statistical: x_new - f(x) ~ N(0, Q) for every particle (flat likelihood, no resampling).
 
     u = L^-1 (x_new - f(x)), with Q = L L^T, is N(0, I) for a correct step. Five chi-square checks,
     each failing a correct step with probability NOISE_ALPHA = 1e-7: sum |u|^2 ~ chi2(N n), N |mean u|^2
     ~ chi2(n), and sum (d . u)^2 ~ chi2(N) for three fixed unit directions d. Together they fail a
-    correct step with probability at most 5e-7. ``seeds`` draw the case and the step's noise; grading
-    uses the default, and tests/test_nonlinear_filters_reference.py runs the reference on 21 others.
+    correct step with probability at most 5e-7, over the submission seeds: the case and the seed of
+    the step's generator are drawn from stream 1508.
     """
-    rng = np.random.default_rng(seeds[0])
+    rng = cases.rng(1508)
     A = np.array([[1.5, 0.4, 0.0], [-0.3, 0.8, 0.2], [0.1, 0.0, 1.2]])
     f = lambda X: X @ A.T  # noqa: E731
     h = lambda X: np.stack((X[..., 0], np.arctan2(X[..., 1], X[..., 0])), axis=-1)  # noqa: E731
@@ -301,8 +321,8 @@ def _check_pf_noise(func: Callable, seeds: tuple[int, int] = (1508, 4)) -> None:
     X = _pf_particles(rng, NOISE_N)
     logw = np.full(NOISE_N, -np.log(NOISE_N))
     label = "bootstrap_pf_step's process noise (a flat likelihood, no resampling)"
-    X_new, _ = _pf_call(func, X, logw, np.array([-1000.0, np.pi]), np.random.default_rng(seeds[1]), f, h, Q,
-                        np.diag([1e12, 1e12]), 0.0, label)
+    step_rng = np.random.default_rng(int(rng.integers(2**63)))  # the generator the step draws its noise from
+    X_new, _ = _pf_call(func, X, logw, np.array([-1000.0, np.pi]), step_rng, f, h, Q, np.diag([1e12, 1e12]), 0.0, label)
     u = np.linalg.solve(L, (X_new - f(X)).T).T
     directions = np.array([[1.0, 1.0, 0.0], [0.0, 1.0, -1.0], [1.0, -1.0, 1.0]])
     directions /= np.linalg.norm(directions, axis=1, keepdims=True)

@@ -40,6 +40,11 @@ MISTAKES = (
     Mistake("moment_error", "mean-not-max", "reports the mean error over the monomials instead of the largest",
             "float(np.max(np.abs(rule - exact)))", "float(np.mean(np.abs(rule - exact)))",
             hint="Your moment_error behaves as if it reported the mean error over the monomials instead of the largest."),
+    Mistake("moment_error", "degree-at-most", "takes the largest error over every monomial of degree at most d, not exactly d",
+            "return float(np.max(np.abs(rule - exact)))",
+            "return max(float(np.max(np.abs(rule - exact))), moment_error(Z, w, degree - 1) if degree > 1 else 0.0)",
+            hint="Your moment_error behaves as if it took the largest error over the monomials of every degree up to this one: "
+                 "only the monomials of exactly this degree count, so a rule can be exact at a degree and wrong below it."),
     Mistake("sigma_point_predict", "no-Q", "forgets the process noise Q in the predicted covariance",
             "@ D + Q", "@ D",
             hint="Your sigma_point_predict behaves as if the process noise Q were left out of the predicted covariance."),

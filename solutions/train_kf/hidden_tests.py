@@ -1,5 +1,6 @@
 """Hidden tests of the train-kf lab: each ``check_<blank>`` compares a student's blank with
-``solutions.train_kf.reference`` on seeded random cases of several state and observation sizes."""
+``solutions.train_kf.reference`` on random cases of several state and observation sizes, drawn from
+the submission seed (``cases.rng``, one stream per check)."""
 
 from __future__ import annotations
 
@@ -8,6 +9,7 @@ from typing import Callable
 import numpy as np
 
 import solutions.train_kf.reference as ref
+from autograder.hidden_tests import cases
 from autograder.hidden_tests.diagnosis import diagnosed
 from autograder.hidden_tests.isolate import isolate
 from autograder.labs import lab_of
@@ -24,9 +26,9 @@ def _gain_cases(rng: np.random.Generator):
         yield n, m, random_spd(rng, n), rng.standard_normal((m, n)), random_spd(rng, m)
 
 
-def _check_gain(func: Callable, name: str, reference: Callable, seed: int) -> None:
+def _check_gain(func: Callable, name: str, reference: Callable, stream: int) -> None:
     func = isolate(func, ref, BLANKS)
-    for n, m, B, H, R in _gain_cases(np.random.default_rng(seed)):
+    for n, m, B, H, R in _gain_cases(cases.rng(stream)):
         K = check_array(func(B.copy(), H.copy(), R.copy()), f"{name}(B, H, R) with n = {n}, m = {m}", (n, m),
                         "K maps an innovation (m,) to a state correction (n,), so it is n x m.")
         check_close(K, reference(B, H, R), f"{name} on a random case with n = {n}, m = {m}", show_expected=False)
@@ -34,18 +36,18 @@ def _check_gain(func: Callable, name: str, reference: Callable, seed: int) -> No
 
 @diagnosed
 def check_gain_information_form(func: Callable) -> None:
-    _check_gain(func, "gain_information_form", ref.gain_information_form, seed=1101)
+    _check_gain(func, "gain_information_form", ref.gain_information_form, stream=1101)
 
 
 @diagnosed
 def check_gain_covariance_form(func: Callable) -> None:
-    _check_gain(func, "gain_covariance_form", ref.gain_covariance_form, seed=1102)
+    _check_gain(func, "gain_covariance_form", ref.gain_covariance_form, stream=1102)
 
 
 @diagnosed
 def check_process_noise(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1103)
+    rng = cases.rng(1103)
     for sigma, dt_min in zip(rng.uniform(0.5, 30.0, 5), (1.0, 1.0, 0.5, 2.0, 5.0)):
         label = f"process_noise({sigma:.3f}, dt_min={dt_min})"
         Q = check_array(func(float(sigma), dt_min=dt_min), label, (2, 2))
@@ -55,7 +57,7 @@ def check_process_noise(func: Callable) -> None:
 @diagnosed
 def check_predict(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1104)
+    rng = cases.rng(1104)
     for n, _ in SIZES:
         x, B, A, Q = rng.standard_normal(n), random_spd(rng, n), rng.standard_normal((n, n)), random_spd(rng, n)
         x_f, B_f = check_pair(func(x.copy(), B.copy(), A.copy(), Q.copy()), "predict(x, B, A, Q)", "x_f", "B_f")
@@ -69,7 +71,7 @@ def check_predict(func: Callable) -> None:
 @diagnosed
 def check_kupdate(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1105)
+    rng = cases.rng(1105)
     for n, m in SIZES:
         x_f, B_f, H, R = rng.standard_normal(n), random_spd(rng, n), rng.standard_normal((m, n)), random_spd(rng, m)
         y = rng.standard_normal(m)
@@ -84,7 +86,7 @@ def check_kupdate(func: Callable) -> None:
 @diagnosed
 def check_run_filter(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1106)
+    rng = cases.rng(1106)
     for (n, m), T in zip(SIZES, (1, 5, 12, 30, 60)):
         x0, B0, Q, R = rng.standard_normal(n), random_spd(rng, n), random_spd(rng, n), random_spd(rng, m)
         A = np.eye(n) + 0.1 * rng.standard_normal((n, n))
@@ -101,7 +103,7 @@ def check_run_filter(func: Callable) -> None:
 @diagnosed
 def check_nees(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1107)
+    rng = cases.rng(1107)
     for n, T in zip((1, 2, 3, 4, 5), (1, 7, 20, 3, 60)):
         errors = rng.standard_normal((T, n))
         covariances = np.stack([random_spd(rng, n) for _ in range(T)])

@@ -12,6 +12,10 @@ MISTAKES = (
     Mistake("gain_information_form", "no-transpose", "uses R^-1 H where the formula has its transpose",
             "B_inv + H.T @ RinvH, RinvH.T)", "B_inv + H.T @ RinvH, RinvH)",
             hint="Your gain_information_form behaves as if the last factor R^-1 H were not transposed: the formula ends with (R^-1 H)^T = H^T R^-1."),
+    Mistake("gain_information_form", "R-diagonal-reciprocal", "inverts R as the reciprocal of its diagonal, 1 / R_ii",
+            "RinvH = np.linalg.solve(R, H)", "RinvH = H / np.diag(R)[:, None]",
+            hint="Your gain_information_form behaves as if R^-1 were the reciprocal of R's diagonal: when the observation errors "
+                 "are correlated, R^-1 has off-diagonal entries too, so solve with the whole R."),
     Mistake("gain_covariance_form", "no-R", "K = B H^T (H B H^T)^-1: forgets the observation noise",
             "S = H @ B @ H.T + R", "S = H @ B @ H.T",
             hint="Your gain_covariance_form behaves as if the observation noise R were missing from the innovation covariance H B H^T + R."),
