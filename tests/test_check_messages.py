@@ -5,11 +5,11 @@ from __future__ import annotations
 
 import re
 
-import matplotlib
 import numpy as np
 import pytest
 
 from autograder import cells
+from autograder.authoring.visible_checks import visible_verdicts
 from autograder.labs import Lab
 from autograder.catalogues.mistakes import catalogue
 from course.checks import count, explain, is_plural
@@ -46,47 +46,18 @@ def test_the_grammar_checks_catch_what_they_claim_to():
     assert count(2, "estimate") == "2 estimates" and is_plural("the estimates") and not is_plural("NEES of e")
 
 
-def _run(code: str, namespace: dict) -> BaseException | None:
-    lines = [line for line in code.splitlines() if not line.lstrip().startswith("%")]
-    try:
-        exec(compile("\n".join(lines), "<cell>", "exec"), namespace)
-    except Exception as error:  # the message is what this test reads
-        return error
-    return None
-
-
 def _message(error: BaseException, blank: str) -> str:
     return explain(error, error.__traceback__, [blank]) or f"{type(error).__name__}: {error}"
 
 
 @over_labs
-def test_visible_check_messages_of_every_mistake_read_as_sentences(lab: Lab, monkeypatch):
-    """Runs the solved notebook's cells (not the graded ones) in this process and, before each
-    blank's visible checks, each catalogued mistake of that blank with them."""
-    matplotlib.use("Agg")
-    monkeypatch.chdir(lab.source_notebook.parent)
-    nb = cells.read(lab.source_notebook)
+def test_visible_check_messages_of_every_mistake_read_as_sentences(lab: Lab):
+    """Each catalogued mistake in place of the model answer, with its blank's visible checks, in the
+    solved notebook run in this process (autograder/authoring/visible_checks.py)."""
     mistakes = catalogue(lab)
-    answers = {cells.grade_id(c): c.source for c in nb.cells if cells.is_code_answer(c)}
-    namespace: dict = {"__name__": "__main__"}
-    rendered: dict[str, str] = {}
-    import matplotlib.pyplot as plt
-
-    for cell in nb.cells:
-        if cell.cell_type != "code" or cells.meta(cell).get("grade"):
-            continue
-        gid = cells.meta(cell).get("grade_id", "")
-        if gid.startswith("check_"):
-            blank = gid[len("check_"):]
-            for mistake in (m for m in mistakes if m.blank == blank):
-                _run(mistake.apply(answers[blank]), namespace)
-                error = _run(cell.source, namespace)
-                _run(answers[blank], namespace)
-                if error is not None:
-                    rendered[f"{blank}/{mistake.slug}"] = _message(error, blank)
-        error = _run(cell.source, namespace)
-        assert error is None, f"{gid or cell.id} fails on the solved notebook: {error}"
-        plt.close("all")
+    model = cells.model_answers(cells.read(lab.source_notebook))
+    verdicts = visible_verdicts(lab, [(f"{m.blank}/{m.slug}", m.blank, m.apply(model[m.blank])) for m in mistakes])
+    rendered = {key: _message(error, key.split("/")[0]) for key, error in verdicts.items() if error is not None}
     # most mistakes fail their visible checks; those that do must say so in sentences
     assert len(rendered) >= len(mistakes) // 2, sorted(rendered)
     problems = {key: grammar_problems(message) for key, message in rendered.items()}
@@ -163,29 +134,12 @@ that moves, a full R, a current that changes in time, ...): the visible checks m
 
 
 @pytest.mark.parametrize("lab", [Lab(lab_id) for lab_id in sorted(VISIBLY_FAILED)], ids=sorted(VISIBLY_FAILED))
-def test_the_visible_checks_fail_the_mistakes_they_were_given_a_case_for(lab: Lab, monkeypatch):
-    """Runs the solved notebook's cells up to the last visible check in this process, each listed mistake before
-    its blank's visible checks, as the test above does."""
-    import matplotlib.pyplot as plt
-
-    matplotlib.use("Agg")
-    monkeypatch.chdir(lab.source_notebook.parent)
-    nb = cells.read(lab.source_notebook)
+def test_the_visible_checks_fail_the_mistakes_they_were_given_a_case_for(lab: Lab):
+    """Each listed mistake in place of the model answer, with its blank's visible checks, in the solved
+    notebook run in this process (autograder/authoring/visible_checks.py)."""
     mistakes = {f"{m.blank}/{m.slug}": m for m in catalogue(lab)}
+    model = cells.model_answers(cells.read(lab.source_notebook))
     listed = [mistakes[key] for key in VISIBLY_FAILED[lab.id]]
-    answers = {cells.grade_id(c): c.source for c in nb.cells if cells.is_code_answer(c)}
-    code_cells = [c for c in nb.cells if c.cell_type == "code" and not cells.meta(c).get("grade")]
-    last_check = max(i for i, c in enumerate(code_cells) if cells.meta(c).get("grade_id", "").startswith("check_"))
-    namespace: dict = {"__name__": "__main__"}
-    passed_wrongly = []
-    for cell in code_cells[:last_check + 1]:
-        gid = cells.meta(cell).get("grade_id", "")
-        for mistake in (m for m in listed if gid == f"check_{m.blank}"):
-            _run(mistake.apply(answers[mistake.blank]), namespace)
-            if _run(cell.source, namespace) is None:
-                passed_wrongly.append(f"{mistake.blank}/{mistake.slug}")
-            _run(answers[mistake.blank], namespace)
-            plt.close("all")
-        assert _run(cell.source, namespace) is None, f"{gid or cell.id} fails on the solved notebook"
-        plt.close("all")
+    verdicts = visible_verdicts(lab, [(f"{m.blank}/{m.slug}", m.blank, m.apply(model[m.blank])) for m in listed])
+    passed_wrongly = [key for key, error in verdicts.items() if error is None]
     assert not passed_wrongly, f"these mistakes pass the visible checks of {lab.id}: {passed_wrongly}"

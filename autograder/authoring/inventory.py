@@ -8,7 +8,8 @@ from collections import Counter
 from dataclasses import dataclass
 
 from autograder import cells
-from autograder.authoring import claims
+from autograder.authoring import claims, mutants, visible_checks
+from autograder.catalogues.alternatives import catalogue as alternative_catalogue
 from autograder.labs import Lab
 from autograder.catalogues.mistakes import catalogue
 from course.checks import count
@@ -36,6 +37,12 @@ class Inventory:
     mistakes: int
     claims: dict[str, str]
     """Claim id -> what its check verifies, for every claim the lab's text marks."""
+    blank_alternatives: dict[str, int]
+    """Each blank's name -> how many correct alternatives its bank holds."""
+    visible_caught: tuple[int, int]
+    """(catalogued mistakes that the visible checks fail, catalogued mistakes)."""
+    mutation: mutants.Report
+    """The mutants of the reference's blanks: killed by the hidden tests, equivalent, surviving."""
 
 
 def _helper_calls(code: str) -> int:
@@ -79,6 +86,7 @@ def inventory(lab: Lab) -> Inventory:
     hidden = lab.hidden_module("hidden_tests")
     blank_points = {name: points[f"test_{name}"] for name in blanks}
     mistakes = Counter(m.blank for m in catalogue(lab))
+    alternatives = Counter(a.blank for a in alternative_catalogue(lab))
     return Inventory(
         lab=lab.id,
         blanks=len(blanks),
@@ -92,6 +100,9 @@ def inventory(lab: Lab) -> Inventory:
         hidden_assertions=_assertions_on_reference(lab, hidden, blanks),
         mistakes=sum(mistakes.values()),
         claims={cid: c.summary for cid, c in claims.checks(lab).items()},
+        blank_alternatives={name: alternatives[name] for name in blanks},
+        visible_caught=visible_checks.mistakes_caught(lab),
+        mutation=mutants.report(lab),
     )
 
 
@@ -111,11 +122,19 @@ def print_inventory(labs: list[Lab]) -> None:
         print(line((i.lab, i.blanks, f"{i.autograded_points:g}", f"{i.written_answers} ({i.written_points:g})",
                     i.visible_checks, i.hidden_tests, i.hidden_assertions, i.mistakes, len(i.claims))))
     for i in inventories:
-        print(f"\nThe blanks of {i.lab}, in the notebook's order (points of the hidden test, catalogued mistakes):")
+        print(f"\nThe blanks of {i.lab}, in the notebook's order (points of the hidden test, catalogued mistakes, "
+              "correct alternatives):")
         name_w = max(len(name) for name in i.blank_points)
         for name, points in i.blank_points.items():
             mistakes = i.blank_mistakes[name]
-            print(f"  {name:<{name_w}}  {points:>4g} pt  {count(mistakes, 'mistake')}")
+            print(f"  {name:<{name_w}}  {points:>4g} pt  {count(mistakes, 'mistake'):<12}"
+                  f"{count(i.blank_alternatives[name], 'alternative')}")
+        caught, mistakes = i.visible_caught
+        m = i.mutation
+        print(f"The visible checks fail {caught} of the {count(mistakes, 'catalogued mistake')} "
+              f"({caught / max(mistakes, 1):.0%}). Mutants of the reference (autograder/authoring/mutants.py): "
+              f"{m.mutants}, of which the hidden tests kill {m.killed}, {m.equivalent} are listed as equivalent "
+              f"(solutions/{i.lab.replace('-', '_')}/mutants.py) and {len(m.surviving)} survive.")
         print(f"Claims that {i.lab} states, each recomputed by a check (solutions/{i.lab.replace('-', '_')}/claims.py):")
         for cid, summary in i.claims.items():
             print(textwrap.fill(f"{cid}: {summary}", 100, initial_indent="  ", subsequent_indent="      ",

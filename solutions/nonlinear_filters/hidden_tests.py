@@ -107,12 +107,15 @@ def _random_map(rng: np.random.Generator, n: int, p: int) -> Callable:
     return lambda X: np.sin(X) @ A.T + (X**2) @ B.T + c
 
 
-def _rules_for(n: int) -> list[tuple[str, tuple[np.ndarray, np.ndarray]]]:
+def _rules_for(n: int, rng: np.random.Generator) -> list[tuple[str, tuple[np.ndarray, np.ndarray]]]:
     rules = [("cubature", ref.cubature_points(n)), ("unscented", ref.unscented_points(n))]
     if n >= 3:
         rules.append(("CUT4", ref.cut4_points(n)))
     if n == 5:
         rules.append(("CUT8", cut.cut8_points()))
+    # a point set with no symmetry (weights summing to one): every rule above has a point -z for each
+    # z, under which x_i = m - S z_i gives the same points as m + S z_i
+    rules.append(("random asymmetric", (rng.standard_normal((n + 2, n)), rng.dirichlet(np.ones(n + 2)))))
     return rules
 
 
@@ -137,7 +140,7 @@ def check_sigma_point_predict(func: Callable) -> None:
     for n in range(1, 7):
         m, P, Q = rng.standard_normal(n), 0.5 * random_spd(rng, n), random_spd(rng, n)
         f = _random_map(rng, n, n)
-        for name, (Z, w) in _rules_for(n):
+        for name, (Z, w) in _rules_for(n, rng):
             label = f"sigma_point_predict with {name} points, n = {n}, a random nonlinear f"
             _check_mean_cov(func(m.copy(), P.copy(), f, Z.copy(), w.copy(), Q.copy()),
                             ref.sigma_point_predict(m, P, f, Z, w, Q), n, label, SQRT_HINT)
@@ -159,12 +162,12 @@ def check_sigma_point_update(func: Callable) -> None:
     for n, p in [(1, 1), (2, 1), (3, 2), (4, 3), (5, 2), (6, 3)]:
         m, P, R, y = rng.standard_normal(n), 0.5 * random_spd(rng, n), random_spd(rng, p), rng.standard_normal(p)
         h = _random_map(rng, n, p)
-        for name, (Z, w) in _rules_for(n):
+        for name, (Z, w) in _rules_for(n, rng):
             label = f"sigma_point_update with {name} points, n = {n}, p = {p}, a random nonlinear h"
             _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, R.copy(), Z.copy(), w.copy()),
                             ref.sigma_point_update(m, P, y, h, R, Z, w), n, label, SQRT_HINT)
     m, P, y, h, R = _bearing_case(rng)
-    for name, (Z, w) in _rules_for(3):
+    for name, (Z, w) in _rules_for(3, rng):
         label = (f"sigma_point_update with {name} points for a target due west (bearings near +-pi, angles=(1,)): "
                  "are the bearing differences wrapped to (-pi, pi]?")
         _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, R.copy(), Z.copy(), w.copy(), (1,)),
@@ -232,8 +235,9 @@ def _check_pf_weights(func: Callable) -> None:
     f, h = _pf_model(rng)
     X = _pf_particles(rng, PF_N)
     logw = _normalised(rng.standard_normal(PF_N))
-    y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([30.0**2, 0.05**2])
-    label = "bootstrap_pf_step with ess_fraction=0 (no resampling) and bearings near +-pi"
+    # a correlated R: with a diagonal one, e^T R^-1 e cannot tell L^-1 e from L^-T e (R = L L^T)
+    y, R = np.array([-1010.0, np.pi - 0.01]), np.array([[30.0**2, 0.6 * 30.0 * 0.05], [0.6 * 30.0 * 0.05, 0.05**2]])
+    label = "bootstrap_pf_step with ess_fraction=0 (no resampling), bearings near +-pi and correlated noise R"
     X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, 0.0, label)
     check_close(X_new, f(X), f"the particles from {label}",
                 "With a negligible Q, each particle should move to f(x) and keep its place in the array.",
@@ -298,6 +302,28 @@ def _check_pf_resampling(func: Callable) -> None:
         )
 
 
+def _check_pf_threshold(func: Callable) -> None:
+    """Exact: with a flat likelihood, weights whose effective sample size is 0.6 N are resampled (ESS
+    below 0.7 N) and weights whose effective sample size is 0.8 N are kept. Half the particles have
+    weight a times the other half's: ESS / N = (a + 1)^2 / (2 (a^2 + 1)), which is 0.6 for
+    a = 5 + sqrt(24) and 0.8 for a = 3 (the likelihood moves it by less than 1e-9)."""
+    rng = cases.rng(1509)
+    f, h = _pf_model(rng)
+    X = _pf_particles(rng, PF_N)
+    flat = np.diag([1e12, 1e12])
+    for a, fraction, resampled in ((5.0 + np.sqrt(24.0), 0.6, True), (3.0, 0.8, False)):
+        logw = _normalised(np.log(np.where(rng.permutation(PF_N) < PF_N // 2, a, 1.0)))
+        label = f"bootstrap_pf_step with a flat likelihood and weights whose effective sample size is {fraction} N"
+        step_seed = int(rng.integers(2**63))  # the seed of the generator the step draws from
+        _, logw_new = _pf_call(func, X, logw, np.array([-1000.0, np.pi]), np.random.default_rng(step_seed), f, h,
+                               TINY_Q, flat, 0.7, label)
+        want = np.full(PF_N, -np.log(PF_N)) if resampled else logw
+        check_close(logw_new, want, f"the log-weights from {label}",
+                    "Resample exactly when the effective sample size 1 / sum_i w_i^2 (of the normalised weights) is "
+                    "below ess_fraction * N; after resampling every log-weight is -log(N).",
+                    rtol=1e-7, atol=1e-6, show_expected=False)
+
+
 def _chi2_outside(value: float, dof: int, alpha: float) -> bool:
     """Whether a chi-square(dof) statistic falls outside its central 1 - alpha interval."""
     return not (stats.chi2.ppf(alpha / 2, dof) <= value <= stats.chi2.isf(alpha / 2, dof))
@@ -343,4 +369,5 @@ def check_bootstrap_pf_step(func: Callable) -> None:
     _check_pf_weights(func)
     _check_pf_no_resampling(func)
     _check_pf_resampling(func)
+    _check_pf_threshold(func)
     _check_pf_noise(func)

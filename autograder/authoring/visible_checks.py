@@ -1,0 +1,73 @@
+"""What a blank's visible checks say of other answers to it: the solved notebook's cells run in this
+process (not the graded ones, and none after the last visible check), and before each blank's check
+cell, each answer given for that blank, with the check cell run on it; then the model answer again.
+
+Used to measure which catalogued mistakes the visible checks already fail (``python -m autograder
+labs``), and by the tests: every correct alternative passes them, the mistakes they were given a
+case for fail them, and their messages read as sentences.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import io
+from collections.abc import Iterable
+
+from autograder import cells
+from autograder.labs import Lab
+
+
+class SolvedNotebookFails(AssertionError):
+    """A cell of the solved notebook itself failed: the lab is broken, not the answer tried."""
+
+
+def run_cell(code: str, namespace: dict) -> BaseException | None:
+    """Run a cell's code (IPython magics left out) in ``namespace``: the exception it raised, or None."""
+    lines = [line for line in code.splitlines() if not line.lstrip().startswith("%")]
+    try:
+        exec(compile("\n".join(lines), "<cell>", "exec"), namespace)
+    except Exception as error:  # noqa: BLE001 (the failure is what the caller reads)
+        return error
+    return None
+
+
+def visible_verdicts(lab: Lab, answers: Iterable[tuple[str, str, str]]) -> dict[str, BaseException | None]:
+    """For each (key, blank, code) of ``answers``: what the blank's visible checks raised with ``code``
+    in place of the model answer (None: they passed). Raises SolvedNotebookFails if a cell fails on
+    the solved notebook."""
+    import matplotlib
+    import matplotlib.pyplot as plt
+
+    matplotlib.use("Agg")
+    by_blank: dict[str, list[tuple[str, str]]] = {}
+    for key, blank, code in answers:
+        by_blank.setdefault(blank, []).append((key, code))
+    nb = cells.read(lab.source_notebook)
+    model = {cells.grade_id(c): c.source for c in nb.cells if cells.is_code_answer(c)}
+    code_cells = [c for c in nb.cells if c.cell_type == "code" and not cells.meta(c).get("grade")]
+    last_check = max(i for i, c in enumerate(code_cells) if cells.meta(c).get("grade_id", "").startswith("check_"))
+    namespace: dict = {"__name__": "__main__"}
+    verdicts: dict[str, BaseException | None] = {}
+    with contextlib.chdir(lab.source_notebook.parent), contextlib.redirect_stdout(io.StringIO()):
+        for cell in code_cells[:last_check + 1]:
+            gid = cells.meta(cell).get("grade_id", "")
+            for key, code in by_blank.get(gid.removeprefix("check_"), []) if gid.startswith("check_") else []:
+                verdicts[key] = run_cell(code, namespace) or run_cell(cell.source, namespace)
+                if run_cell(model[gid.removeprefix("check_")], namespace) is not None:
+                    raise SolvedNotebookFails(f"the model answer of {gid.removeprefix('check_')} no longer runs")
+                plt.close("all")
+            error = run_cell(cell.source, namespace)
+            plt.close("all")
+            if error is not None:
+                raise SolvedNotebookFails(f"{gid or cell.id} fails on the solved notebook: {error}")
+    return verdicts
+
+
+def mistakes_caught(lab: Lab) -> tuple[int, int]:
+    """(how many of the lab's catalogued mistakes its visible checks fail, how many there are)."""
+    from autograder.catalogues.mistakes import catalogue
+
+    model = cells.model_answers(cells.read(lab.source_notebook))
+    mistakes = catalogue(lab)
+    verdicts = visible_verdicts(lab, [(m.student_id(lab), m.blank, m.apply(model[m.blank])) for m in mistakes])
+    return sum(verdicts.get(m.student_id(lab)) is not None for m in mistakes), len(mistakes)
