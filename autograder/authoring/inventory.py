@@ -134,7 +134,9 @@ def print_inventory(labs: list[Lab]) -> None:
         print(f"The visible checks fail {caught} of the {count(mistakes, 'catalogued mistake')} "
               f"({caught / max(mistakes, 1):.0%}). Mutants of the reference (autograder/authoring/mutants.py): "
               f"{m.mutants}, of which the hidden tests kill {m.killed}, {m.equivalent} are listed as equivalent "
-              f"(solutions/{i.lab.replace('-', '_')}/mutants.py) and {len(m.surviving)} survive.")
+              f"(solutions/{i.lab.replace('-', '_')}/mutants.py) and {len(m.surviving)} survive; the message of "
+              f"{m.narrowed} of the {m.killed} killed ({m.narrowed / max(m.killed, 1):.0%}) narrows the cause (the kinds "
+              "of case it is wrong on, or a catalogued mistake).")
         print(f"Claims that {i.lab} states, each recomputed by a check (solutions/{i.lab.replace('-', '_')}/claims.py):")
         for cid, summary in i.claims.items():
             print(textwrap.fill(f"{cid}: {summary}", 100, initial_indent="  ", subsequent_indent="      ",

@@ -194,23 +194,28 @@ def _time_limit(seconds: float):
 
 def killed(lab: Lab, mutant: Mutant) -> bool:
     """Whether the blank's hidden test fails ``mutant`` (in this process, on the default seed)."""
+    return failure(lab, mutant) is not None
+
+
+def failure(lab: Lab, mutant: Mutant) -> BaseException | None:
+    """What the blank's hidden test raises on ``mutant`` (None: it passes it), with the message a
+    student would read (labelled cases and the diagnosis included)."""
     reference = lab.reference()
     namespace = dict(vars(reference))
     try:
         exec(compile(mutant.source, inspect.getsourcefile(reference) or "<mutant>", "exec"), namespace)
         function: Callable = namespace[mutant.blank]
-    except Exception:  # noqa: BLE001 (a mutant that does not even compile is no answer)
-        return True
+    except Exception as error:  # noqa: BLE001 (a mutant that does not even compile is no answer)
+        return error
     check = getattr(lab.hidden_module("hidden_tests"), f"check_{mutant.blank}")
-    check = getattr(check, "__wrapped__", check)  # the diagnosis only adds to a failure's message
     try:
         with _time_limit(TIME_LIMIT_S), np.errstate(all="ignore"):
             check(function)
     except BaseException as error:  # noqa: BLE001 (any failure kills it; KeyboardInterrupt is the user's)
         if isinstance(error, KeyboardInterrupt):
             raise
-        return True
-    return False
+        return error
+    return None
 
 
 @dataclass(frozen=True)
@@ -223,6 +228,9 @@ class Report:
     equivalent: int
     surviving: tuple[Mutant, ...]
     seconds: float
+    narrowed: int
+    """Killed mutants whose failing message says on which kinds of case the function is right and on
+    which wrong (autograder/hidden_tests/case_kinds.py), or names a catalogued mistake."""
 
 
 def report(lab: Lab, blanks: list[str] | None = None) -> Report:
@@ -232,15 +240,19 @@ def report(lab: Lab, blanks: list[str] | None = None) -> Report:
     start = time.monotonic()
     reference = lab.reference()
     listed = equivalent(lab)
-    total = dead = same = 0
+    total = dead = same = narrowed = 0
     surviving = []
     for blank in blanks or cells.blank_names(cells.read(lab.source_notebook)):
         for mutant in mutants(blank, inspect.getsource(getattr(reference, blank))):
             total += 1
             if (blank, mutant.id) in listed:
                 same += 1
-            elif killed(lab, mutant):
-                dead += 1
-            else:
+                continue
+            error = failure(lab, mutant)
+            if error is None:
                 surviving.append(mutant)
-    return Report(lab.id, total, dead, same, tuple(surviving), time.monotonic() - start)
+                continue
+            dead += 1
+            message = " ".join([str(error), *getattr(error, "__notes__", [])])
+            narrowed += f"Your {blank} is right on " in message or "Diagnosis:" in message
+    return Report(lab.id, total, dead, same, tuple(surviving), time.monotonic() - start, narrowed)

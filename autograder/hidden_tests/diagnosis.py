@@ -58,6 +58,8 @@ from typing import Any, Callable
 import numpy as np
 
 from autograder.hidden_tests import isolate
+from autograder.hidden_tests import case_kinds
+from autograder.hidden_tests.case_kinds import add_to_message
 from autograder.labs import lab_of
 from autograder.catalogues.mistakes import Mistake, catalogue
 
@@ -87,7 +89,9 @@ class _Unsupported(Exception):
 
 def diagnosed(check: Callable) -> Callable:
     """Decorate the hidden test ``check_<blank>`` of ``solutions.<module>.hidden_tests`` so that its
-    failures name the catalogued mistake the student's function behaves like, if exactly one does."""
+    failures name the catalogued mistake the student's function behaves like, if exactly one does,
+    and, where its cases are labelled (autograder/hidden_tests/case_kinds.py), say on which kinds of
+    case the function is right and on which wrong."""
     blank = _blank(check)
 
     @functools.wraps(check)
@@ -95,12 +99,12 @@ def diagnosed(check: Callable) -> Callable:
         start = time.monotonic()
         calls: list[tuple[tuple, Any]] = []
         try:
-            with isolate.observed(_recorder(calls)):
+            with isolate.observed(_recorder(calls)), case_kinds.labelled(blank):
                 return check(func, *args, **kwargs)
         except Exception as error:
             mistake = _diagnosis(check, calls, _budget(time.monotonic() - start))
             if mistake is not None:
-                _add_to_message(error, f"{LEAD.format(blank=blank)} {mistake.hint}")
+                add_to_message(error, f"{LEAD.format(blank=blank)} {mistake.hint}")
             raise
 
     diagnosing_check.diagnosed_blank = blank
@@ -288,12 +292,3 @@ def _quiet():
             contextlib.redirect_stderr(io.StringIO()):
         warnings.simplefilter("ignore")
         yield
-
-
-def _add_to_message(error: BaseException, text: str) -> None:
-    """Append ``text`` to the message that the traceback shows for ``error``, on the same line: the
-    grades table and the notes column show a failure's message as one line."""
-    if len(error.args) == 1 and isinstance(error.args[0], str) and type(error).__str__ is BaseException.__str__:
-        error.args = (f"{error.args[0].rstrip()} {text}",)
-    else:
-        error.add_note(text)

@@ -1,0 +1,136 @@
+"""Hidden cases labelled by what sets them apart, so that a failing hidden test says on which kinds of
+case the student's function is right and on which it is wrong.
+
+"The largest difference from the reference is 0.059" does not tell a student where to look. A check
+runs its cases inside ``labelled(blank)``, each case inside ``case(...)`` with the properties that
+distinguish it, in words: ``case(R="a full R")``, ``case(n="n = 1")``, ``case(weights="zero
+weights")``. Inside ``labelled``, a case that fails is recorded and the check goes on with the next,
+so the student's function is given every case of the test (no case is replayed: the diagnosis sees
+the same calls, autograder/hidden_tests/diagnosis.py). At the end, if any case failed, the first
+failure is raised, its message followed by a sentence that narrows the cause, from the properties
+alone (never a number of the reference's):
+
+- a property that splits the cases exactly: "Your kupdate is right on every case with a diagonal R
+  and wrong on every case with a full R.";
+- otherwise the failing cases' properties: "Your kupdate is right on 3 of 5 cases; it is wrong on
+  the cases with n = 2 and a full R, and with n = 4 and a diagonal R.";
+- nothing more when every case fails.
+
+Outside ``labelled`` (a check that does not use it), ``case`` does nothing and a failure is raised at
+once, as before. The grader's own interruptions (a kernel that is stuck or gone) always pass through.
+"""
+
+from __future__ import annotations
+
+import contextlib
+from collections.abc import Iterator
+from dataclasses import dataclass, field
+
+NARROWED = ("is right on every case with", "is right on ")
+"""How a narrowing sentence begins after the blank's name (the mutation report counts them)."""
+
+
+@dataclass
+class _Case:
+    properties: dict[str, str]
+    error: BaseException | None = None
+
+
+@dataclass
+class _Run:
+    cases: list[_Case] = field(default_factory=list)
+
+
+_run: _Run | None = None
+
+
+def _interruptions() -> tuple[type[BaseException], ...]:
+    """What a case never records: the grader's own interruptions, which end the test at once."""
+    found: list[type[BaseException]] = []
+    with contextlib.suppress(ImportError):
+        from autograder.kernel.side import PeerGone, PeerTimeout, ProtocolError
+
+        found += [PeerGone, PeerTimeout, ProtocolError]
+    with contextlib.suppress(ImportError):
+        from autograder.pipeline.compare import KernelStopped
+
+        found.append(KernelStopped)
+    return tuple(found)
+
+
+@contextlib.contextmanager
+def case(**properties: str) -> Iterator[None]:
+    """One hidden case, described by the properties that set it apart (each a phrase: "a full R")."""
+    run = _run
+    if run is None:
+        yield
+        return
+    record = _Case(dict(properties))
+    try:
+        yield
+    except _interruptions():
+        raise
+    except Exception as error:  # noqa: BLE001 (a failing case: recorded, the first is raised at the end)
+        record.error = error
+    run.cases.append(record)
+
+
+@contextlib.contextmanager
+def labelled(blank: str) -> Iterator[None]:
+    """Run every ``case`` of the block to the end; then raise the first failure, with a sentence on
+    where ``blank`` is right and where it is wrong (see the module doc)."""
+    global _run
+    outer, _run = _run, _Run()
+    run = _run
+    try:
+        yield
+    finally:
+        _run = outer
+    failed = [c for c in run.cases if c.error is not None]
+    if not failed:
+        return
+    error = failed[0].error
+    sentence = narrowing(blank, run.cases)
+    if sentence:
+        add_to_message(error, sentence)
+    raise error
+
+
+def narrowing(blank: str, cases: list[_Case]) -> str:
+    """The sentence that says on which kinds of case ``blank`` is right and on which wrong ("" if it is
+    wrong on every case, or there is nothing to tell the cases apart)."""
+    wrong = [c for c in cases if c.error is not None]
+    right = [c for c in cases if c.error is None]
+    if not wrong or not right:
+        return ""
+    keys = [k for k in dict.fromkeys(k for c in cases for k in c.properties)]
+    splits = []
+    for key in keys:
+        good = {c.properties.get(key) for c in right}
+        bad = {c.properties.get(key) for c in wrong}
+        if None not in good | bad and not good & bad:
+            splits.append((len(bad) + len(good), key, sorted(good), sorted(bad)))
+    if splits:
+        _, key, good, bad = min(splits)
+        return (f"Your {blank} is right on every case with {' or '.join(good)} and wrong on every case with "
+                f"{' or '.join(bad)}.")
+    described = [_listed([v for v in c.properties.values()]) for c in wrong]
+    unique = list(dict.fromkeys(d for d in described if d))
+    if not unique:
+        return f"Your {blank} is right on {len(right)} of {len(cases)} cases."
+    return (f"Your {blank} is right on {len(right)} of {len(cases)} cases; it is wrong on the cases with "
+            f"{_listed(unique, ', and with ')}.")
+
+
+def _listed(parts: list[str], last: str = " and ") -> str:
+    parts = [p for p in parts if p]
+    return parts[0] if len(parts) == 1 else ", ".join(parts[:-1]) + last + parts[-1] if parts else ""
+
+
+def add_to_message(error: BaseException, text: str) -> None:
+    """Append ``text`` to the message that the traceback shows for ``error``, on the same line: the
+    grades table and the notes column show a failure's message as one line."""
+    if len(error.args) == 1 and isinstance(error.args[0], str) and type(error).__str__ is BaseException.__str__:
+        error.args = (f"{error.args[0].rstrip()} {text}",)
+    else:
+        error.add_note(text)
