@@ -219,6 +219,52 @@ def test_credibility_interval_matches_the_exact_weighted_oracle(seed):
     assert checked > 200
 
 
+def credibility_normalised_first(samples, weights, p):
+    """The text's formula with the weights normalised before they are accumulated."""
+    order = np.argsort(samples)
+    F = np.cumsum(weights[order] / np.sum(weights))
+    a = np.array([0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200])
+    i = np.minimum(np.searchsorted(F, a), samples.shape[0] - 1)
+    return samples[order][i[0]], samples[order][i[1]]
+
+
+def credibility_divided_by_sum(samples, weights, p):
+    """Accumulated, then divided by the (pairwise) sum of the weights rather than the last cumulative weight."""
+    order = np.argsort(samples)
+    F = np.cumsum(weights[order]) / weights.sum()
+    lo, hi = (np.minimum(np.searchsorted(F, (1 + sign * np.asarray(p) / 100) / 2), samples.shape[0] - 1) for sign in (-1, 1))
+    return samples[order][lo], samples[order][hi]
+
+
+def credibility_loop(samples, weights, p):
+    """A loop over the orders, and over the sorted samples until the cumulative weight reaches the order."""
+    order = np.argsort(samples)
+    s, w = samples[order], weights[order] / np.sum(weights)
+    ends = []
+    for a in np.ravel([(1 - np.asarray(p) / 100) / 2, (1 + np.asarray(p) / 100) / 2]):
+        total, i = 0.0, 0
+        for i in range(s.shape[0]):
+            total += w[i]
+            if total >= a:
+                break
+        ends.append(s[i])
+    ends = np.reshape(ends, (2, *np.shape(p)))
+    return ends[0], ends[1]
+
+
+@random_draws(false_fail=0.0, why="every correct reading of the text passes whatever the seed: the check accepts any "
+              "sample that a cumulative weight within rounding of the order can select")
+@pytest.mark.parametrize("variant", [credibility_normalised_first, credibility_divided_by_sum, credibility_loop],
+                         ids=["normalised-first", "divided-by-sum", "loop"])
+def test_correct_credibility_intervals_pass_the_hidden_check(variant, seed):
+    # Issue 30: the check compared with the reference's one value, and the literal formula lost the
+    # points wherever rounding left a cumulative weight just under an order (p = 100, whose order 1
+    # then picked a zero-weight last sample), on 30-40% of seeds.
+    for submission_seed in (seed, 1000 + seed, 2000 + seed):
+        with cases.seeded(submission_seed):
+            checks.check_credibility_interval.__wrapped__(variant)
+
+
 @random_draws(false_fail=0.0, why="an identity: scaling the weights by 4, a power of two, is exact, so both calls see the same cumulative weights")
 def test_credibility_interval_hand_cases_and_arrays_of_p(seed):
     samples = np.array([4.0, 1.0, 3.0, 2.0])
