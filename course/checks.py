@@ -258,8 +258,8 @@ def check_axis_label(label: str, unit: str, name: str, axis: str, example: str) 
     if not label_has_unit(label, unit):
         given = f"its label is '{label}'" if label else "it has no label"
         raise AssertionError(
-            f"{name}: label the {axis} with the quantity and its unit, {unit}: for example {example} "
-            f"(any common way of writing the unit will do); {given}."
+            f"{name}: label the {axis} with the quantity and its unit ({unit}), written any common way, for "
+            f"example {example}; {given}."
         )
 
 

@@ -100,8 +100,8 @@ def test_an_axis_label_may_write_its_unit_any_common_way(unit, label):
 @pytest.mark.parametrize("unit, label", [(u, label) for u, labels in LABELS_WITHOUT_UNIT.items() for label in labels])
 def test_an_axis_label_without_its_unit_fails_and_says_what_to_write(unit, label):
     assert not label_has_unit(label, unit)
-    with pytest.raises(AssertionError, match=r"plot: label the time axis with the quantity and its unit, .*: for "
-                                             r"example ax.set_xlabel\('Time \[s\]'\)"):
+    with pytest.raises(AssertionError, match=r"plot: label the time axis with the quantity and its unit \(.*\), "
+                                             r"written any common way, for example ax.set_xlabel\('Time \[s\]'\); "):
         check_axis_label(label, unit, "plot", "time axis", "ax.set_xlabel('Time [s]')")
 
 
