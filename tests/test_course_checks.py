@@ -81,6 +81,7 @@ LABELS_WITH_UNIT = {
                "c [m² kg⁻¹]", "c / (m^2/kg)", r"c [$\mathrm{m}^2/\mathrm{kg}$]", r"c [$\frac{m^2}{kg}$]",
                "c [m^2 / kg]", "Ballistic coefficient, m^2/kg"],
     "kg/(m s^2)": ["beta [kg/(m s^2)]", r"$\beta$ [kg/(m s$^2$)]", "beta (kg m^-1 s^-2)", "beta / kg m⁻¹ s⁻²"],
+    "kg/m^2": ["areal density [kg/m^2]", "areal density [kg m$^{-2}$]", "areal density (kg/m²)"],
 }
 LABELS_WITHOUT_UNIT = {
     "s": ["", "Time", "Time [m]", "Time (min)", "Time [ms]", "Time index", "Time [-]", "seconds", "[s]",
@@ -88,6 +89,7 @@ LABELS_WITHOUT_UNIT = {
     "m^2/kg": ["", "c", "c [kg/m^2]", "c [kg m$^{-2}$]", "c [m/kg]", "Ballistic coefficient", "c [-]", "c [m^2]",
                "c [1/kg]", "c [s]"],
     "kg/(m s^2)": ["beta", "beta [kg/(m s)]", "beta [kg m s^-2]"],
+    "kg/m^2": ["areal density [m^2/kg]", "areal density [kg m$^{2}$]"],
 }
 
 
