@@ -142,6 +142,127 @@ def random_spd(rng: np.random.Generator, n: int) -> np.ndarray:
     return factor @ factor.T + n * np.eye(n)
 
 
+# ---------------------------------------------------------------------------------------------
+# Axis labels: a quantity and its unit, written any common way
+# ---------------------------------------------------------------------------------------------
+_UNIT_SPELLINGS = {
+    "s": ("s", "sec", "secs", "second", "seconds"),
+    "m": ("m", "metre", "metres", "meter", "meters"),
+    "kg": ("kg", "kilogram", "kilograms", "kilogramme", "kilogrammes"),
+}
+"""The base units the labs' axes use, each with the ways of writing it (words in any case)."""
+_SPELLING_TO_UNIT = {spelling: unit for unit, spellings in _UNIT_SPELLINGS.items() for spelling in spellings}
+_UNIT_TOKEN = re.compile(
+    "(?P<unit>" + "|".join(sorted((f"(?i:{w})" if len(w) > 2 else w for w in _SPELLING_TO_UNIT), key=len, reverse=True))
+    + r")(?:\s*\^\s*\(?(?P<power>[+-]?\d+)\)?|(?P<digits>\d+))?(?![\w^])"
+)
+_SUPERSCRIPTS = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻⁺", "0123456789-+")
+
+
+def _plain_label(text: str) -> str:
+    """A label with LaTeX and Unicode notation spelled plainly: m$^{-2}$, m⁻², m**-2 all become m^-2."""
+    text = text.replace("$", "").replace("−", "-").replace("**", "^")
+    text = re.sub(r"\\(?:left|right|big|Big)\s*(?=[(\[\])])", "", text)
+    text = re.sub(r"\\(?:mathrm|text|textrm|mathit|operatorname|rm)\s*", "", text)
+    text = re.sub(r"\^\s*\{([^{}]*)\}", r"^\1", text)
+    text = re.sub(r"\\[dt]?frac\s*\{([^{}]*)\}\s*\{([^{}]*)\}", r"(\1)/(\2)", text)
+    text = re.sub(r"\\(?:cdot|times)|[·⋅×*]", " ", text)
+    text = re.sub(r"\\[,;:! ]|~|\\quad", " ", text)
+    text = text.replace("{", "").replace("}", "").replace("\\", "")
+    text = re.sub(r"[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+", lambda m: "^" + m.group(0).translate(_SUPERSCRIPTS), text)
+    text = re.sub(r"(?i)\bsquare\s+(\w+)", r"\1^2", text)
+    text = re.sub(r"(?i)(\w+)\s+squared\b", r"\1^2", text)
+    return re.sub(r"(?i)\s+per\s+", " / ", text)
+
+
+def _depth_change(char: str) -> int:
+    return 1 if char in "([" else -1 if char in ")]" else 0
+
+
+def _balanced(text: str) -> bool:
+    """Whether every bracket of ``text`` closes, and none closes before it opens."""
+    depth = 0
+    for char in text:
+        depth += _depth_change(char)
+        if depth < 0:
+            return False
+    return depth == 0
+
+
+def _top_level(text: str, separator: str) -> list[int]:
+    """Positions of ``separator`` in ``text`` outside every bracket."""
+    depth, found = 0, []
+    for i, char in enumerate(text):
+        depth += _depth_change(char)
+        if depth == 0 and char == separator:
+            found.append(i)
+    return found
+
+
+def _unbracketed(text: str) -> str:
+    """``text`` without the brackets around all of it: "(m^2/kg)" -> "m^2/kg", "(m) / (kg)" unchanged."""
+    text = text.strip()
+    while len(text) > 1 and text[0] + text[-1] in ("()", "[]") and _balanced(text[1:-1]):
+        text = text[1:-1].strip()
+    return text
+
+
+def parse_unit(text: str) -> dict[str, int] | None:
+    """The base units of a unit written plainly, as {unit: power} ("m^2/kg" -> {"m": 2, "kg": -1}), or
+    None if ``text`` is not a product and quotient of the labs' units."""
+    text = _unbracketed(text)
+    if not text or not _balanced(text):
+        return None
+    cuts = [-1, *_top_level(text, "/"), len(text)]
+    powers: dict[str, int] = {}
+    for k, (start, stop) in enumerate(zip(cuts, cuts[1:])):
+        part = _unbracketed(text[start + 1:stop])
+        tokens = list(_UNIT_TOKEN.finditer(part))
+        if not tokens or re.sub(r"\s+", "", _UNIT_TOKEN.sub("", part)):
+            return None
+        for token in tokens:
+            power = int(token.group("power") or token.group("digits") or 1)
+            unit = _SPELLING_TO_UNIT.get(token.group("unit")) or _SPELLING_TO_UNIT[token.group("unit").lower()]
+            powers[unit] = powers.get(unit, 0) + (power if k == 0 else -power)
+    return {unit: power for unit, power in powers.items() if power}
+
+
+def label_has_unit(label: str, unit: str) -> bool:
+    """Whether an axis label names a quantity and gives it the unit ``unit`` (written as "s" or "m^2/kg").
+
+    The unit may be written in brackets ("Time [s]", "c (m²/kg)"), after "in" ("time in seconds"), after
+    a comma ("time, s"), or ISO's way after a slash ("time $t$ / s", "c / (m^2/kg)"); in symbols or
+    words (s, sec, seconds; m^2/kg, m$^2$ kg$^{-1}$, square metres per kilogram). Something other than
+    the unit must name the quantity.
+    """
+    want = parse_unit(unit)
+    text = _plain_label(label)
+    candidates = []  # (unit text, the rest of the label)
+    for match in re.finditer(r"[(\[]", text):
+        depth, start = 0, match.start()
+        for stop in range(start, len(text)):
+            depth += _depth_change(text[stop])
+            if depth == 0:
+                candidates.append((text[start:stop + 1], text[:start] + text[stop + 1:]))
+                break
+    for found in re.finditer(r"(?i)\bin\b", text):
+        candidates.append((text[found.end():], text[:found.start()]))
+    for cut in _top_level(text, "/") + _top_level(text, ","):
+        candidates.append((text[cut + 1:], text[:cut]))
+    return any(re.search(r"[A-Za-z]", rest) and parse_unit(candidate) == want for candidate, rest in candidates)
+
+
+def check_axis_label(label: str, unit: str, name: str, axis: str, example: str) -> None:
+    """Check that the label of one axis of ``name``'s plot names its quantity with the unit ``unit``
+    (see ``label_has_unit``); ``axis`` says which axis in words, ``example`` shows a label that passes."""
+    if not label_has_unit(label, unit):
+        given = f"its label is '{label}'" if label else "it has no label"
+        raise AssertionError(
+            f"{name}: label the {axis} with the quantity and its unit ({unit}), written any common way, for "
+            f"example {example}; {given}."
+        )
+
+
 def passed(name: str) -> None:
     """Report that a blank passed its visible checks (``validate`` remembers it for this definition)."""
     function = sys._getframe(1).f_globals.get(name)

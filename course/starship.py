@@ -24,6 +24,8 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from course.checks import check_axis_label
+
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
@@ -558,13 +560,14 @@ def check_jacobian(
 
 def check_band_plot(
     ax: Axes, returned: object, t: ArrayLike, truth: ArrayLike, mean: ArrayLike, std: ArrayLike,
-    name: str, *, n_sigma: float = 3.0,
+    name: str, *, n_sigma: float = 3.0, y_unit: str = "m^2/kg",
 ) -> None:
     """Check a plot of truth, estimate and an n-sigma band by inspecting the Axes (not pixels).
 
     Looks for: the Axes returned; a line through (t, truth) and one through (t, mean); one filled
-    band (``fill_between``) from mean - n_sigma std to mean + n_sigma std; axis labels, the time
-    axis with its unit in seconds; a legend with at least three entries.
+    band (``fill_between``) from mean - n_sigma std to mean + n_sigma std; axis labels with units,
+    seconds on the time axis and ``y_unit`` on the other, written any common way
+    (``course.checks.label_has_unit``); a legend with at least three entries.
     """
     from matplotlib.collections import PolyCollection
 
@@ -612,11 +615,8 @@ def check_band_plot(
             f"{name}: the band should run from mean - {n_sigma:g} std to mean + {n_sigma:g} std (the 99.7% "
             f"region), but its half-width is {reach:.3g} std. {advice}"
         )
-    if not ax.get_ylabel():
-        raise AssertionError(f"{name}: label the y axis with the quantity and its unit, e.g. ax.set_ylabel(...).")
-    xlabel = ax.get_xlabel()
-    if not xlabel or not any(unit in xlabel for unit in ("[s]", "(s)", "[sec]", "(sec)")):
-        raise AssertionError(f"{name}: label the time axis with its unit, e.g. ax.set_xlabel('Time [s]').")
+    check_axis_label(ax.get_xlabel(), "s", name, "time axis", "ax.set_xlabel('Time [s]')")
+    check_axis_label(ax.get_ylabel(), y_unit, name, "y axis", f"ax.set_ylabel('c [{y_unit}]')")
     legend = ax.get_legend()
     if legend is None or len(legend.get_texts()) < 3:
         raise AssertionError(

@@ -4,7 +4,8 @@ import numpy as np
 import pytest
 
 from autograder import cells
-from course.checks import NotWrittenYet, check_array, check_close, check_pair, check_symmetric, random_spd, require
+from course.checks import (NotWrittenYet, check_array, check_axis_label, check_close, check_pair, check_symmetric,
+                           label_has_unit, parse_unit, random_spd, require)
 from over_labs import over_labs
 from random_draws import random_draws
 
@@ -68,3 +69,46 @@ def test_symmetry_check_and_random_spd(seed):
         assert np.all(np.linalg.eigvalsh(S) > 0)
     with pytest.raises(AssertionError, match="should be symmetric"):
         check_symmetric(np.array([[1.0, 0.1], [0.0, 1.0]]), "B")
+
+
+# the unit of each axis of the labs' plot blanks: labels that must pass, and labels that must fail
+LABELS_WITH_UNIT = {
+    "s": ["Time [s]", "Time (s)", "Time (seconds)", "time $t$ / s", "t [sec]", "time in s", "time in seconds",
+          "Time, s", "$t$ [s]", r"$t\,/\,\mathrm{s}$", r"Time $[\mathrm{s}]$", "Time [Seconds]", "time t (s)",
+          "Time (secs)", "t/s", "Time [s] since the first range"],
+    "m^2/kg": ["c [m^2/kg]", "c (m²/kg)", "c [m$^2$/kg]", "$c$ / m$^2$ kg$^{-1}$", "ballistic coefficient c (m^2 kg^-1)",
+               "c [m2/kg]", "c in m^2 per kg", "c [m**2/kg]", "ballistic coefficient [square metres per kilogram]",
+               "c [m² kg⁻¹]", "c / (m^2/kg)", r"c [$\mathrm{m}^2/\mathrm{kg}$]", r"c [$\frac{m^2}{kg}$]",
+               "c [m^2 / kg]", "Ballistic coefficient, m^2/kg"],
+    "kg/(m s^2)": ["beta [kg/(m s^2)]", r"$\beta$ [kg/(m s$^2$)]", "beta (kg m^-1 s^-2)", "beta / kg m⁻¹ s⁻²"],
+    "kg/m^2": ["areal density [kg/m^2]", "areal density [kg m$^{-2}$]", "areal density (kg/m²)"],
+}
+LABELS_WITHOUT_UNIT = {
+    "s": ["", "Time", "Time [m]", "Time (min)", "Time [ms]", "Time index", "Time [-]", "seconds", "[s]",
+          "Time (samples)", "Times", "time step k"],
+    "m^2/kg": ["", "c", "c [kg/m^2]", "c [kg m$^{-2}$]", "c [m/kg]", "Ballistic coefficient", "c [-]", "c [m^2]",
+               "c [1/kg]", "c [s]"],
+    "kg/(m s^2)": ["beta", "beta [kg/(m s)]", "beta [kg m s^-2]"],
+    "kg/m^2": ["areal density [m^2/kg]", "areal density [kg m$^{2}$]"],
+}
+
+
+@pytest.mark.parametrize("unit, label", [(u, label) for u, labels in LABELS_WITH_UNIT.items() for label in labels])
+def test_an_axis_label_may_write_its_unit_any_common_way(unit, label):
+    assert label_has_unit(label, unit)
+    check_axis_label(label, unit, "plot", "time axis", "ax.set_xlabel('Time [s]')")
+
+
+@pytest.mark.parametrize("unit, label", [(u, label) for u, labels in LABELS_WITHOUT_UNIT.items() for label in labels])
+def test_an_axis_label_without_its_unit_fails_and_says_what_to_write(unit, label):
+    assert not label_has_unit(label, unit)
+    with pytest.raises(AssertionError, match=r"plot: label the time axis with the quantity and its unit \(.*\), "
+                                             r"written any common way, for example ax.set_xlabel\('Time \[s\]'\); "):
+        check_axis_label(label, unit, "plot", "time axis", "ax.set_xlabel('Time [s]')")
+
+
+def test_units_parse_to_their_base_units():
+    assert parse_unit("m^2/kg") == parse_unit("m^2 kg^-1") == parse_unit("(m^2)/(kg)") == {"m": 2, "kg": -1}
+    assert parse_unit("kg/(m s^2)") == parse_unit("kg m^-1 s^-2") == {"kg": 1, "m": -1, "s": -2}
+    assert parse_unit("seconds") == {"s": 1} and parse_unit("m/m") == {}
+    assert parse_unit("min") is None and parse_unit("ms") is None and parse_unit("") is None

@@ -3,7 +3,10 @@
 also run with another innovation_std and with the given bootstrap step.
 
 The deterministic blanks (tracking_dynamics, simulate_radar, initial_cloud, credibility_interval,
-run_particle_filter) are compared with the reference on seeded random inputs of several sizes.
+run_particle_filter) are compared with the reference on random inputs of several sizes. Every case, and
+the seed of every generator a student's function is given, is drawn from ``cases.rng(stream)``, a
+stream of the submission seed (each check's stream is its old fixed seed), so that no two submissions
+see the same cases.
 ``pf_step`` is stochastic, so its test is statistical (the second half of this module): weights
 normalised and following step (d), the diagnostics it reports in ``info`` (exact), resampling
 following the fitness weights (chi-square), the spread and centre of the artificial process noise
@@ -11,7 +14,7 @@ following the fitness weights (chi-square), the spread and centre of the artific
 reference runs. Each statistical check states its false-fail probability for a correct step,
 derived from its statistic's distribution; together they stay below ``FALSE_FAIL_TOTAL`` = 1e-6.
 tests/test_reentry_pf_reference.py shows the reference passing every check and every catalogued
-pf_step mistake failing on each of 21 seeds, and the posterior statistic Gaussian over 200 seeds.
+pf_step mistake failing on each of 21 seeds, and the posterior statistic Gaussian over 400 submission seeds.
 """
 
 from __future__ import annotations
@@ -26,6 +29,7 @@ import numpy as np
 from scipy import stats
 
 import solutions.reentry_pf.reference as ref
+from autograder.hidden_tests import cases
 from autograder.hidden_tests.diagnosis import diagnosed
 from autograder.hidden_tests.isolate import isolate
 from autograder.labs import lab_of
@@ -35,8 +39,8 @@ from course.falling_object import DT, INNOVATION_STD, SIGMA, FilterHistory
 
 BLANKS = lab_of(__name__).blanks()
 """The lab's blanks, from its notebook: each check isolates the student's function with them."""
-PF_STEP_SEED = 4004
-"""The fixed seed of pf_step's statistical test: grading is reproducible."""
+PF_STEP_STREAM = 4004
+"""The stream of pf_step's statistical test: its draws come from cases.rng(PF_STEP_STREAM, k), one k per use."""
 
 # =============================================================================================
 # The deterministic blanks: compared with the reference on seeded random inputs
@@ -49,7 +53,7 @@ def _random_states(rng: np.random.Generator, count: int) -> np.ndarray:
 @diagnosed
 def check_tracking_dynamics(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(4001)
+    rng = cases.rng(4001)
     for N in (1, 7, 1000):
         x = _random_states(rng, N)
         label = f"tracking_dynamics(t, x) for a cloud x of shape (3, {N})"
@@ -63,17 +67,19 @@ def check_tracking_dynamics(func: Callable) -> None:
         check_close(f, ref.tracking_dynamics(0.0, x), label, rtol=1e-10, atol=1e-9, show_expected=False)
 
 
-def simulate_radar_cases(seed: int = 4002) -> list[tuple[np.ndarray, np.ndarray, float, int]]:
+def simulate_radar_cases() -> list[tuple[np.ndarray, np.ndarray, float, int]]:
     """(x0, t, sigma, rng seed) of the hidden test: lab-like starts and grids of 2 to 301 times, with
     steps of 0.1-0.2 s that do not start at 0. The long ones reach the dense air, where a loose
-    tolerance shows; the object stays above 1 km."""
-    rng = np.random.default_rng(seed)
-    cases = []
+    tolerance shows. On every seed the object stays above 1 km: the lowest start, the fastest and the
+    least braked (beta up to 20000; the lab's is 19161) is still 1.1 km up after 30 s, where a beta of
+    30000 would reach -1.5 km."""
+    rng = cases.rng(4002)
+    radar_cases = []
     for n, step in ((2, 0.1), (40, 0.2), (160, 0.15), (301, 0.1)):
-        x0 = np.array([rng.uniform(60_000.0, 70_000.0), rng.uniform(2_500.0, 3_200.0), rng.uniform(12_000.0, 30_000.0)])
+        x0 = np.array([rng.uniform(60_000.0, 70_000.0), rng.uniform(2_500.0, 3_200.0), rng.uniform(12_000.0, 20_000.0)])
         t = rng.uniform(0.0, 5.0) + step * np.arange(n)
-        cases.append((x0, t, float(rng.uniform(100.0, 800.0)), int(rng.integers(2**31))))
-    return cases
+        radar_cases.append((x0, t, float(rng.uniform(100.0, 800.0)), int(rng.integers(2**63))))
+    return radar_cases
 
 
 @diagnosed
@@ -101,9 +107,9 @@ def check_simulate_radar(func: Callable) -> None:
 @diagnosed
 def check_initial_cloud(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(4003)
+    rng = cases.rng(4003)
     for N in (1, 5, 2000):
-        b0, seed = float(rng.uniform(50_000.0, 70_000.0)), int(rng.integers(2**31))
+        b0, seed = float(rng.uniform(50_000.0, 70_000.0)), int(rng.integers(2**63))
         x, w = check_pair(func(b0, N, np.random.default_rng(seed)), f"initial_cloud(b0, {N}, rng)", "x", "w")
         x = check_array(x, f"the prior cloud with N = {N}", (3, N), "One column per particle: rows h, v, beta.")
         w = check_array(w, f"the prior weights with N = {N}", (N,))
@@ -114,12 +120,12 @@ def check_initial_cloud(func: Callable) -> None:
         check_close(w, want_w, f"the prior weights for N = {N}", "Equal weights 1/N.", rtol=1e-12, atol=0.0, show_expected=False)
 
 
-def credibility_cases(seed: int = 4005) -> list[tuple[np.ndarray, np.ndarray, float | np.ndarray]]:
+def credibility_cases() -> list[tuple[np.ndarray, np.ndarray, float | np.ndarray]]:
     """(samples, weights, p) of the hidden test: N from 1 to 5000, weights from flat to a few heavy
-    ones, some exactly zero, and p single numbers or arrays. Random weights put no cumulative weight
-    exactly on a quantile's order, so the interval is unambiguous."""
-    rng = np.random.default_rng(seed)
-    cases = []
+    ones, some exactly zero, and p single numbers or arrays, with p = 0 (the median) and p = 100
+    (orders 0 and 1, where zero weights at the ends make several samples reach the order at once)."""
+    rng = cases.rng(4005)
+    found = []
     for N, concentration in ((1, 1.0), (2, 1.0), (7, 0.3), (50, 1.0), (300, 0.05), (2000, 1.0), (5000, 5.0)):
         samples = rng.normal(rng.uniform(-1e4, 1e4), rng.uniform(1.0, 1e3), N)
         weights = rng.dirichlet(np.full(N, concentration)) if N > 1 else np.ones(1)
@@ -127,8 +133,35 @@ def credibility_cases(seed: int = 4005) -> list[tuple[np.ndarray, np.ndarray, fl
             weights[rng.choice(N, N // 5, replace=False)] = 0.0  # particles with no weight left
         weights = weights * rng.uniform(0.5, 2.0)  # not normalised: the function normalises
         for p in (90.0, 50.0, float(rng.uniform(1.0, 99.0)), np.array([0.0, 50.0, 90.0]), np.array([100.0, 5.0])):
-            cases.append((samples, weights, p))
-    return cases
+            found.append((samples, weights, p))
+    return found
+
+
+def acceptable_quantiles(samples: np.ndarray, weights: np.ndarray, orders: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """The smallest and the largest sample that a correct weighted quantile of each order may return.
+
+    The text's rule, the first sorted sample whose normalised cumulative weight F_i reaches the order
+    a, is decided by rounding wherever some F_i lies within rounding of a: at a = 0 and a = 1 (p = 100)
+    always, and at equal weights. Every correct answer computes F_i = (w_1 + ... + w_i) / total in some
+    order: accumulated one by one (np.cumsum, a loop), normalised before or after, divided by the last
+    cumulative weight or by a pairwise sum. Each of those is within 2N u of the exact F_i (u = 2^-53:
+    at most N - 1 roundings in the running sum of non-negative terms, each at most u times the total,
+    as many in the total, and one in the division), and the order (1 -+ p/100) / 2 is within 2u of
+    its exact value. So a correct answer's index is the first i with F_i >= a' for some a' within
+    (2N + 2) u of a. F here is itself computed in floating point, within 2N u, and the tolerance
+    4 (N + 2) u covers both. The answers accepted are the sorted samples from the first i with
+    F_i >= a - tolerance to the first with F_i >= a + tolerance (the last sample if none), and
+    nothing else: a mistake that moves the order or the cumulative weights by more than rounding
+    still fails.
+    """
+    order = np.argsort(samples, kind="stable")
+    s = samples[order]
+    F = np.cumsum(weights[order]) / np.sum(weights)
+    tolerance = 4 * (s.shape[0] + 2) * 2.0**-53
+    last = s.shape[0] - 1
+    first = np.minimum(np.searchsorted(F, orders - tolerance), last)
+    final = np.minimum(np.searchsorted(F, orders + tolerance), last)
+    return s[first], s[final]
 
 
 @diagnosed
@@ -141,10 +174,15 @@ def check_credibility_interval(func: Callable) -> None:
         lo, hi = check_pair(func(samples.copy(), weights.copy(), np.copy(p) if shape else p), label, "lo", "hi")
         got = np.stack([check_array(lo, f"lo of {label}", shape, "lo and hi have the shape of p."),
                         check_array(hi, f"hi of {label}", shape, "lo and hi have the shape of p.")])
-        check_close(got, np.stack(ref.credibility_interval(samples, weights, p)), label,
-                    "Sort the samples and carry their weights along (weights[order]); the quantile of order a is the "
-                    "first sorted sample whose normalised cumulative weight reaches a; the orders are (1 -+ p/100) / 2.",
-                    rtol=0.0, atol=0.0, show_expected=False)
+        orders = np.stack([0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200])
+        smallest, largest = acceptable_quantiles(samples, weights, orders)
+        if not (np.all(np.isin(got, samples)) and np.all((smallest <= got) & (got <= largest))):
+            raise AssertionError(
+                f"{label} is not right. Sort the samples and carry their weights along (weights[order]); the "
+                "quantile of order a is the first sorted sample whose normalised cumulative weight reaches a; the "
+                "orders are (1 -+ p/100) / 2. (Where rounding decides which sample reaches an order first, every "
+                "sample it could pick is accepted.)"
+            )
 
 
 RUN_HINTS = {
@@ -164,15 +202,15 @@ RUN_HINTS = {
 @diagnosed
 def check_run_particle_filter(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(4006)
+    rng = cases.rng(4006)
     bootstrap = functools.partial(falling_object.bootstrap_step, dynamics=ref.tracking_dynamics)
-    cases = ((1, 50, {}), (6, 200, {}), (25, 1000, {}),
+    runs = ((1, 50, {}), (6, 200, {}), (25, 1000, {}),
              (12, 300, {"innovation_std": np.array([30.0, 20.0, 40.0])}),
              (12, 300, {"step": bootstrap, "innovation_std": np.array([10.0, 10.0, 50.0])}))
-    for n_times, N, options in cases:
+    for n_times, N, options in runs:
         t = DT * np.arange(n_times)
         b = rng.uniform(55_000.0, 65_000.0) - rng.uniform(2_500.0, 3_500.0) * t + SIGMA * rng.standard_normal(n_times)
-        seed = int(rng.integers(2**31))
+        seed = int(rng.integers(2**63))
         history = func(b.copy(), N, np.random.default_rng(seed), **options)
         if not isinstance(history, FilterHistory):
             raise AssertionError(f"run_particle_filter should return a FilterHistory, not {type(history).__name__}.")
@@ -196,7 +234,7 @@ def check_run_particle_filter(func: Callable) -> None:
 # state (so they share one propagated candidate x^ and one fitness), and the families' ballistic
 # coefficients are 5000 apart, 1000 innovation standard deviations, so every new particle names
 # its parent's family without doubt (beta does not change in the propagation). The prior weights
-# are random within a family, with fixed family totals, and the particles come in a seeded random
+# are random within a family, with fixed family totals, and the particles come in a random
 # order. Two readings are used: one near the cloud (the fitness shapes the resampling), and one
 # 40 sigma below every particle, where exp(-(h - b)^2 / (2 sigma^2)) underflows to zero for all
 # of them unless the step works with log-weights.
@@ -218,7 +256,10 @@ OTHER_INNOVATION_STD = np.array([40.0, 250.0, 2.0])
 """A second setting of the keyword innovation_std for the innovation check (beta's stays far below
 the 5000 between the families)."""
 ALPHA_POSTERIOR = 3e-7
-"""Posterior of beta after a whole run, against an ensemble of reference runs."""
+"""Posterior of beta after a whole run, against the fixed ensemble of reference runs (over the
+submission seeds, with the ensemble as shipped: see check_posterior)."""
+POSTERIOR_SIGMAS = 8.0
+"""check_posterior's tolerance, in standard deviations s_R of the reference ensemble."""
 TIE_BOUND = 1e-15
 """Bound on the probability that two fresh innovations coincide exactly (see check_innovation)."""
 FALSE_FAIL_TOTAL = ALPHA_RESAMPLING + ALPHA_INNOVATION + ALPHA_POSTERIOR + TIE_BOUND
@@ -257,10 +298,11 @@ class FamilyCase:
     name: str
 
 
-def family_case(offsets: np.ndarray, seed: int, name: str) -> FamilyCase:
-    """The K = 3 family test bed with propagated altitudes b_next + offsets, shuffled by ``seed``."""
+def family_case(offsets: np.ndarray, name: str) -> FamilyCase:
+    """The K = 3 family test bed with propagated altitudes b_next + offsets, shuffled and weighted by a
+    draw of the submission seed (the family totals, and so p, are the same for every seed)."""
     f = ref.tracking_dynamics
-    rng = np.random.default_rng([seed, 7])
+    rng = _rng(9)
     K = FAMILY_BETA.shape[0]
     # family states chosen so that the Forward Euler candidate x^_1 = h - dt v lands at b + offset
     states = np.vstack([READING + offsets + DT * FAMILY_SPEED, np.full(K, FAMILY_SPEED), FAMILY_BETA])
@@ -277,12 +319,12 @@ def family_case(offsets: np.ndarray, seed: int, name: str) -> FamilyCase:
     return FamilyCase(states[:, family], w, READING, family, x_hat, p / p.sum(), name)
 
 
-def near_case(seed: int) -> FamilyCase:
-    return family_case(NEAR_OFFSETS, seed, "a reading within 2 sigma of the cloud")
+def near_case() -> FamilyCase:
+    return family_case(NEAR_OFFSETS, "a reading within 2 sigma of the cloud")
 
 
-def far_case(seed: int) -> FamilyCase:
-    return family_case(FAR_OFFSETS, seed, "a reading 40 sigma below every particle")
+def far_case() -> FamilyCase:
+    return family_case(FAR_OFFSETS, "a reading 40 sigma below every particle")
 
 
 def _run_step(pf_step: PfStep, case: FamilyCase, rng: np.random.Generator, **options: object) -> tuple[np.ndarray, np.ndarray]:
@@ -329,17 +371,18 @@ def _parent_family(case: FamilyCase, x_new: np.ndarray) -> np.ndarray:
     return family
 
 
-def _rng(seed: int, stream: int) -> np.random.Generator:
-    return np.random.default_rng([seed, stream])
+def _rng(stream: int) -> np.random.Generator:
+    """The generator of one use within pf_step's test: a stream of the submission seed."""
+    return cases.rng(PF_STEP_STREAM, stream)
 
 
-def _cases(seed: int, readings: tuple[str, ...]) -> list[tuple[FamilyCase, int]]:
+def _cases(readings: tuple[str, ...]) -> list[tuple[FamilyCase, int]]:
     """The requested test-bed inputs ("near", "far") with their rng stream numbers."""
     builders = {"near": (near_case, 0), "far": (far_case, 1)}
-    return [(builders[r][0](seed), builders[r][1]) for r in readings]
+    return [(builders[r][0](), builders[r][1]) for r in readings]
 
 
-def check_weights(pf_step: PfStep, seed: int = 0, readings: tuple[str, ...] = ("near", "far")) -> None:
+def check_weights(pf_step: PfStep, readings: tuple[str, ...] = ("near", "far")) -> None:
     """The returned weights are finite, non-negative, sum to 1, and follow step (d).
 
     Exact check (false-fail probability 0): given the new particles, step (d) fixes the weights,
@@ -347,8 +390,8 @@ def check_weights(pf_step: PfStep, seed: int = 0, readings: tuple[str, ...] = ("
     the parent's propagated candidate before the innovation. Both readings are tried; the far one
     overflows or underflows a step that does not work with log-weights.
     """
-    for case, stream in _cases(seed, readings):
-        x_new, w_new = _run_step(pf_step, case, _rng(seed, 1 + stream))
+    for case, stream in _cases(readings):
+        x_new, w_new = _run_step(pf_step, case, _rng(1 + stream))
         if np.any(w_new < 0):
             raise AssertionError(f"Some weights are negative ({case.name}).")
         total = float(np.sum(w_new))
@@ -381,7 +424,7 @@ def resampling_threshold(alpha: float = RESAMPLING_NOMINAL_TAIL, df: int = 2) ->
     return float(stats.chi2.isf(alpha, df))
 
 
-def check_resampling(pf_step: PfStep, seed: int = 0, readings: tuple[str, ...] = ("near", "far")) -> None:
+def check_resampling(pf_step: PfStep, readings: tuple[str, ...] = ("near", "far")) -> None:
     """Resampling draws parents with the fitness weights (b) and with replacement.
 
     For a correct step the family counts (n_1, n_2, n_3) of the N = 12000 new particles are
@@ -394,8 +437,8 @@ def check_resampling(pf_step: PfStep, seed: int = 0, readings: tuple[str, ...] =
     """
     K = FAMILY_BETA.shape[0]
     threshold = resampling_threshold()
-    for case, stream in _cases(seed, readings):
-        x_new, _ = _run_step(pf_step, case, _rng(seed, 3 + stream))
+    for case, stream in _cases(readings):
+        x_new, _ = _run_step(pf_step, case, _rng(3 + stream))
         counts = np.bincount(_parent_family(case, x_new), minlength=K)
         statistic = chi2_counts(counts, case.p)
         if statistic > threshold:
@@ -415,16 +458,16 @@ def innovation_bounds(n: int, alpha: float = ALPHA_INNOVATION / INNOVATION_TAILS
     return float(stats.chi2.ppf(alpha, n)), float(stats.chi2.isf(alpha, n)), float(stats.norm.isf(alpha))
 
 
-def check_info(pf_step: PfStep, seed: int = 0) -> None:
+def check_info(pf_step: PfStep) -> None:
     """With info={}, the step reports the ESS of its resampling weights and the parents it drew.
 
     Exact check (false-fail probability 0): the ESS of the fitness weights (b) follows from the
     input alone, and each reported parent must belong to the family that the new particle's beta
     names.
     """
-    case = near_case(seed)
+    case = near_case()
     info: dict = {}
-    x_new, _ = _run_step(pf_step, case, _rng(seed, 7), info=info)
+    x_new, _ = _run_step(pf_step, case, _rng(7), info=info)
     missing = [key for key in ("ess", "parents") if key not in info]
     if missing:
         raise AssertionError(f"pf_step(..., info=info) should store {missing} in the dict info: "
@@ -444,7 +487,7 @@ def check_info(pf_step: PfStep, seed: int = 0) -> None:
                              "indices k that you used in x_hat[:, k].")
 
 
-def check_innovation(pf_step: PfStep, seed: int = 0, innovation_std: np.ndarray | None = None) -> None:
+def check_innovation(pf_step: PfStep, innovation_std: np.ndarray | None = None) -> None:
     """New particles are the parents' propagated candidates plus fresh N(0, D) innovations.
 
     With z = (x_new - x^(k_l)) / D^(1/2) per coordinate, a correct step gives N independent
@@ -459,13 +502,13 @@ def check_innovation(pf_step: PfStep, seed: int = 0, innovation_std: np.ndarray 
     probability 2^-32 (a generous bound for 53-bit doubles), the union over the N^2/2 = 7.2e7
     pairs is below 7.2e7 x 2^-96 < 1e-15 (for each of the two runs; TIE_BOUND covers both).
     """
-    case = near_case(seed)
+    case = near_case()
     if innovation_std is None:  # the default: the handout's setting
         std, options, stream = INNOVATION_STD, {}, 5
     else:
         std, options, stream = np.asarray(innovation_std, dtype=float), {"innovation_std": np.array(innovation_std)}, 8
     stds = ", ".join(f"{value:g}" for value in std)
-    x_new, _ = _run_step(pf_step, case, _rng(seed, stream), **options)
+    x_new, _ = _run_step(pf_step, case, _rng(stream), **options)
     N = x_new.shape[1]
     distinct = np.unique(x_new, axis=1).shape[1]
     if distinct < N:
@@ -508,6 +551,9 @@ def final_beta_mean(pf_step: PfStep, b: np.ndarray, N: int, rng: np.random.Gener
 def reference_ensemble(n_runs: int = POSTERIOR_RUNS, N: int = POSTERIOR_PARTICLES) -> np.ndarray:
     """Final posterior means of beta from n_runs reference runs on the shipped data (own seeds)."""
     b = falling_object.load().b
+    # Fixed seeds, not the submission seed: the ensemble is the yardstick every submission is measured
+    # against, computed once per grading process (prepare) and the same for all; what a submission's
+    # seed decides is its own run alone (check_posterior), and a student learns nothing from it.
     runs = [final_beta_mean(ref.pf_step, b, N, np.random.default_rng([2019, 12, r])) for r in range(n_runs)]
     result = np.array(runs)
     result.setflags(write=False)
@@ -520,34 +566,33 @@ def prepare() -> None:
     reference_ensemble()
 
 
-def posterior_threshold(n_runs: int = POSTERIOR_RUNS, alpha: float = ALPHA_POSTERIOR) -> float:
-    """Bound on |m - mean| / (std sqrt(1 + 1/R)): Student's t with R - 1 degrees of freedom,
-    two-sided tail alpha."""
-    return float(stats.t.isf(alpha / 2, n_runs - 1))
-
-
-def check_posterior(pf_step: PfStep, seed: int = 0) -> float:
+def check_posterior(pf_step: PfStep) -> float:
     """After a run over the shipped data, the posterior mean of beta agrees with the reference's.
 
-    The student's run (N = 1000, all 300 steps, the reference prior cloud, seed-derived rng) gives
-    m; R = 30 reference runs with their own seeds give the ensemble mean m_R and standard
-    deviation s_R. For a correct step m and the ensemble are independent draws of one
-    distribution; the particle filter's central limit theorem (Chopin 2004) makes it Gaussian,
-    so (m - m_R) / (s_R sqrt(1 + 1/R)) follows Student's t with R - 1 = 29 degrees of freedom,
-    and the threshold with two-sided tail 3e-7 (6.7 ensemble standard deviations) fails a
-    correct step with probability 3e-7. tests/ checks the Gaussian shape on 200 seeds.
+    The student's run (N = 1000, all 300 steps, the reference prior cloud, a generator drawn from the
+    submission seed) gives m; R = 30 reference runs with fixed seeds give the ensemble mean m_R and
+    standard deviation s_R, the same for every submission. The check fails when
+    |m - m_R| > POSTERIOR_SIGMAS s_R = 8 s_R. Over submission seeds only m varies: for a correct step
+    it is Gaussian (the particle filter's central limit theorem, Chopin 2004) with some mean mu and
+    standard deviation sigma, and the false-fail probability is P(|m - m_R| > 8 s_R) with the
+    ensemble as it is. tests/test_reentry_pf_reference.py estimates mu and sigma from 400 submission
+    seeds, checks the Gaussian shape, and bounds that probability by 2e-8, below 3e-7, with sigma
+    and |mu - m_R| at their upper 1e-7 confidence limits (point estimate 2e-12). (The old threshold,
+    6.7 s_R sqrt(1 + 1/R) from Student's t, had tail 3e-7 on average over ensembles; for the shipped
+    one its point estimate is 3e-9, but its bound at the same confidence 2e-6, so 400 seeds could not
+    show that it held.)
     Returns m.
     """
     ensemble = reference_ensemble()
     b = falling_object.load().b
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
-        m = final_beta_mean(pf_step, b, POSTERIOR_PARTICLES, _rng(seed, 6))
+        m = final_beta_mean(pf_step, b, POSTERIOR_PARTICLES, _rng(6))
     for warning in caught:
         if issubclass(warning.category, RuntimeWarning):
             raise AssertionError(f"pf_step gave the warning '{warning.message}' while filtering the shipped data.")
     centre, spread = float(ensemble.mean()), float(ensemble.std(ddof=1))
-    tolerance = posterior_threshold() * spread * np.sqrt(1 + 1 / ensemble.shape[0])
+    tolerance = POSTERIOR_SIGMAS * spread
     if not np.isfinite(m) or abs(m - centre) > tolerance:
         raise AssertionError(
             f"After filtering the shipped data with N = {POSTERIOR_PARTICLES} particles, the posterior mean "
@@ -557,19 +602,19 @@ def check_posterior(pf_step: PfStep, seed: int = 0) -> float:
     return m
 
 
-def statistical_checks(pf_step: PfStep, seed: int) -> None:
-    """Every statistical check, cheapest first. A correct step fails with probability below
-    FALSE_FAIL_TOTAL."""
-    check_weights(pf_step, seed)
-    check_info(pf_step, seed)
-    check_resampling(pf_step, seed)
-    check_innovation(pf_step, seed)
-    check_innovation(pf_step, seed, OTHER_INNOVATION_STD)
-    check_posterior(pf_step, seed)
+def statistical_checks(pf_step: PfStep) -> None:
+    """Every statistical check, cheapest first, on the draws of the current submission seed. A correct
+    step fails with probability below FALSE_FAIL_TOTAL over the submission seeds."""
+    check_weights(pf_step)
+    check_info(pf_step)
+    check_resampling(pf_step)
+    check_innovation(pf_step)
+    check_innovation(pf_step, OTHER_INNOVATION_STD)
+    check_posterior(pf_step)
 
 
 @diagnosed
-def check_pf_step(func: Callable, seed: int = PF_STEP_SEED) -> None:
+def check_pf_step(func: Callable) -> None:
     """The statistical test of pf_step, with the reference tracking_dynamics."""
     # the statistical checks turn warnings into failures with a hint about log-weights
-    statistical_checks(isolate(func, ref, BLANKS, warnings_fail=False), seed)
+    statistical_checks(isolate(func, ref, BLANKS, warnings_fail=False))

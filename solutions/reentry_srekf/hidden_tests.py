@@ -1,6 +1,7 @@
 """Hidden tests of the reentry-srekf lab: each ``check_<blank>`` compares a student's blank with
 ``solutions.reentry_srekf.reference`` on seeded random states, random upper-triangular square roots of
-sizes 2 to 7 and random index sets (head, tail, segment, non-contiguous, non-ascending).
+sizes 2 to 7 and random index sets (head, tail, segment, non-contiguous, non-ascending). Every case is
+drawn from ``cases.rng(stream)``, a stream of the submission seed (each check's stream is its old fixed seed).
 
 Square roots are compared through S^T S on the correlation scale (``check_square_root``): the sign
 of each row of an upper-triangular square root is free, so the tests are invariant to it."""
@@ -13,6 +14,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 import solutions.reentry_srekf.reference as ref
+from autograder.hidden_tests import cases
 from autograder.hidden_tests.diagnosis import diagnosed
 from autograder.hidden_tests.isolate import isolate
 from autograder.labs import lab_of
@@ -54,10 +56,10 @@ def _index_sets(rng: np.random.Generator, n: int) -> list[tuple[str, np.ndarray]
     ]
 
 
-def _check_state_function(func: Callable, name: str, reference: Callable, shape: tuple[int, ...], seed: int,
+def _check_state_function(func: Callable, name: str, reference: Callable, shape: tuple[int, ...], stream: int,
                           hint: str) -> None:
     func = isolate(func, ref, BLANKS)
-    for x in _random_states(np.random.default_rng(seed)):
+    for x in _random_states(cases.rng(stream)):
         label = f"{name}(x) at x = [{x[0]:.1f}, {x[1]:.1f}, {x[2]:.3g}]"
         value = check_array(func(x.copy()), label, shape, hint)
         check_close(value, reference(x), label, hint, rtol=1e-9, atol=1e-12 * (1 + np.max(np.abs(reference(x)))),
@@ -91,7 +93,7 @@ def check_radar_jacobian(func: Callable) -> None:
 @diagnosed
 def check_marginal(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(3305)
+    rng = cases.rng(3305)
     for n in SIZES:
         S, mu = _random_sqrt(rng, n), rng.standard_normal(n)
         for what, idx in _index_sets(rng, n):
@@ -108,7 +110,7 @@ def check_marginal(func: Callable) -> None:
 @diagnosed
 def check_conditional(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(3306)
+    rng = cases.rng(3306)
     for n in SIZES:
         S, mu = _random_sqrt(rng, n), rng.standard_normal(n)
         std = np.sqrt(np.sum(S**2, axis=0))
@@ -135,22 +137,22 @@ def _update_cases(rng: np.random.Generator) -> list[tuple[str, np.ndarray, np.nd
     well-conditioned case, up to 1e5 for a badly conditioned one, where the covariance form loses
     about ten digits and the square-root form none).
     """
-    cases = []
+    updates = []
     for n in SIZES:
         S = _random_sqrt(rng, n)
-        cases.append((f"a well-conditioned Gaussian with n = {n}", rng.standard_normal(n), S, 1.0))
+        updates.append((f"a well-conditioned Gaussian with n = {n}", rng.standard_normal(n), S, 1.0))
         # columns over twelve decades and one nearly dependent column: P is badly conditioned
         S_bad = np.linalg.qr(rng.standard_normal((n, n)) + n * np.eye(n), mode="r")
         S_bad[:, -1] = S_bad[:, 0] + 1e-7 * S_bad[:, -1]
         S_bad = np.linalg.qr(S_bad, mode="r") * 10.0 ** rng.uniform(-6.0, 6.0, n)[None, :]
-        cases.append((f"a badly conditioned Gaussian with n = {n}", rng.standard_normal(n), S_bad, 1e5))
-    return cases
+        updates.append((f"a badly conditioned Gaussian with n = {n}", rng.standard_normal(n), S_bad, 1e5))
+    return updates
 
 
 @diagnosed
 def check_sqrt_time_update(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(3308)
+    rng = cases.rng(3308)
     for what, mu, S, ratio in _update_cases(rng):
         n = mu.size
         for q in sorted({n, int(rng.integers(1, n + 2))}):
@@ -180,7 +182,7 @@ def check_sqrt_time_update(func: Callable) -> None:
 @diagnosed
 def check_sqrt_measurement_update(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(3309)
+    rng = cases.rng(3309)
     for what, mu, S, ratio in _update_cases(rng):
         n = mu.size
         for m in sorted({1, int(rng.integers(1, n + 1))}):
@@ -212,7 +214,7 @@ def check_sqrt_measurement_update(func: Callable) -> None:
 @diagnosed
 def check_plot_ballistic_coefficient(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(3307)
+    rng = cases.rng(3307)
     for size in (7, 40):
         t = np.cumsum(rng.uniform(0.05, 0.2, size)) - 0.05
         c_true = 1e-3 + 5e-5 * rng.standard_normal(size)
