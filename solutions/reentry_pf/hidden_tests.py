@@ -262,7 +262,9 @@ POSTERIOR_SIGMAS = 8.0
 """check_posterior's tolerance, in standard deviations s_R of the reference ensemble."""
 TIE_BOUND = 1e-15
 """Bound on the probability that two fresh innovations coincide exactly (see check_innovation)."""
-FALSE_FAIL_TOTAL = ALPHA_RESAMPLING + ALPHA_INNOVATION + ALPHA_POSTERIOR + TIE_BOUND
+HEAVY_BOUND = 1e-9
+"""The false-fail probability of check_heavy_last_particle (at most N (N - 1) 1e-15 with N = 1000)."""
+FALSE_FAIL_TOTAL = ALPHA_RESAMPLING + ALPHA_INNOVATION + ALPHA_POSTERIOR + TIE_BOUND + HEAVY_BOUND
 """check_weights and check_info are exact (false-fail probability 0), so this bounds all the checks together."""
 
 # --- the test bed ------------------------------------------------------------------------------
@@ -487,6 +489,35 @@ def check_info(pf_step: PfStep) -> None:
                              "indices k that you used in x_hat[:, k].")
 
 
+HEAVY_N = 1000
+HEAVY_REST = 1e-15
+"""The weight of every particle but the last in check_heavy_last_particle."""
+
+
+def check_heavy_last_particle(pf_step: PfStep) -> None:
+    """A cloud whose whole weight, but 1e-15 a particle, sits on its last particle, all particles in one
+    state (so the fitness weights are the weights): every resampled parent is that last particle.
+
+    False-fail probability: each of the N = 1000 draws picks another particle with probability
+    (N - 1) 1e-15, so all N pick the last with probability at least 1 - N (N - 1) 1e-15 > 1 - 1e-9.
+    A step that normalises its cumulative weights by another entry than the last, or that cannot reach
+    the last particle, never picks it."""
+    rng = _rng(11)
+    state = np.array([[READING + DT * FAMILY_SPEED], [FAMILY_SPEED], [FAMILY_BETA[0]]])
+    x = np.repeat(state, HEAVY_N, axis=1)
+    w = np.full(HEAVY_N, HEAVY_REST)
+    w[-1] = 1.0 - (HEAVY_N - 1) * HEAVY_REST
+    info: dict = {}
+    result = pf_step(x.copy(), w.copy(), READING, rng, info=info)
+    check_pair(result, "pf_step", "x", "w")
+    parents = check_array(info.get("parents"), "info['parents']", (HEAVY_N,), "One parent index k_l per new particle.")
+    if np.any(parents != HEAVY_N - 1):
+        raise AssertionError(
+            f"With all the weight on the last of {HEAVY_N} particles (every other has weight 1e-15, all in one "
+            f"state), {int(np.sum(parents != HEAVY_N - 1))} resampled parents are another particle. Draw k_l as the "
+            "first index whose cumulative weight, normalised by the total (the last cumulative weight), exceeds u_l.")
+
+
 def check_innovation(pf_step: PfStep, innovation_std: np.ndarray | None = None) -> None:
     """New particles are the parents' propagated candidates plus fresh N(0, D) innovations.
 
@@ -607,6 +638,7 @@ def statistical_checks(pf_step: PfStep) -> None:
     step fails with probability below FALSE_FAIL_TOTAL over the submission seeds."""
     check_weights(pf_step)
     check_info(pf_step)
+    check_heavy_last_particle(pf_step)
     check_resampling(pf_step)
     check_innovation(pf_step)
     check_innovation(pf_step, OTHER_INNOVATION_STD)
