@@ -192,6 +192,19 @@ def test_a_served_blank_answers_only_the_calls_the_reference_makes(kernel):
     assert again == chosen == other_state == -1.0
 
 
+def test_a_served_call_is_the_same_call_by_position_or_by_keyword(kernel):
+    """The reference's run passes u by keyword and leaves the default out; a student's run that passes
+    u by position, or spells the default out, makes the same call, and the grader serves it (a fairness
+    review found castaway-bob's run_rank4 charged for a wrong kalman_step when it passed u by position)."""
+    reference = type(np)("reference")
+    exec("def step(x, u=None, scale=1.0):\n    return x + 100.0 * scale + (0.0 if u is None else u)\n"
+         "def run(x):\n    return [step(x, u=1.0), step(x)]\n", reference.__dict__)
+    source = ("def step(x, u=None, scale=1.0):\n    return -1.0\n"  # a wrong step of the student's own
+              "def run(x):\n    return [step(x, 1.0), step(x, None, 1.0)]\n")
+    student = isolate(kernel(_define(source), "run", earlier=frozenset({"step"})), reference, ("step", "run"))
+    assert student(np.array([1.0])) == [101.0 + 1.0, 101.0]
+
+
 def test_errors_come_back_by_type_with_the_students_line(kernel):
     """A NumPy or builtin exception is re-raised as itself, another keeps its name; the message says
     which line of the student's function raised it."""

@@ -16,8 +16,9 @@ alone (never a number of the reference's):
   the cases with n = 2 and a full R, and with n = 4 and a diagonal R.";
 - nothing more when every case fails.
 
-Outside ``labelled`` (a check that does not use it), ``case`` does nothing and a failure is raised at
-once, as before. The grader's own interruptions (a kernel that is stuck or gone) always pass through.
+An error raised in the student's function (not the check's own AssertionError, whose message names
+its case) is told on which case it was raised. Outside ``labelled`` (a check that does not use it),
+``case`` does nothing and a failure is raised at once, as before. The grader's own interruptions (a kernel that is stuck or gone) always pass through.
 """
 
 from __future__ import annotations
@@ -71,6 +72,9 @@ def case(**properties: str) -> Iterator[None]:
     except _interruptions():
         raise
     except Exception as error:  # noqa: BLE001 (a failing case: recorded, the first is raised at the end)
+        if not isinstance(error, AssertionError) and record.properties:
+            # the check's own messages name their case; an error raised in the student's function does not
+            add_to_message(error, f"It was raised on the case with {_listed(list(record.properties.values()))}.")
         record.error = error
     run.cases.append(record)
 

@@ -6,9 +6,9 @@ that a mistake in ``g`` costs only ``g``'s points. Answering *any* call would ma
 oracle: a kernel could ask it about inputs of its own choosing and print the answers. So, for each
 call of the student's ``f``, the grader first runs the reference's ``f`` on a copy of the same
 arguments with every served blank recorded (``ReferenceUse.of``), and answers a call of a served blank
-only if its arguments match one the reference made in that run (numbers within a relative 1e-6, a
-random generator in the same state, the same structure), each as many times as the reference made
-it. Every other call is answered by the student's own ``g`` in the kernel (the stand-in is told
+only if its arguments match one the reference made in that run (by parameter name, whether passed
+by position or by keyword, defaults filled in; numbers within a relative 1e-6, a random generator in
+the same state, the same structure), each as many times as the reference made it. Every other call is answered by the student's own ``g`` in the kernel (the stand-in is told
 ``side.NOT_SERVED``): an honest student whose ``f`` calls ``g`` as the reference does is isolated from
 their own ``g``, and whatever else a student's ``f`` asks is answered by their own code, never by the
 reference.
@@ -16,8 +16,10 @@ reference.
 
 from __future__ import annotations
 
+import contextlib
 import copy
 import dataclasses
+import inspect
 import types
 from collections.abc import Callable
 
@@ -59,12 +61,24 @@ def _matches(got, want) -> bool:
     return False
 
 
+def _bound(function: Callable, args: tuple, kwargs: dict) -> dict | None:
+    """A call's arguments by parameter name, defaults filled in, so that ``f(x, u)`` and ``f(x, u=u)``
+    are the same call; None if they do not fit ``function``'s signature."""
+    try:
+        bound = inspect.signature(function).bind(*args, **kwargs)
+    except (TypeError, ValueError):
+        return None
+    bound.apply_defaults()
+    return dict(bound.arguments)
+
+
 class ReferenceUse:
     """The calls the reference's ``f`` made of each served blank, on one call's arguments."""
 
-    def __init__(self, calls: dict[str, list[tuple[tuple, dict]]] | None):
+    def __init__(self, calls: dict[str, list[dict]] | None, served: dict[str, Callable] | None = None):
         self.calls = calls
-        """blank -> the (args, kwargs) of each call not yet answered; None: answer every call."""
+        """blank -> the arguments (by parameter name) of each call not yet answered; None: answer every call."""
+        self.served = served or {}
 
     @classmethod
     def of(cls, reference_function: Callable, served: dict[str, Callable], args: tuple, kwargs: dict) -> "ReferenceUse":
@@ -75,14 +89,14 @@ class ReferenceUse:
             call_args, call_kwargs = copy.deepcopy((args, kwargs))
         except Exception:  # noqa: BLE001 (an argument that cannot be copied: no guard)
             return cls(None)
-        calls: dict[str, list[tuple[tuple, dict]]] = {name: [] for name in served}
+        calls: dict[str, list[dict]] = {name: [] for name in served}
 
         def recording(name: str, function: Callable) -> Callable:
             def call(*a, **k):
-                try:
-                    calls[name].append(copy.deepcopy((a, k)))
-                except Exception:  # noqa: BLE001 (arguments that cannot be copied are not served)
-                    pass
+                with contextlib.suppress(Exception):  # arguments that cannot be copied are not served
+                    bound = _bound(function, *copy.deepcopy((a, k)))
+                    if bound is not None:
+                        calls[name].append(bound)
                 return function(*a, **k)
             return call
 
@@ -96,14 +110,18 @@ class ReferenceUse:
             recorded(*call_args, **call_kwargs)
         except Exception:  # noqa: BLE001 (the reference may reject the case: what it called until then counts)
             pass
-        return cls(calls)
+        return cls(calls, served)
 
     def take(self, name: str, args: tuple, kwargs: dict) -> bool:
-        """Whether to answer this call of ``name`` with the reference (it is then used up)."""
+        """Whether to answer this call of ``name`` with the reference (it is then used up). Calls are
+        compared by parameter name, whether each argument was passed by position or by keyword."""
         if self.calls is None:
             return True
-        for index, (want_args, want_kwargs) in enumerate(self.calls.get(name, [])):
-            if _matches(args, want_args) and _matches(kwargs, want_kwargs):
+        bound = _bound(self.served[name], args, kwargs) if name in self.served else None
+        if bound is None:
+            return False
+        for index, want in enumerate(self.calls.get(name, [])):
+            if _matches(bound, want):
                 del self.calls[name][index]
                 return True
         return False

@@ -85,6 +85,11 @@ MISTAKES = (
     Mistake("run_rank4", "no-dt", "adds the current's velocity, not the distance it carries Bob in dt",
             "dt * flow(xs[k - 1, :2], t[k - 1])", "flow(xs[k - 1, :2], t[k - 1])",
             hint="Your run_rank4 behaves as if it added the current's velocity, not the distance the current carries Bob in dt."),
+    Mistake("run_rank4", "position-noise", "puts process noise on the position too, Q = sigma_F^2 I_4",
+            "Q = np.diag([0.0, 0.0, sigma_F**2, sigma_F**2])", "Q = sigma_F**2 * np.eye(4)",
+            hint="Your run_rank4 behaves as if Q put process noise on the position too (sigma_F^2 I_4): the random force "
+                 "drives Bob's own velocity w only, so Q = diag(0, 0, sigma_F^2, sigma_F^2). Its effect on the track "
+                 "is small, which is why it shows only in the last digits."),
     Mistake("run_rank4", "handout-Q", "takes the handout's slip Q = sigma_F I_4",
             "Q = np.diag([0.0, 0.0, sigma_F**2, sigma_F**2])", "Q = sigma_F * np.eye(4)",
             hint="Your run_rank4 behaves as if it took the handout's slip Q = sigma_F I: only the velocity takes process noise, with variance sigma_F^2."),

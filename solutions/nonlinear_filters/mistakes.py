@@ -34,6 +34,11 @@ MISTAKES = (
     Mistake("moment_error", "odd-moments-not-zero", "takes (a - 1)!! as the Gaussian moment for odd exponents too",
             "np.where(powers % 2 == 0, double_factorial, 0.0)", "double_factorial",
             hint="Your moment_error behaves as if the Gaussian's odd moments were (a - 1)!! too: they are zero."),
+    Mistake("moment_error", "factorial2-of-minus-one", "takes (a - 1)!! from scipy.special.factorial2, whose value at -1 is 0",
+            "double_factorial = scipy.special.factorial(2 * half) / (2.0**half * scipy.special.factorial(half))",
+            "double_factorial = scipy.special.factorial2(powers - 1)",
+            hint="Your moment_error behaves as if (-1)!! were 0, which scipy.special.factorial2(-1) returns: (-1)!! = 1, "
+                 "the moment E[z^0] = 1 of a coordinate that the monomial leaves out."),
     Mistake("moment_error", "unweighted", "averages the points instead of weighting them",
             "rule = w @ np.prod(Z[:, index], axis=2)", "rule = np.mean(np.prod(Z[:, index], axis=2), axis=0)",
             hint="Your moment_error behaves as if it averaged the points instead of weighting them with w."),
