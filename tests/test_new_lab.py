@@ -26,7 +26,8 @@ NOT_COPIED = {".git", ".venv", "demo", "submitted", "autograded", "feedback", "g
               "grades.csv", "grades.versions.json", "exchange", "inbound", "outbound", ".pytest_cache"}
 """What the course root holds besides the course: git, environments, the demo's class, nbgrader's work."""
 LAB_TESTS = ("tests/test_notebook_structure.py", "tests/test_hidden_tests.py", "tests/test_diagnosis.py",
-             "tests/test_claims.py", "tests/test_release.py", "tests/test_authoring.py")
+             "tests/test_claims.py", "tests/test_release.py", "tests/test_authoring.py", "tests/test_alternatives.py",
+             "tests/test_case_seeds.py", "tests/test_mutants.py")
 NEW, WITH_DATA = "parcel-scales", "parcel-data"
 """The labs added: the template as it comes, and with shipped data (``new --data``)."""
 
@@ -60,7 +61,8 @@ def course(tmp_path_factory) -> Path:
 def test_new_writes_a_lab_that_build_turns_into_one_that_passes_the_tests_of_a_lab(course):
     module = NEW.replace("-", "_")
     assert sorted(p.name for p in (course / "solutions" / module).iterdir() if p.is_file()) == [
-        "__init__.py", "claims.py", "draft.py", "hidden_tests.py", "mistakes.py", "reference.py"]
+        "__init__.py", "alternatives.py", "claims.py", "draft.py", "hidden_tests.py", "mistakes.py", "mutants.py",
+        "reference.py"]
     assert (course / "course" / f"{module}.py").exists() and (course / "release" / NEW / f"{NEW}.ipynb").exists()
     assert not (course / "source" / NEW / "draft.py").exists(), "the draft holds the answers: never in source/"
     assert (course / "course" / "data" / "parcel_data.csv").exists() and (course / "tests" / "test_parcel_data_reference.py").exists()

@@ -22,7 +22,8 @@ from autograder.labs import DUE_DATES, ROOT, Lab
 TEMPLATES = Path(__file__).parent / "template"
 LAB_ID = re.compile(r"[a-z][a-z0-9]*(?:-[a-z0-9]+)*")
 """A lab id: lower-case words of letters and digits joined by hyphens, starting with a letter."""
-HIDDEN_FILES = ("__init__.py", "draft.py", "reference.py", "hidden_tests.py", "mistakes.py", "claims.py")
+HIDDEN_FILES = ("__init__.py", "draft.py", "reference.py", "hidden_tests.py", "mistakes.py", "alternatives.py",
+                "mutants.py", "claims.py")
 """What ``new`` writes into ``solutions/<module>/``, each from ``template/<name>.j2``."""
 README = ROOT / "README.md"
 LABS_TABLE_HEADER = "| lab | topic | follows the handout |"
