@@ -194,7 +194,8 @@ def _random_current(rng: np.random.Generator, steady: bool = False) -> Callable[
 
 def _tidal_current(rng: np.random.Generator) -> Callable[[np.ndarray, float], np.ndarray]:
     """A current the same everywhere that turns in time, of about 0.1-0.6 m/s (a tide)."""
-    mean, a, omega, phase = rng.uniform(-0.3, 0.3, 2), rng.uniform(0.1, 0.3), rng.uniform(1e-4, 1e-3), rng.uniform(0, 6.3)
+    mean, a = rng.uniform(-0.3, 0.3, 2), rng.uniform(0.1, 0.3)
+    omega, phase = rng.uniform(1e-4, 1e-3), rng.uniform(0, 6.3)
 
     def current(p: np.ndarray, t: float) -> np.ndarray:
         p = np.asarray(p, dtype=float)
