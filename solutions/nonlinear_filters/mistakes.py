@@ -2,6 +2,9 @@
 
 from autograder.catalogues.mistakes import Mistake
 
+CHOLESKY_WHY = " A Cholesky factor L also has L L^T = P and its transpose gives an equally valid rule of the same degree, but with other points, so a nonlinear model gives another mean and covariance; this lab, like the authors' sqrtm, fixes the symmetric root so that answers can be compared."
+"""Why a transposed Cholesky factor, a valid choice, loses the points in this lab."""
+
 MISTAKES = (
     Mistake("cubature_points", "radius-n", "puts the points at +-n e_i instead of +-sqrt(n) e_i",
             "Z = np.sqrt(n) * np.vstack", "Z = n * np.vstack",
@@ -59,7 +62,8 @@ MISTAKES = (
     Mistake("sigma_point_predict", "cholesky-transposed",
             "maps the points with the transposed Cholesky factor L^T: the right covariance, other points",
             "Z @ symmetric_sqrt(P)", "Z @ np.linalg.cholesky(P).swapaxes(-1, -2)",
-            hint="Your sigma_point_predict behaves as if it placed the points with the transposed Cholesky factor instead of symmetric_sqrt(P)."),
+            hint="Your sigma_point_predict behaves as if it placed the points with the transposed Cholesky factor instead of symmetric_sqrt(P)."
+                 + CHOLESKY_WHY),
     Mistake("sigma_point_predict", "mean-through-f", "takes f(m) as the predicted mean, as the EKF does",
             "m_new = w @ Y", "m_new = f(m)",
             hint="Your sigma_point_predict behaves as if the predicted mean were f(m), as the EKF has it, instead of the weighted mean of the mapped points."),
@@ -69,7 +73,12 @@ MISTAKES = (
     Mistake("sigma_point_update", "cholesky-transposed",
             "maps the points with the transposed Cholesky factor L^T instead of the symmetric square root",
             "DX = Z @ symmetric_sqrt(P)", "DX = Z @ np.linalg.cholesky(P).swapaxes(-1, -2)",
-            hint="Your sigma_point_update behaves as if it placed the points with the transposed Cholesky factor instead of symmetric_sqrt(P)."),
+            hint="Your sigma_point_update behaves as if it placed the points with the transposed Cholesky factor instead of symmetric_sqrt(P)."
+                 + CHOLESKY_WHY),
+    Mistake("sigma_point_update", "cholesky", "maps the points with the Cholesky factor instead of the symmetric square root",
+            "DX = Z @ symmetric_sqrt(P)", "DX = Z @ np.linalg.cholesky(P)",
+            hint="Your sigma_point_update behaves as if it placed the points with a Cholesky factor L, as Z @ L: those "
+                 "points do not even have the covariance P (Z @ L.T would), and the lab places them with symmetric_sqrt(P)."),
     Mistake("sigma_point_update", "no-R", "forgets the measurement noise R in P_yy", "@ DY + R", "@ DY",
             hint="Your sigma_point_update behaves as if the measurement noise R were left out of P_yy."),
     Mistake("sigma_point_update", "deviations-about-y", "forms P_yy and P_xy from differences about y, not about y_hat",
