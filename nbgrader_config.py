@@ -94,8 +94,8 @@ c.Autograde.sanitize_preprocessors = [
 # autograder/pipeline/verdicts.py).
 c.Autograde.autograde_preprocessors = [
     GradingExecute,
-    InertHtml,
     FlagCheating,
+    InertHtml,
     IgnorePattern,
     ClearMetadataPreprocessor,
     LimitOutput,
@@ -103,6 +103,14 @@ c.Autograde.autograde_preprocessors = [
     AssignLatePenalties,
     CheckCellMetadata,
 ]
+
+# InertHtml comes after FlagCheating, whose notes quote the student's code, so that they are made inert
+# too. ClearMetadataPreprocessor (which nbconvert leaves disabled) keeps only the notebook metadata the
+# pages need: a submission's own (widget state, a title) would otherwise reach any other renderer of
+# the graded notebook, such as a plain `jupyter nbconvert --to html`, which loads widgets from it.
+c.ClearMetadataPreprocessor.enabled = True
+c.ClearMetadataPreprocessor.clear_cell_metadata = False
+c.ClearMetadataPreprocessor.preserve_nb_metadata_mask = {("kernelspec",), ("language_info",)}
 
 # Feedback shows students their graded notebook without the hidden tests' code, with the kit's
 # template over nbgrader's: written answers not graded yet say so, a test cell that earns its marks

@@ -64,12 +64,15 @@ def _as_text(source: str) -> str:
 def inert_markdown(cell: NotebookNode) -> None:
     """Make ``cell`` (Markdown) render to sanitised HTML (see the module's doc)."""
     attachments = cell.get("attachments")
-    page = rendered(cell.source, attachments)
-    clean = sanitise(page)
-    if page == clean:
+    try:
+        page = rendered(cell.source, attachments)
+    except Exception:  # noqa: BLE001 (nbconvert cannot render it, e.g. an attachment it names is missing: show it as text)
+        page = None
+    clean = sanitise(page) if page is not None else None
+    if page is not None and page == clean:
         return
     cell.pop("attachments", None)
-    for source in (_one_line(clean), _as_text(cell.source)):
+    for source in ((_one_line(clean),) if clean is not None else ()) + (_as_text(cell.source),):
         if rendered(source).rstrip("\n") == source:
             cell.source = source
             return
