@@ -205,6 +205,21 @@ def test_a_served_call_is_the_same_call_by_position_or_by_keyword(kernel):
     assert student(np.array([1.0])) == [101.0 + 1.0, 101.0]
 
 
+def test_a_served_call_is_the_same_call_whatever_its_info_dict_held(kernel):
+    """A dict argument is where the call writes what it reports: a run that hands the served step a
+    fresh dict (or one its previous step filled) makes the reference's call (a fairness review found
+    reentry-pf's run_particle_filter graded with the student's own pf_step because of it)."""
+    reference = type(np)("reference")
+    reference.np = np
+    exec("def step(x, info=None):\n    info['calls'] = info.get('calls', 0) + 1\n    return x + 100.0\n"
+         "def run(x):\n    info = {'calls': 0, 'parents': np.arange(3)}\n    return step(step(x, info=info), info=info)\n",
+         reference.__dict__)
+    source = ("def step(x, info=None):\n    return -1.0\n"  # a wrong step of the student's own
+              "def run(x):\n    return step(step(x, info={}), info={'something': 'else'})\n")
+    student = isolate(kernel(_define(source), "run", earlier=frozenset({"step"})), reference, ("step", "run"))
+    assert student(np.array([1.0])) == 201.0
+
+
 def test_errors_come_back_by_type_with_the_students_line(kernel):
     """A NumPy or builtin exception is re-raised as itself, another keeps its name; the message says
     which line of the student's function raised it."""

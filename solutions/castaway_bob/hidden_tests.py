@@ -120,7 +120,8 @@ def check_joseph_covariance(func: Callable) -> None:
         with case(gain=gain, n=_state(n), m=_observed(m)):
             P_new = check_array(func(P.copy(), K.copy(), H.copy(), R.copy()), label, (n, n))
             check_close(P_new, ref.joseph_covariance(P, K, H, R), label, show_expected=False,
-                        hint="Equation (13) must hold for any gain K, not only the optimal one.")
+                        hint="Check each factor and transpose of (13), (I - K H) P (I - K H)^T + K R K^T: it must "
+                             "hold for any gain K, not only the optimal one.")
 
 
 @diagnosed
