@@ -163,3 +163,15 @@ def test_grade_skips_a_folder_not_named_by_a_student_id_and_grades_the_rest(tmp_
         assert (f"Skipped: The folder {str(klass / name)!r} is not named by a student id (letters, digits, _ . -, "
                 "beginning with a letter or a digit); it was not graded.") in printed
     assert "Not graded: 2 folders not named by a student id (listed above)." in printed
+
+
+def test_every_path_in_the_report_is_shown_quoted_if_it_holds_a_control_character():
+    """A file name with an escape sequence (here: up a line, erase it) is quoted in every line of
+    the report, the superseded and renamed lines too, so that it cannot act on the terminal."""
+    from autograder.pipeline.collect import IntakeReport
+    evil = "bob_\x1b[1A\x1b[2K.ipynb"
+    report = IntakeReport("train-kf", ["s002"], [(evil, "not a notebook")], [(evil, "s002")], [], [(evil, "s002")],
+                          [(evil, "bob (s002)", "it is a symbolic link")])
+    lines = report.lines()
+    assert len(lines) == 5 and not any("\x1b" in line for line in lines)
+    assert all(repr(evil) in line for line in lines[1:])

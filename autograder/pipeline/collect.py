@@ -203,8 +203,8 @@ class IntakeReport:
         out += [f"REFUSED {_shown(path)}{f' from {_shown(whose)}' if whose else ''}: {reason}; it is left in the download"
                 for path, whose, reason in self.refused]
         out += [f"NOT COLLECTED {_shown(path)}: {reason}" for path, reason in self.skipped]
-        out += [f"superseded {path}: {student} submitted a newer file" for path, student in self.superseded]
-        out += [f"renamed {path}: collected as {student}'s {self.lab}.ipynb" for path, student in self.renamed]
+        out += [f"superseded {_shown(path)}: {student} submitted a newer file" for path, student in self.superseded]
+        out += [f"renamed {_shown(path)}: collected as {student}'s {self.lab}.ipynb" for path, student in self.renamed]
         if self.missing:
             out.append(f"no submission from: {', '.join(self.missing)}")
         return out
