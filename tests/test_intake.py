@@ -108,15 +108,70 @@ def test_command_reports_unknown_names_and_exits_nonzero(download, tmp_path, cap
     assert (out / "s001/train-kf/timestamp.txt").read_text() == "2026-10-03 01:00:00"
 
 
-def test_two_files_of_one_student_without_times_are_refused(tmp_path):
+def test_two_files_of_one_student_without_times_are_that_students_refusal(tmp_path):
+    """Neither is collected, with the reason, and the rest of the class is (nbgrader would stop the
+    whole collect: "Duplicate submission file")."""
     download = tmp_path / "lms"
     download.mkdir()
-    for name in ("bob_train-kf.ipynb", "bob_train-kf (1).ipynb"):
+    for name in ("bob_train-kf.ipynb", "bob_train-kf (1).ipynb", "alice_train-kf.ipynb"):
         (download / name).write_text(notebook(name))
     students = tmp_path / "students.csv"
     students.write_text(STUDENTS)
-    with pytest.raises(IntakeError, match=r"(?s)Duplicate submission file.*s002: bob_train-kf \(1\)\.ipynb, bob_train-kf\.ipynb"):
-        collect(LAB, download, students, tmp_path / "out")
+    report = collect(LAB, download, students, tmp_path / "out")
+    assert report.students == ["s001"] and tag(tmp_path / "out/s001/train-kf/train-kf.ipynb") == "alice_train-kf.ipynb"
+    reason = ("s002 has 2 notebooks here (bob_train-kf (1).ipynb, bob_train-kf.ipynb) and no submission time in "
+              "each name to choose the newest: none is collected (keep one)")
+    assert sorted(report.skipped) == [("bob_train-kf (1).ipynb", reason), ("bob_train-kf.ipynb", reason)]
+    assert "s002" in report.missing
+
+
+def poc_download(tmp_path, members: dict[str, str], upload="bob_2026-10-09-10-00-00_upload.zip"):
+    """The review's folder download: alice's and carol's notebooks, and bob's zip of ``members``."""
+    download = tmp_path / "lms"
+    download.mkdir()
+    (download / "alice_2026-10-01-10-00-00_train-kf.ipynb").write_text(notebook("alice"))
+    (download / "carol_train-kf.ipynb").write_text(notebook("carol"))
+    with zipfile.ZipFile(download / upload, "w") as archive:
+        for name, text in members.items():
+            archive.writestr(name, text)
+    students = tmp_path / "students.csv"
+    students.write_text(STUDENTS)
+    return download, students
+
+
+def test_a_file_in_a_students_upload_cannot_claim_another_student_or_time(tmp_path):
+    """The student and the time come from the name the LMS wrote (bob's zip), never from a name
+    inside the upload: bob's member named for alice, dated 2099, and his own member dated 2000 are
+    refused, for bob, with the reason; alice keeps her notebook and her time."""
+    download, students = poc_download(tmp_path, {"alice_2099-01-01-00-00-00_x.ipynb": "FORGED BY BOB",
+                                                 "bob_2000-01-01-00-00-00_train-kf.ipynb": notebook("bob-backdated")})
+    out = tmp_path / "out"
+    report = collect(LAB, download, students, out)
+    assert report.students == ["s001", "s003"]
+    assert tag(out / "s001/train-kf/train-kf.ipynb") == "alice"
+    assert (out / "s001/train-kf/timestamp.txt").read_text() == "2026-10-01 10:00:00"
+    assert not (out / "s002").exists()
+    upload = "bob_2026-10-09-10-00-00_upload"
+    assert sorted(report.skipped) == [
+        (f"{upload}/alice_2099-01-01-00-00-00_x.ipynb",
+         f"it is in bob (s002)'s upload {upload}.zip, but its name says it is 'alice''s: a file in an upload is "
+         "the uploader's, so it is not collected"),
+        (f"{upload}/bob_2000-01-01-00-00-00_train-kf.ipynb",
+         f"it is in bob (s002)'s upload {upload}.zip, but its name gives its own submission time: the time is "
+         "the upload's, so it is not collected"),
+    ]
+
+
+def test_a_students_upload_without_times_cannot_stop_the_class(tmp_path):
+    """bob_upload.zip holding alice_x.ipynb made nbgrader refuse a duplicate of alice's and stop the
+    whole collect; now it is bob's refusal, and bob's own notebook beside it is his, at his zip's time."""
+    download, students = poc_download(tmp_path, {"alice_x.ipynb": "FORGED BY BOB", "train-kf.ipynb": notebook("bob")})
+    out = tmp_path / "out"
+    report = collect(LAB, download, students, out)
+    assert report.students == ["s001", "s002", "s003"]
+    assert tag(out / "s001/train-kf/train-kf.ipynb") == "alice" and tag(out / "s002/train-kf/train-kf.ipynb") == "bob"
+    assert (out / "s002/train-kf/timestamp.txt").read_text() == "2026-10-09 10:00:00"
+    assert [path for path, _ in report.skipped] == ["bob_2026-10-09-10-00-00_upload/alice_x.ipynb"]
 
 
 def test_a_student_list_mapping_one_name_twice_is_refused(download, tmp_path):
@@ -163,3 +218,15 @@ def test_grade_skips_a_folder_not_named_by_a_student_id_and_grades_the_rest(tmp_
         assert (f"Skipped: The folder {str(klass / name)!r} is not named by a student id (letters, digits, _ . -, "
                 "beginning with a letter or a digit); it was not graded.") in printed
     assert "Not graded: 2 folders not named by a student id (listed above)." in printed
+
+
+def test_every_path_in_the_report_is_shown_quoted_if_it_holds_a_control_character():
+    """A file name with an escape sequence (here: up a line, erase it) is quoted in every line of
+    the report, the superseded and renamed lines too, so that it cannot act on the terminal."""
+    from autograder.pipeline.collect import IntakeReport
+    evil = "bob_\x1b[1A\x1b[2K.ipynb"
+    report = IntakeReport("train-kf", ["s002"], [(evil, "not a notebook")], [(evil, "s002")], [], [(evil, "s002")],
+                          [(evil, "bob (s002)", "it is a symbolic link")])
+    lines = report.lines()
+    assert len(lines) == 5 and not any("\x1b" in line for line in lines)
+    assert all(repr(evil) in line for line in lines[1:])

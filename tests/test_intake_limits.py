@@ -3,8 +3,13 @@ refuses a zip bomb, an archive inside an archive, too many files, a path that le
 link, naming the student and the reason; the honest student beside it is collected, and the refused
 upload is still in the download."""
 
+import gzip
 import io
+import os
+import subprocess
+import sys
 import tarfile
+import time
 import zipfile
 
 import nbformat
@@ -12,7 +17,7 @@ import pytest
 
 from autograder.__main__ import main
 from autograder.catalogues import submissions
-from autograder.labs import get_lab
+from autograder.labs import ROOT, get_lab
 from autograder.pipeline import intake
 from autograder.pipeline.archives import Limits
 from autograder.pipeline.collect import collect
@@ -201,3 +206,66 @@ def test_the_command_names_the_student_and_exits_nonzero(tmp_path, notebook, cap
 
 def test_the_largest_file_unpacked_is_the_largest_notebook_graded():
     assert Limits().max_file_bytes == intake.MAX_SUBMISSION_BYTES
+
+
+def ext_header(kind: bytes, size: int) -> bytes:
+    """One ustar header block of type ``kind`` (pax ``x``, global ``g``, GNU longname ``L``, longlink
+    ``K``) declaring ``size`` bytes of body."""
+    info = tarfile.TarInfo("././@PaxHeader" if kind in b"xg" else "././@LongLink")
+    info.type, info.size = kind, size
+    return info.tobuf(tarfile.USTAR_FORMAT)
+
+
+@pytest.mark.parametrize("kind, what", [(b"x", "a pax header"), (b"g", "a pax global header"),
+                                        (b"L", "a GNU long name"), (b"K", "a GNU long link name")])
+def test_a_tar_whose_extended_header_declares_too_much_is_refused_before_it_is_read(tmp_path, notebook, kind, what):
+    """tarfile reads a pax or GNU long-name header's whole body into memory and parses it (quadratic on
+    some Pythons: CVE-2024-6232) before any limit applies: the raw headers are scanned first, and one
+    that declares more than 64 KiB is refused. The body here is 10 kB: what it declares is enough."""
+    download = tmp_path / "lms"
+    download.mkdir()
+    (download / "alice_train-kf.ipynb").write_text(notebook)
+    with gzip.open(download / "bob_upload.tar.gz", "wb") as handle:
+        handle.write(ext_header(kind, 400_000_000) + b"0" * 10_000)
+    report, out = run(tmp_path, download)
+    assert report.refused == [("bob_upload.tar.gz", "bob (s002)",
+                               f"its header at byte 0 is {what} of 400,000,000 bytes, more than the 65,536 one may hold")]
+    assert not (out / "s002").exists()
+
+
+def test_a_tar_with_a_malformed_header_is_refused(tmp_path, notebook):
+    """A member, then a header whose checksum is wrong (one byte of its name changed): refused whole
+    (tarfile would end the archive there and unpack the member before it)."""
+    download = tmp_path / "lms"
+    download.mkdir()
+    (download / "alice_train-kf.ipynb").write_text(notebook)
+    info = tarfile.TarInfo("bob_train-kf.ipynb")
+    data = notebook.encode()
+    info.size = len(data)
+    body = data + bytes(-len(data) % 512)
+    with gzip.open(download / "bob_upload.tar.gz", "wb") as handle:
+        header = info.tobuf(tarfile.USTAR_FORMAT)
+        handle.write(header + body + b"c" + header[1:] + body + bytes(1024))
+    report, _ = run(tmp_path, download)
+    assert report.refused == [("bob_upload.tar.gz", "bob (s002)",
+                               f"its header at byte {512 + len(body):,} is malformed (bad checksum)")]
+
+
+def test_a_tar_of_a_few_megabytes_in_a_pax_header_is_refused_quickly(tmp_path, notebook):
+    """The review's archive, smaller: a pax header of 3 MB of ASCII zeros, which took this Python's
+    tarfile (quadratic) far longer than a minute. `collect` refuses it in seconds."""
+    download = tmp_path / "lms"
+    download.mkdir()
+    (download / "alice_train-kf.ipynb").write_text(notebook)
+    with gzip.open(download / "bob_upload.tar.gz", "wb") as handle:
+        handle.write(ext_header(b"x", 3_000_000) + b"0" * 3_000_000 + bytes(1024))
+    students = tmp_path / "students.csv"
+    students.write_text(STUDENTS)
+    started = time.monotonic()
+    done = subprocess.run([sys.executable, "-m", "autograder", "collect", "train-kf", str(download),
+                           "--students", str(students), "--out", str(tmp_path / "out")],
+                          cwd=ROOT, env={**os.environ, "PYTHONPATH": str(ROOT)}, capture_output=True, text=True, timeout=120)
+    assert done.returncode == 1, done.stdout + done.stderr
+    assert ("REFUSED bob_upload.tar.gz from bob (s002): its header at byte 0 is a pax header of 3,000,000 bytes, "
+            "more than the 65,536 one may hold") in done.stdout
+    assert time.monotonic() - started < 60

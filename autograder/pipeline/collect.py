@@ -3,7 +3,8 @@
 An LMS download of one lab (one zip, or a folder of files named by student) goes through nbgrader's
 ZipCollectApp: its extractor unpacks the archives, and our collector, a FileNameCollectorPlugin,
 reads the LMS's name for the student (and the submission time, if the file name carries one) from
-each file's path, and maps the name to our student id with a CSV (``lms_name,student_id``). The
+the name the LMS wrote (a file's path, or for a file unpacked from a student's upload, the upload's
+name: nothing inside an upload can claim another student or another time), and maps the name to our student id with a CSV (``lms_name,student_id``). The
 result is the layout ``python -m autograder grade`` takes:
 ``SUBMISSIONS/<student>/<lab>/<lab>.ipynb``, with nbgrader's ``timestamp.txt`` beside it when the
 LMS gives a submission time. Every file that is not collected is reported with the reason.
@@ -31,7 +32,7 @@ from nbgrader.apps import ZipCollectApp
 from nbgrader.coursedir import CourseDirectory
 from nbgrader.plugins import ExtractorPlugin, FileNameCollectorPlugin
 from nbgrader.utils import capture_log
-from traitlets import Float, Int, Unicode
+from traitlets import Float, Int, List, Unicode
 from traitlets.config import Config
 
 from autograder.labs import ROOT, Lab, get_lab
@@ -43,7 +44,21 @@ DEFAULT_PATTERN = (
     r"(?:(?P<timestamp>\d{4}-\d\d-\d\d[-_T ]\d\d[-:]\d\d(?:[-:]\d\d)?)_)?[^/]*\.ipynb$"
 )
 """A file ``<lms name>_<anything>.ipynb``, or ``<lms name>_<YYYY-MM-DD-HH-MM-SS>_<anything>.ipynb``
-with the submission time, anywhere in the download."""
+with the submission time, anywhere in the download (but inside a student's upload: see StudentIdCollector)."""
+
+
+def unpacked_folder(relative: PurePosixPath) -> str:
+    """Where SafeExtractor unpacks the archive at ``relative`` (in the download), relative to the
+    extracted download: a folder of its name without the archive's suffix (``.tar.gz`` both)."""
+    return (relative.parent / relative.stem.removesuffix(".tar")).as_posix()
+
+
+def _as_notebook(path: str) -> str | None:
+    """An archive's path as the pattern reads it: with ``.ipynb`` for its suffix (None: it cannot take one)."""
+    try:
+        return PurePosixPath(path).with_suffix(".ipynb").as_posix()
+    except ValueError:  # a path whose last part cannot take a suffix ("..")
+        return None
 
 
 class IntakeError(RuntimeError):
@@ -102,8 +117,8 @@ class SafeExtractor(ExtractorPlugin):
                 if source.is_symlink():
                     unpacker.refused.append(Refusal(relative.as_posix(), "it is a symbolic link"))
                 elif source.suffix in self.zip_ext:
-                    stem = source.stem.removesuffix(".tar")
-                    unpacker.unpack(source, target / stem, (relative.parent / stem).as_posix(), relative.as_posix())
+                    folder = unpacked_folder(PurePosixPath(relative.as_posix()))
+                    unpacker.unpack(source, Path(extracted_path) / folder, folder, relative.as_posix())
                 else:
                     shutil.copy(source, target / name)
         self.refused = unpacker.refused
@@ -123,15 +138,27 @@ class Collected:
 class StudentIdCollector(FileNameCollectorPlugin):
     """nbgrader's file-name collector, mapping the LMS's name for a student to our student id.
 
-    ``named_regexp`` is searched in each file's path relative to the extracted download (``/``
-    separators); its group ``student_id`` is the LMS's name, and its optional group ``timestamp``
-    the submission time in ``timezone``. A lab has one notebook, so whatever name the student gave
-    the file, it is collected as ``<lab>.ipynb``.
+    ``named_regexp`` is searched in the name the LMS wrote (``/`` separators): its group
+    ``student_id`` is the LMS's name, and its optional group ``timestamp`` the submission time in
+    ``timezone``. That name is a file's path relative to the extracted download, unless the file
+    was unpacked from a student's upload: an archive of the download (not one of ``lms_archives``)
+    whose own path, read with ``.ipynb`` for its suffix, the pattern matches. Then the student and
+    the time are the archive's; a member whose own path names another student, or gives a time, is
+    not collected, with the reason (refused, not read as the uploader's: it is either an attempt to
+    submit as someone else or at another time, or a mix-up the instructor should see). A lab has
+    one notebook, so whatever name the student gave the file, it is collected as ``<lab>.ipynb``.
+    Of a student's several notebooks the newest is collected (a later path wins a tie, as in
+    nbgrader); when one of them has no time, none is, with the reason: that student's refusal,
+    never an error for the class. The whole download is planned at the first file nbgrader asks
+    about, so that nbgrader only ever sees one notebook per student.
     """
 
     named_regexp = Unicode(DEFAULT_PATTERN, help="Regular expression with the groups student_id and, optionally, timestamp.").tag(config=True)
     students_file = Unicode("", help="CSV with the columns lms_name and student_id.").tag(config=True)
     timezone = Unicode("UTC", help="The time zone of the submission times in file names (IANA name).").tag(config=True)
+    lms_archives = List(Unicode(), help="Archives of the archive folder that the LMS wrote, holding many students' files "
+                        "(their members' names are the LMS's). An archive the pattern does not name is one too; any "
+                        "other archive is the upload of the student its name gives.").tag(config=True)
 
     def __init__(self, **kwargs) -> None:
         super().__init__(**kwargs)
@@ -141,43 +168,124 @@ class StudentIdCollector(FileNameCollectorPlugin):
         self.collected: list[Collected] = []
         self.skipped: list[tuple[str, str]] = []
         """(file, reason) for every file that is not collected."""
+        self.superseded: list[tuple[str, str]] = []
+        """(file, student): a student's older notebook, not collected for a newer one."""
+        self._plan: dict[str, dict] | None = None
+        self._upload_names: dict[str, tuple[str, re.Match]] | None = None
 
     def _relative(self, path: str) -> str:
         extracted = self.parent._format_collect_path(self.parent.extracted_directory)
         return Path(path).relative_to(extracted).as_posix()
 
     def collect(self, submitted_file: str) -> dict | None:
-        relative = self._relative(submitted_file)
-        if Path(submitted_file).suffix not in self.valid_ext:
-            self.skipped.append((relative, "not a notebook"))
-            return None
-        match = re.search(self.named_regexp, relative)
-        if not match:
-            self.skipped.append((relative, "the file name does not match the LMS pattern"))
-            return None
-        name = match.group("student_id")
-        if name not in self.students:
-            self.skipped.append((relative, f"unknown student {name!r}: not in the student list"))
-            return None
-        info = {"student_id": self.students[name], "file_id": f"{self.parent.coursedir.assignment_id}.ipynb"}
+        if self._plan is None:
+            self._plan = self._make_plan()
+        return self._plan.get(self._relative(submitted_file))
+
+    def _uploads(self) -> dict[str, tuple[str, re.Match]]:
+        """Unpacked folder (relative to the extracted download) -> (its archive's path in the download,
+        the pattern's match on it), for each archive that is a student's upload."""
+        if self._upload_names is None:
+            top = Path(self.parent._format_collect_path(self.parent.archive_directory))
+            zip_ext = getattr(getattr(self.parent, "extractor_plugin_inst", None), "zip_ext", None) or [".zip", ".gz"]
+            self._upload_names = {}
+            for root, _, files in os.walk(top):
+                for name in files:
+                    relative = PurePosixPath((Path(root) / name).relative_to(top).as_posix())
+                    if relative.suffix not in zip_ext or relative.as_posix() in self.lms_archives:
+                        continue
+                    path = _as_notebook(relative.as_posix())
+                    match = path and re.search(self.named_regexp, path)
+                    if match:
+                        self._upload_names[unpacked_folder(relative)] = (relative.as_posix(), match)
+        return self._upload_names
+
+    def _upload_of(self, relative: str) -> tuple[str, str, re.Match] | None:
+        """(folder, archive, match) of the student's upload a file was unpacked from, or None."""
+        uploads = self._uploads()
+        for folder in PurePosixPath(relative).parents:
+            if folder.as_posix() in uploads:
+                return (folder.as_posix(), *uploads[folder.as_posix()])
+        return None
+
+    def _label(self, name: str) -> str:
+        return f"{name} ({self.students[name]})" if name in self.students else f"{name!r}, not in the student list"
+
+    def _candidate(self, relative: str) -> Collected | str:
+        """The student and time of one notebook, or why it is not collected."""
+        upload = self._upload_of(relative)
+        if upload:
+            folder, archive, match = upload
+            name = match.group("student_id")
+            inner = re.search(self.named_regexp, PurePosixPath(relative).relative_to(folder).as_posix())
+            where = f"it is in {self._label(name)}'s upload {_shown(archive)}, but its name"
+            if inner and inner.group("student_id") != name:
+                return (f"{where} says it is {inner.group('student_id')!r}'s: a file in an upload is the uploader's, "
+                        "so it is not collected")
+            if inner and inner.groupdict().get("timestamp"):
+                return f"{where} gives its own submission time: the time is the upload's, so it is not collected"
+            if name not in self.students:
+                return f"unknown student {name!r}: not in the student list (its upload {_shown(archive)})"
+        else:
+            match = re.search(self.named_regexp, relative)
+            if not match:
+                return "the file name does not match the LMS pattern"
+            name = match.group("student_id")
+            if name not in self.students:
+                return f"unknown student {name!r}: not in the student list"
         stamp = match.groupdict().get("timestamp")
-        time = parse_time(stamp, self.timezone) if stamp else None
-        if time:
-            info["timestamp"] = time.isoformat()
-        self.collected.append(Collected(relative, info["student_id"], time))
-        return info
+        return Collected(relative, self.students[name], parse_time(stamp, self.timezone) if stamp else None)
+
+    def _make_plan(self) -> dict[str, dict]:
+        """Every file of the extracted download, as nbgrader walks it: the collected notebooks' infos
+        by path; the other files go to ``skipped`` or ``superseded``."""
+        extracted = Path(self.parent._format_collect_path(self.parent.extracted_directory))
+        files = sorted(os.path.join(root, name) for root, _, names in os.walk(extracted) for name in names)
+        by_student: dict[str, list[Collected]] = {}
+        for path in files:
+            relative = Path(path).relative_to(extracted).as_posix()
+            if Path(path).suffix not in self.valid_ext:
+                self.skipped.append((relative, "not a notebook"))
+                continue
+            found = self._candidate(relative)
+            if isinstance(found, str):
+                self.skipped.append((relative, found))
+            else:
+                by_student.setdefault(found.student, []).append(found)
+        plan = {}
+        for student, items in by_student.items():
+            if len(items) > 1 and any(item.time is None for item in items):
+                listed = ", ".join(_shown(item.path) for item in items)
+                reason = (f"{student} has {len(items)} notebooks here ({listed}) and no submission time in each name "
+                          "to choose the newest: none is collected (keep one)")
+                self.skipped += [(item.path, reason) for item in items]
+                continue
+            kept = items[0]
+            for item in items[1:]:  # in path order: a later file wins a tie, as in nbgrader
+                if item.time >= kept.time:
+                    kept = item
+            self.superseded += [(item.path, student) for item in items if item is not kept]
+            self.collected.append(kept)
+            info = {"student_id": student, "file_id": f"{self.parent.coursedir.assignment_id}.ipynb"}
+            if kept.time:
+                info["timestamp"] = kept.time.isoformat()
+            plan[kept.path] = info
+        return plan
 
     def owner(self, refusal: Refusal) -> str | None:
-        """Whose a refused file is, as ``lms name (student id)``: the LMS name the pattern finds in its
-        path, or else in its archive's, read as if it were a notebook; None if neither says."""
-        for path in (refusal.path, refusal.archive):
-            try:
-                match = path and re.search(self.named_regexp, PurePosixPath(path).with_suffix(".ipynb").as_posix())
-            except ValueError:  # a path whose last part cannot take a suffix ("..")
-                match = None
-            if match:
-                name = match.group("student_id")
-                return f"{name} ({self.students[name]})" if name in self.students else f"{name}, not in the student list"
+        """Whose a refused file is, as ``lms name (student id)``: for a member of a student's upload,
+        the upload's student; else the LMS name the pattern finds in its path, read as if it were a
+        notebook; None if it says none."""
+        upload = refusal.archive and self._uploads().get(refusal.archive)
+        if upload:
+            return self._label(upload[1].group("student_id"))
+        if refusal.archive is None and refusal.path in self.lms_archives:
+            return None
+        path = _as_notebook(refusal.path)
+        match = path and re.search(self.named_regexp, path)
+        if match:
+            name = match.group("student_id")
+            return f"{name} ({self.students[name]})" if name in self.students else f"{name}, not in the student list"
         return None
 
 
@@ -203,8 +311,8 @@ class IntakeReport:
         out += [f"REFUSED {_shown(path)}{f' from {_shown(whose)}' if whose else ''}: {reason}; it is left in the download"
                 for path, whose, reason in self.refused]
         out += [f"NOT COLLECTED {_shown(path)}: {reason}" for path, reason in self.skipped]
-        out += [f"superseded {path}: {student} submitted a newer file" for path, student in self.superseded]
-        out += [f"renamed {path}: collected as {student}'s {self.lab}.ipynb" for path, student in self.renamed]
+        out += [f"superseded {_shown(path)}: {student} submitted a newer file" for path, student in self.superseded]
+        out += [f"renamed {_shown(path)}: collected as {student}'s {self.lab}.ipynb" for path, student in self.renamed]
         if self.missing:
             out.append(f"no submission from: {', '.join(self.missing)}")
         return out
@@ -216,17 +324,6 @@ def _shown(path: str) -> str:
     return path if path.isprintable() else repr(path)
 
 
-def _superseded(collected: list[Collected]) -> list[tuple[str, str]]:
-    """The files nbgrader replaced: for each student all but the newest (later files win ties, as in
-    ZipCollectApp, which sees the files in sorted order). nbgrader refuses a student's second file
-    without a time, so here every student with two files has times."""
-    kept: dict[str, Collected] = {}
-    for item in sorted(collected, key=lambda c: c.path):
-        if item.student not in kept or item.time >= kept[item.student].time:
-            kept[item.student] = item
-    return [(c.path, c.student) for c in collected if kept[c.student] is not c]
-
-
 def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: str | None = None,
             zone: str = "UTC", limits: Limits = Limits()) -> IntakeReport:
     """Collect an LMS download of ``lab`` (a zip or a folder) into ``out/<student>/<lab>/<lab>.ipynb``.
@@ -234,8 +331,8 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
     nbgrader's ZipCollectApp does the work in a scratch course folder whose ``submitted/`` is
     ``out``, its archives unpacked within ``limits`` (SafeExtractor). A student's folder
     in ``out`` is replaced by the newest file of this download.
-    Raises IntakeError when nbgrader refuses (e.g. two files of one student and no times to
-    choose between them).
+    Raises IntakeError when nbgrader refuses; a student's own several notebooks without times are
+    that student's refusal, in the report.
     """
     if not download.exists():
         raise IntakeError(f"There is no download {download}.")
@@ -268,6 +365,8 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
         config.ZipCollectApp.collector_plugin = StudentIdCollector
         config.StudentIdCollector.students_file = str(students_file)
         config.StudentIdCollector.timezone = zone
+        if not download.is_dir():
+            config.StudentIdCollector.lms_archives = [download.name]  # the LMS's own zip, whatever its name
         if pattern:
             config.StudentIdCollector.named_regexp = pattern
         app = ZipCollectApp(coursedir=CourseDirectory(config=config), config=config)
@@ -276,18 +375,13 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
         extractor: SafeExtractor | None = app.extractor_plugin_inst
         if not result["success"]:
             errors = "\n".join(line for line in result.get("log", "").splitlines() if line.startswith("[ERROR]"))
-            files: dict[str, list[str]] = {}
-            for item in collector.collected if collector else []:
-                files.setdefault(item.student, []).append(item.path)
-            twice = "".join(f"\n{student}: {', '.join(paths)}" for student, paths in files.items() if len(paths) > 1)
-            raise IntakeError(f"nbgrader zip_collect could not collect {download}:\n{errors or result['error']}"
-                              + (f"\nStudents with several files and no submission times (keep one each):{twice}" if twice else ""))
+            raise IntakeError(f"nbgrader zip_collect could not collect {download}:\n{errors or result['error']}")
     students = sorted({c.student for c in collector.collected})
     return IntakeReport(
         lab.id,
         students,
         collector.skipped,
-        _superseded(collector.collected),
+        collector.superseded,
         sorted(set(collector.students.values()) - set(students)),
         [(c.path, c.student) for c in collector.collected if not c.path.endswith(lab.notebook_name)],
         [(r.path, collector.owner(r), r.reason) for r in extractor.refused],
