@@ -6,7 +6,9 @@ The deterministic blanks (tracking_dynamics, simulate_radar, initial_cloud, cred
 run_particle_filter) are compared with the reference on random inputs of several sizes. Every case, and
 the seed of every generator a student's function is given, is drawn from ``cases.rng(stream)``, a
 stream of the submission seed (each check's stream is its old fixed seed), so that no two submissions
-see the same cases.
+see the same cases. Each case is labelled with the properties that set it apart
+(autograder/hidden_tests/case_kinds.py): one state or a cloud, one reading or several, zero weights, a scalar
+or an array of p, the step and innovation_std of a run.
 ``pf_step`` is stochastic, so its test is statistical (the second half of this module): weights
 normalised and following step (d), the diagnostics it reports in ``info`` (exact), resampling
 following the fitness weights (chi-square), the spread and centre of the artificial process noise
@@ -30,6 +32,7 @@ from scipy import stats
 
 import solutions.reentry_pf.reference as ref
 from autograder.hidden_tests import cases
+from autograder.hidden_tests.case_kinds import case
 from autograder.hidden_tests.diagnosis import diagnosed
 from autograder.hidden_tests.isolate import isolate
 from autograder.labs import lab_of
@@ -57,14 +60,16 @@ def check_tracking_dynamics(func: Callable) -> None:
     for N in (1, 7, 1000):
         x = _random_states(rng, N)
         label = f"tracking_dynamics(t, x) for a cloud x of shape (3, {N})"
-        f = check_array(func(float(rng.uniform(0.0, 30.0)), x.copy()), label, (3, N),
-                        "Return one column of derivatives per particle: rows dh/dt, dv/dt, dbeta/dt.")
-        check_close(f, ref.tracking_dynamics(0.0, x), label, "Check the signs of (1) and (2) and rho(h) = gamma exp(-eta h).",
-                    rtol=1e-10, atol=1e-9, show_expected=False)
+        with case(x="a cloud of one particle (3, 1)" if N == 1 else "a cloud of particles (3, N)"):
+            f = check_array(func(float(rng.uniform(0.0, 30.0)), x.copy()), label, (3, N),
+                            "Return one column of derivatives per particle: rows dh/dt, dv/dt, dbeta/dt.")
+            check_close(f, ref.tracking_dynamics(0.0, x), label, "Check the signs of (1) and (2) and rho(h) = gamma exp(-eta h).",
+                        rtol=1e-10, atol=1e-9, show_expected=False)
     for x in _random_states(rng, 5).T:
         label = "tracking_dynamics(t, x) for one state x of shape (3,)"
-        f = check_array(func(float(rng.uniform(0.0, 30.0)), x.copy()), label, (3,))
-        check_close(f, ref.tracking_dynamics(0.0, x), label, rtol=1e-10, atol=1e-9, show_expected=False)
+        with case(x="one state of shape (3,)"):
+            f = check_array(func(float(rng.uniform(0.0, 30.0)), x.copy()), label, (3,))
+            check_close(f, ref.tracking_dynamics(0.0, x), label, rtol=1e-10, atol=1e-9, show_expected=False)
 
 
 def simulate_radar_cases() -> list[tuple[np.ndarray, np.ndarray, float, int]]:
@@ -89,19 +94,23 @@ def check_simulate_radar(func: Callable) -> None:
                       "(the default rtol = 1e-3 is off by about 20 m).")
     for x0, t, sigma, seed in simulate_radar_cases():
         n = t.shape[0]
-        case = f"a random start, {count(n, 'time')} from t = {t[0]:.2f} s, sigma = {sigma:.0f} m"
-        x_true, b = check_pair(func(x0.copy(), t.copy(), sigma, np.random.default_rng(seed)),
-                               "simulate_radar(x0, t, sigma, rng)", "x_true", "b")
-        x_true = check_array(x_true, f"x_true for {case}", (3, n), "One column per time t_j; rows h, v, beta.")
-        b = check_array(b, f"b for {case}", (n,), "One reading per time t_j.")
-        want_x, want_b = ref.simulate_radar(x0, t, sigma, np.random.default_rng(seed))
-        check_close(x_true[0], want_x[0], f"the true altitude for {case}", tolerance_hint, rtol=0.0, atol=1.0, show_expected=False)
-        check_close(x_true[1], want_x[1], f"the true speed for {case}", tolerance_hint, rtol=0.0, atol=0.25, show_expected=False)
-        check_close(x_true[2], want_x[2], f"the true beta for {case}", "beta' = 0: beta stays at x0[2].",
-                    rtol=1e-9, atol=1e-6, show_expected=False)
-        check_close(b - x_true[0], want_b - want_x[0], f"the radar noise b - h for {case}",
-                    "Draw e = rng.standard_normal(len(t)) in one call and add sigma * e to the true altitude.",
-                    rtol=1e-9, atol=1e-6, show_expected=False)
+        label = f"a random start, {count(n, 'time')} from t = {t[0]:.2f} s, sigma = {sigma:.0f} m"
+        span = "a span under 10 s" if t[-1] - t[0] < 10.0 else "a span of 20 s or more (into the dense air)"
+        with case(times="two times" if n == 2 else "many times", span=span):
+            x_true, b = check_pair(func(x0.copy(), t.copy(), sigma, np.random.default_rng(seed)),
+                                   "simulate_radar(x0, t, sigma, rng)", "x_true", "b")
+            x_true = check_array(x_true, f"x_true for {label}", (3, n), "One column per time t_j; rows h, v, beta.")
+            b = check_array(b, f"b for {label}", (n,), "One reading per time t_j.")
+            want_x, want_b = ref.simulate_radar(x0, t, sigma, np.random.default_rng(seed))
+            check_close(x_true[0], want_x[0], f"the true altitude for {label}", tolerance_hint, rtol=0.0, atol=1.0,
+                        show_expected=False)
+            check_close(x_true[1], want_x[1], f"the true speed for {label}", tolerance_hint, rtol=0.0, atol=0.25,
+                        show_expected=False)
+            check_close(x_true[2], want_x[2], f"the true beta for {label}", "beta' = 0: beta stays at x0[2].",
+                        rtol=1e-9, atol=1e-6, show_expected=False)
+            check_close(b - x_true[0], want_b - want_x[0], f"the radar noise b - h for {label}",
+                        "Draw e = rng.standard_normal(len(t)) in one call and add sigma * e to the true altitude.",
+                        rtol=1e-9, atol=1e-6, show_expected=False)
 
 
 @diagnosed
@@ -110,20 +119,24 @@ def check_initial_cloud(func: Callable) -> None:
     rng = cases.rng(4003)
     for N in (1, 5, 2000):
         b0, seed = float(rng.uniform(50_000.0, 70_000.0)), int(rng.integers(2**63))
-        x, w = check_pair(func(b0, N, np.random.default_rng(seed)), f"initial_cloud(b0, {N}, rng)", "x", "w")
-        x = check_array(x, f"the prior cloud with N = {N}", (3, N), "One column per particle: rows h, v, beta.")
-        w = check_array(w, f"the prior weights with N = {N}", (N,))
-        want_x, want_w = ref.initial_cloud(b0, N, np.random.default_rng(seed))
-        check_close(x, want_x, f"the prior cloud for a random b0 and N = {N}",
-                    "Draw rng.standard_normal((3, N)) in one call; scale row i by the prior standard deviation of "
-                    "variable i and add the prior mean [b0, v_init, beta_init].", rtol=1e-12, atol=1e-9, show_expected=False)
-        check_close(w, want_w, f"the prior weights for N = {N}", "Equal weights 1/N.", rtol=1e-12, atol=0.0, show_expected=False)
+        with case(N="a single particle (N = 1)" if N == 1 else "several particles (N > 1)"):
+            x, w = check_pair(func(b0, N, np.random.default_rng(seed)), f"initial_cloud(b0, {N}, rng)", "x", "w")
+            x = check_array(x, f"the prior cloud with N = {N}", (3, N), "One column per particle: rows h, v, beta.")
+            w = check_array(w, f"the prior weights with N = {N}", (N,))
+            want_x, want_w = ref.initial_cloud(b0, N, np.random.default_rng(seed))
+            check_close(x, want_x, f"the prior cloud for a random b0 and N = {N}",
+                        "Draw rng.standard_normal((3, N)) in one call; scale row i by the prior standard deviation of "
+                        "variable i and add the prior mean [b0, v_init, beta_init].", rtol=1e-12, atol=1e-9,
+                        show_expected=False)
+            check_close(w, want_w, f"the prior weights for N = {N}", "Equal weights 1/N.", rtol=1e-12, atol=0.0,
+                        show_expected=False)
 
 
 def credibility_cases() -> list[tuple[np.ndarray, np.ndarray, float | np.ndarray]]:
     """(samples, weights, p) of the hidden test: N from 1 to 5000, weights from flat to a few heavy
     ones, some exactly zero, and p single numbers or arrays, with p = 0 (the median) and p = 100
-    (orders 0 and 1, where zero weights at the ends make several samples reach the order at once)."""
+    (orders 0 and 1, where zero weights at the ends make several samples reach the order at once), each
+    as a single number and within an array, and arrays without them."""
     rng = cases.rng(4005)
     found = []
     for N, concentration in ((1, 1.0), (2, 1.0), (7, 0.3), (50, 1.0), (300, 0.05), (2000, 1.0), (5000, 5.0)):
@@ -132,9 +145,23 @@ def credibility_cases() -> list[tuple[np.ndarray, np.ndarray, float | np.ndarray
         if N >= 50:
             weights[rng.choice(N, N // 5, replace=False)] = 0.0  # particles with no weight left
         weights = weights * rng.uniform(0.5, 2.0)  # not normalised: the function normalises
-        for p in (90.0, 50.0, float(rng.uniform(1.0, 99.0)), np.array([0.0, 50.0, 90.0]), np.array([100.0, 5.0])):
+        for p in (90.0, 50.0, float(rng.uniform(1.0, 99.0)), np.array([0.0, 50.0, 90.0]), np.array([100.0, 5.0]),
+                  0.0, 100.0, np.array([95.0, 25.0])):
             found.append((samples, weights, p))
     return found
+
+
+def _credibility_kinds(samples: np.ndarray, weights: np.ndarray, p: float | np.ndarray) -> dict[str, str]:
+    """How a case's message names a credibility case: one sample, or several with or without zero weights;
+    p a number or an array; p = 0 or 100 among the p (orders 1/2, 0 and 1), or every p strictly between."""
+    N = samples.shape[0]
+    extreme = bool(np.any((np.asarray(p) == 0.0) | (np.asarray(p) == 100.0)))
+    return {
+        "samples": ("one sample" if N == 1 else "several samples with some zero weights" if np.any(weights == 0.0)
+                    else "several samples without zero weights"),
+        "p": "an array of p" if np.ndim(p) else "a scalar p",
+        "order": "a p of 0 or 100" if extreme else "no p of 0 or 100",
+    }
 
 
 def acceptable_quantiles(samples: np.ndarray, weights: np.ndarray, orders: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -171,18 +198,19 @@ def check_credibility_interval(func: Callable) -> None:
         N = samples.shape[0]
         shape = np.shape(p)
         label = f"credibility_interval(samples, weights, {np.round(p, 2).tolist()}) for {N} weighted samples"
-        lo, hi = check_pair(func(samples.copy(), weights.copy(), np.copy(p) if shape else p), label, "lo", "hi")
-        got = np.stack([check_array(lo, f"lo of {label}", shape, "lo and hi have the shape of p."),
-                        check_array(hi, f"hi of {label}", shape, "lo and hi have the shape of p.")])
-        orders = np.stack([0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200])
-        smallest, largest = acceptable_quantiles(samples, weights, orders)
-        if not (np.all(np.isin(got, samples)) and np.all((smallest <= got) & (got <= largest))):
-            raise AssertionError(
-                f"{label} is not right. Sort the samples and carry their weights along (weights[order]); the "
-                "quantile of order a is the first sorted sample whose normalised cumulative weight reaches a; the "
-                "orders are (1 -+ p/100) / 2. (Where rounding decides which sample reaches an order first, every "
-                "sample it could pick is accepted.)"
-            )
+        with case(**_credibility_kinds(samples, weights, p)):
+            lo, hi = check_pair(func(samples.copy(), weights.copy(), np.copy(p) if shape else p), label, "lo", "hi")
+            got = np.stack([check_array(lo, f"lo of {label}", shape, "lo and hi have the shape of p."),
+                            check_array(hi, f"hi of {label}", shape, "lo and hi have the shape of p.")])
+            orders = np.stack([0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200])
+            smallest, largest = acceptable_quantiles(samples, weights, orders)
+            if not (np.all(np.isin(got, samples)) and np.all((smallest <= got) & (got <= largest))):
+                raise AssertionError(
+                    f"{label} is not right. Sort the samples and carry their weights along (weights[order]); the "
+                    "quantile of order a is the first sorted sample whose normalised cumulative weight reaches a; the "
+                    "orders are (1 -+ p/100) / 2. (Where rounding decides which sample reaches an order first, every "
+                    "sample it could pick is accepted.)"
+                )
 
 
 RUN_HINTS = {
@@ -211,21 +239,24 @@ def check_run_particle_filter(func: Callable) -> None:
         t = DT * np.arange(n_times)
         b = rng.uniform(55_000.0, 65_000.0) - rng.uniform(2_500.0, 3_500.0) * t + SIGMA * rng.standard_normal(n_times)
         seed = int(rng.integers(2**63))
-        history = func(b.copy(), N, np.random.default_rng(seed), **options)
-        if not isinstance(history, FilterHistory):
-            raise AssertionError(f"run_particle_filter should return a FilterHistory, not {type(history).__name__}.")
-        want = ref.run_particle_filter(b, N, np.random.default_rng(seed), **options)
-        case = f"{n_times} random readings, N = {N}" + "".join(f", {key}={'bootstrap_step' if key == 'step' else value}"
-                                                                for key, value in options.items())
-        for name, hint in RUN_HINTS.items():
-            shape = getattr(want, name).shape
-            got = check_array(getattr(history, name), f"history.{name} for {case}", shape,
-                              "Fill every entry: one column per reading time t_j.")
-            check_close(got, getattr(want, name), f"history.{name} for {case}",
-                        f"It should hold {hint}. Start from initial_cloud(b[0], N, rng) at t_0, then call the step "
-                        "(pf_step unless step is given) once with each later reading b_j, passing innovation_std and "
-                        "info, using the rng you were given.",
-                        rtol=1e-9, atol=1e-9, show_expected=False)
+        label = f"{n_times} random readings, N = {N}" + "".join(f", {key}={'bootstrap_step' if key == 'step' else value}"
+                                                                 for key, value in options.items())
+        with case(readings="a single reading" if n_times == 1 else "several readings",
+                  step="the bootstrap step" if "step" in options else "pf_step",
+                  innovation_std="another innovation_std" if "innovation_std" in options else "the default innovation_std"):
+            history = func(b.copy(), N, np.random.default_rng(seed), **options)
+            if not isinstance(history, FilterHistory):
+                raise AssertionError(f"run_particle_filter should return a FilterHistory, not {type(history).__name__}.")
+            want = ref.run_particle_filter(b, N, np.random.default_rng(seed), **options)
+            for name, hint in RUN_HINTS.items():
+                shape = getattr(want, name).shape
+                got = check_array(getattr(history, name), f"history.{name} for {label}", shape,
+                                  "Fill every entry: one column per reading time t_j.")
+                check_close(got, getattr(want, name), f"history.{name} for {label}",
+                            f"It should hold {hint}. Start from initial_cloud(b[0], N, rng) at t_0, then call the step "
+                            "(pf_step unless step is given) once with each later reading b_j, passing innovation_std and "
+                            "info, using the rng you were given.",
+                            rtol=1e-9, atol=1e-9, show_expected=False)
 
 # =============================================================================================
 # pf_step: statistical checks
@@ -635,14 +666,24 @@ def check_posterior(pf_step: PfStep) -> float:
 
 def statistical_checks(pf_step: PfStep) -> None:
     """Every statistical check, cheapest first, on the draws of the current submission seed. A correct
-    step fails with probability below FALSE_FAIL_TOTAL over the submission seeds."""
-    check_weights(pf_step)
-    check_info(pf_step)
-    check_heavy_last_particle(pf_step)
-    check_resampling(pf_step)
-    check_innovation(pf_step)
-    check_innovation(pf_step, OTHER_INNOVATION_STD)
-    check_posterior(pf_step)
+    step fails with probability below FALSE_FAIL_TOTAL over the submission seeds. Each check is one case,
+    labelled with the part of the step it tests (autograder/hidden_tests/case_kinds.py), and with the
+    innovation_std it runs with."""
+    default = "the default innovation_std"
+    with case(part="the weights of step (d)", innovation_std=default):
+        check_weights(pf_step)
+    with case(part="the ESS and the parents reported in info", innovation_std=default):
+        check_info(pf_step)
+    with case(part="all the weight on the last particle", innovation_std=default):
+        check_heavy_last_particle(pf_step)
+    with case(part="the resampling with the fitness weights of (b)", innovation_std=default):
+        check_resampling(pf_step)
+    with case(part="the artificial process noise", innovation_std=default):
+        check_innovation(pf_step)
+    with case(part="the artificial process noise", innovation_std="another innovation_std"):
+        check_innovation(pf_step, OTHER_INNOVATION_STD)
+    with case(part="the posterior after a whole run", innovation_std=default):
+        check_posterior(pf_step)
 
 
 @diagnosed
