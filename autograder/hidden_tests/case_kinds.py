@@ -27,6 +27,8 @@ import contextlib
 from collections.abc import Iterator
 from dataclasses import dataclass, field
 
+MAX_LISTED = 3
+"""The most kinds of failing case a sentence lists; beyond, a list says less than the count alone."""
 NARROWED = ("is right on every case with", "is right on ")
 """How a narrowing sentence begins after the blank's name (the mutation report counts them)."""
 
@@ -120,7 +122,7 @@ def narrowing(blank: str, cases: list[_Case]) -> str:
                 f"{' or '.join(bad)}.")
     described = [_listed([v for v in c.properties.values()]) for c in wrong]
     unique = list(dict.fromkeys(d for d in described if d))
-    if not unique:
+    if not unique or len(unique) > MAX_LISTED:
         return f"Your {blank} is right on {len(right)} of {len(cases)} cases."
     return (f"Your {blank} is right on {len(right)} of {len(cases)} cases; it is wrong on the cases with "
             f"{_listed(unique, ', and with ')}.")

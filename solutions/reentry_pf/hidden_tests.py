@@ -148,7 +148,20 @@ def credibility_cases() -> list[tuple[np.ndarray, np.ndarray, float | np.ndarray
         for p in (90.0, 50.0, float(rng.uniform(1.0, 99.0)), np.array([0.0, 50.0, 90.0]), np.array([100.0, 5.0]),
                   0.0, 100.0, np.array([95.0, 25.0])):
             found.append((samples, weights, p))
+    # eight equal weights: the cumulative weights land exactly on the orders 1/4, 1/2 and 3/4, where the
+    # text's F_i >= a and F_i > a part; every correct answer computes them exactly (acceptable_quantiles)
+    samples = rng.normal(0.0, 1e3, 8)
+    for p in (0.0, 50.0, np.array([0.0, 50.0])):
+        found.append((samples, np.full(8, 2.0), p))
     return found
+
+
+def _exact(weights: np.ndarray, orders: np.ndarray) -> bool:
+    """Whether every correct way of computing the cumulative weights and the orders is exact here:
+    integer weights whose total is a power of two, and orders that are multiples of 1/1024."""
+    total = float(np.sum(weights))
+    return bool(np.all(weights == np.round(weights)) and total > 0 and total == 2.0 ** np.round(np.log2(total))
+                and total < 2.0**40 and np.all(np.mod(np.asarray(orders) * 1024, 1.0) == 0.0))
 
 
 def _credibility_kinds(samples: np.ndarray, weights: np.ndarray, p: float | np.ndarray) -> dict[str, str]:
@@ -158,6 +171,7 @@ def _credibility_kinds(samples: np.ndarray, weights: np.ndarray, p: float | np.n
     extreme = bool(np.any((np.asarray(p) == 0.0) | (np.asarray(p) == 100.0)))
     return {
         "samples": ("one sample" if N == 1 else "several samples with some zero weights" if np.any(weights == 0.0)
+                    else "equal weights (cumulative weights exactly on the orders)" if np.all(weights == weights[0])
                     else "several samples without zero weights"),
         "p": "an array of p" if np.ndim(p) else "a scalar p",
         "order": "a p of 0 or 100" if extreme else "no p of 0 or 100",
@@ -174,8 +188,9 @@ def acceptable_quantiles(samples: np.ndarray, weights: np.ndarray, orders: np.nd
     cumulative weight or by a pairwise sum. Each of those is within 2N u of the exact F_i (u = 2^-53:
     at most N - 1 roundings in the running sum of non-negative terms, each at most u times the total,
     as many in the total, and one in the division), and the order (1 -+ p/100) / 2 is within 2u of
-    its exact value. So a correct answer's index is the first i with F_i >= a' for some a' within
-    (2N + 2) u of a. F here is itself computed in floating point, within 2N u, and the tolerance
+    its exact value. (With integer weights whose total is a power of two, and orders that are multiples
+    of 1/1024, every one of those computations is exact, and the tolerance is 0: ``_exact``.) So a
+    correct answer's index is the first i with F_i >= a' for some a' within (2N + 2) u of a. F here is itself computed in floating point, within 2N u, and the tolerance
     4 (N + 2) u covers both. The answers accepted are the sorted samples from the first i with
     F_i >= a - tolerance to the first with F_i >= a + tolerance (the last sample if none), and
     nothing else: a mistake that moves the order or the cumulative weights by more than rounding
@@ -184,7 +199,7 @@ def acceptable_quantiles(samples: np.ndarray, weights: np.ndarray, orders: np.nd
     order = np.argsort(samples, kind="stable")
     s = samples[order]
     F = np.cumsum(weights[order]) / np.sum(weights)
-    tolerance = 4 * (s.shape[0] + 2) * 2.0**-53
+    tolerance = 0.0 if _exact(weights, orders) else 4 * (s.shape[0] + 2) * 2.0**-53
     last = s.shape[0] - 1
     first = np.minimum(np.searchsorted(F, orders - tolerance), last)
     final = np.minimum(np.searchsorted(F, orders + tolerance), last)

@@ -69,6 +69,13 @@ MISTAKES = (
             'info["ess"] = 1.0 / np.sum(w_hat**2)', 'info["ess"] = 1.0 / np.sum(w**2)',
             hint="Your pf_step behaves as if info['ess'] came from the old weights w instead of the fitness weights that the resampling uses."),
     # credibility_interval
+    Mistake("credibility_interval", "strictly-above", "takes the first sample whose cumulative weight exceeds the order strictly",
+            "return s[np.minimum(np.searchsorted(cdf, a_lo), last)], s[np.minimum(np.searchsorted(cdf, a_hi), last)]",
+            "return (s[np.minimum(np.searchsorted(cdf, a_lo, side='right'), last)],\n"
+            "            s[np.minimum(np.searchsorted(cdf, a_hi, side='right'), last)])",
+            hint="Your credibility_interval behaves as if it took the first sorted sample whose cumulative weight "
+                 "exceeds the order (F_i > a, searchsorted's side='right'): the quantile of order a is the first whose "
+                 "cumulative weight reaches it, F_i >= a, which differs where a cumulative weight is exactly a."),
     Mistake("credibility_interval", "weights-not-sorted", "the samples sorted but their weights left in the old order",
             "cdf = np.cumsum(weights[order])", "cdf = np.cumsum(weights)",
             hint="Your credibility_interval behaves as if the samples were sorted but their weights left in the old order."),
