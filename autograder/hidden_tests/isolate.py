@@ -22,9 +22,9 @@ import warnings
 from typing import Callable, Iterable, Iterator
 
 
-def called_blanks(reference: types.ModuleType, name: str, blanks: Iterable[str]) -> frozenset[str]:
-    """The blanks among ``blanks``, other than ``name``, whose names the reference's ``name`` uses
-    (in its code or in the code of functions defined inside it); none if it has no such function."""
+def _named_blanks(reference: types.ModuleType, name: str, blanks: frozenset[str]) -> set[str]:
+    """The blanks whose names the reference's ``name`` uses, in its code or in the code of functions
+    defined inside it."""
     names: set[str] = set()
     code = getattr(getattr(reference, name, None), "__code__", None)
     codes = [code] if code is not None else []
@@ -32,7 +32,21 @@ def called_blanks(reference: types.ModuleType, name: str, blanks: Iterable[str])
         code = codes.pop()
         names.update(code.co_names)
         codes += [const for const in code.co_consts if isinstance(const, types.CodeType)]
-    return frozenset(blank for blank in blanks if blank in names and blank != name)
+    return {blank for blank in blanks if blank in names}
+
+
+def called_blanks(reference: types.ModuleType, name: str, blanks: Iterable[str]) -> frozenset[str]:
+    """The blanks among ``blanks``, other than ``name``, that the reference's ``name`` calls, directly or
+    through another blank it calls (run_rank4 calls kalman_step, which calls kalman_gain: a run that
+    writes the step out with the gain calls it too); none if it has no such function."""
+    blanks = frozenset(blanks)
+    found: set[str] = set()
+    todo = [name]
+    while todo:
+        for blank in _named_blanks(reference, todo.pop(), blanks) - found - {name}:
+            found.add(blank)
+            todo.append(blank)
+    return frozenset(found)
 
 
 _observer: Callable | None = None

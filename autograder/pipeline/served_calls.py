@@ -79,6 +79,16 @@ def _bound(function: Callable, args: tuple, kwargs: dict) -> dict | None:
     return dict(bound.arguments)
 
 
+def _with_globals(function: Callable, names: dict[str, Callable]) -> Callable:
+    """A copy of ``function`` that sees ``names`` in place of its module's."""
+    if not isinstance(function, types.FunctionType):
+        return function
+    copied = types.FunctionType(function.__code__, {**function.__globals__, **names}, function.__name__,
+                                function.__defaults__, function.__closure__)
+    copied.__kwdefaults__ = function.__kwdefaults__
+    return copied
+
+
 class ReferenceUse:
     """The calls the reference's ``f`` made of each served blank, on one call's arguments."""
 
@@ -97,6 +107,7 @@ class ReferenceUse:
         except Exception:  # noqa: BLE001 (an argument that cannot be copied: no guard)
             return cls(None)
         calls: dict[str, list[dict]] = {name: [] for name in served}
+        recorders: dict[str, Callable] = {}
 
         def recording(name: str, function: Callable) -> Callable:
             def call(*a, **k):
@@ -107,12 +118,13 @@ class ReferenceUse:
                 return function(*a, **k)
             return call
 
-        # a copy of the reference's f that sees recording versions of the served blanks (as isolate does)
-        f = reference_function
-        recorded = types.FunctionType(f.__code__, {**f.__globals__, **{name: recording(name, function) for name, function
-                                                                         in served.items()}},
-                                      f.__name__, f.__defaults__, f.__closure__)
-        recorded.__kwdefaults__ = f.__kwdefaults__
+        # every served blank, and the reference's f, see recording versions of the served blanks (as
+        # isolate does), so that a served blank's own calls of another are recorded too: a student's f
+        # may make them itself (the update written out with the gain, where the reference calls the step)
+        proxies = {name: (lambda *a, _name=name, **k: recorders[_name](*a, **k)) for name in served}
+        for name, function in served.items():
+            recorders[name] = recording(name, _with_globals(function, proxies))
+        recorded = _with_globals(reference_function, proxies)
         try:
             recorded(*call_args, **call_kwargs)
         except Exception:  # noqa: BLE001 (the reference may reject the case: what it called until then counts)
