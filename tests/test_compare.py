@@ -21,7 +21,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
-from autograder.pipeline import compare
+from autograder.pipeline import compare, served_calls
 from autograder.hidden_tests import diagnosis
 from autograder.kernel import side
 from autograder.pipeline.compare import HiddenTest, HiddenTestFormError, StudentFunction
@@ -167,12 +167,13 @@ def test_the_grader_answers_only_for_earlier_blanks_and_never_for_the_one_under_
     assert namespace["step"](0.0) == 1.0  # the notebook's own names are left alone
 
 
-def test_a_served_blank_answers_only_the_calls_the_reference_makes(kernel):
-    """The served reference is no oracle: it answers a call of the student's run only if the
-    reference's own run makes that call on the same arguments (to rounding), as often as it makes
-    it; every other call is answered by the student's own step in the kernel. So an honest run is
-    isolated from a wrong step of its own, and a run that asks the served step about inputs of its
-    choosing learns only what its own step says."""
+def test_a_served_blank_answers_only_the_calls_the_reference_makes_and_a_few_of_their_form(kernel):
+    """The served reference is no oracle: it answers a call of the student's run if the reference's own
+    run makes that call on the same arguments (to rounding), as often as it makes it; else, if it has
+    the form of one of those calls (parameters, shapes, kinds of number), at most as many times as the
+    reference's run calls it, plus WINDOW; every other call is answered by the student's own step in the
+    kernel. So an honest run is isolated from a wrong step of its own, and a run that asks the served
+    step about inputs of its choosing gets a bounded number of answers, of the reference's form only."""
     reference = type(np)("reference")
     exec("def step(x, rng):\n    return x + 100.0 + rng.standard_normal()\n"
          "def run(x, rng):\n    return [step(x, rng), step(2.0 * x, rng)]\n", reference.__dict__)
@@ -184,12 +185,13 @@ def test_a_served_blank_answers_only_the_calls_the_reference_makes(kernel):
     assert np.allclose(got[0], want[0]) and np.allclose(got[1], want[1])  # both calls served, to rounding
     harvest = ("def step(x, rng):\n    return -1.0\n"
                "def run(x, rng):\n"
-               "    return [step(x, rng), step(x, rng), step(x + 7.0, rng), step(2.0 * x, np.random.default_rng(9))]\n")
+               "    return [step(np.ones(5), rng)] + [float(np.ravel(step(x + k, rng))[0]) for k in range(40)]\n")
     student = isolate(kernel(_define(harvest), "run", earlier=frozenset({"step"})), reference, ("step", "run"))
-    first, again, chosen, other_state = student(np.array([1.0]), np.random.default_rng(5))
-    assert first[0] > 50.0, "the call the reference makes is served"
-    # the same call again (the reference makes it once), inputs of its own, a generator in another state
-    assert again == chosen == other_state == -1.0
+    other_form, *same_form = student(np.array([1.0]), np.random.default_rng(5))
+    assert other_form == -1.0, "a call of another form than the reference's is answered by the student's own step"
+    served = [value for value in same_form if value != -1.0]
+    # x + 0 and x + 1 (= 2 x) are the reference's own two calls; then its budget: its 2 calls plus WINDOW
+    assert len(served) == 2 + 2 + served_calls.WINDOW and same_form[len(served):] == [-1.0] * (40 - len(served))
 
 
 def test_a_served_call_is_the_same_call_by_position_or_by_keyword(kernel):

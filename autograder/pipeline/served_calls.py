@@ -3,16 +3,23 @@
 While the hidden test of blank ``f`` runs, the student's ``f`` calls stand-ins for the earlier blanks
 that the reference's ``f`` calls (``g``), and the grader answers them with the reference's ``g``, so
 that a mistake in ``g`` costs only ``g``'s points. Answering *any* call would make the served ``g`` an
-oracle: a kernel could ask it about inputs of its own choosing and print the answers. So, for each
-call of the student's ``f``, the grader first runs the reference's ``f`` on a copy of the same
-arguments with every served blank recorded (``ReferenceUse.of``), and answers a call of a served blank
-only if its arguments match one the reference made in that run (by parameter name, whether passed
-by position or by keyword, defaults filled in; numbers within a relative 1e-6, a random generator in
-the same state, the same structure; a dict, which the call writes into, whatever it held), each as
-many times as the reference made it, and in its order (among the next WINDOW calls not answered yet). Every other call is answered by the student's own ``g`` in the kernel (the stand-in is told
-``side.NOT_SERVED``): an honest student whose ``f`` calls ``g`` as the reference does is isolated from
-their own ``g``, and whatever else a student's ``f`` asks is answered by their own code, never by the
-reference.
+oracle: a kernel could ask it about inputs of its own choosing, as many as it likes, and print the
+answers. So, for each call of the student's ``f``, the grader first runs the reference's ``f`` on a
+copy of the same arguments with every served blank recorded, inside the other served blanks too
+(``ReferenceUse.of``), and answers a call of a served blank:
+
+- when its arguments are one of the reference's calls (by parameter name, whether passed by position
+  or by keyword, defaults filled in; numbers within a relative 1e-6, a random generator in the same
+  state; a dict, which the call writes into, whatever it held), each as many times as the reference
+  made it, among its next WINDOW calls not answered yet;
+- otherwise, when they have the form of one of the reference's calls (the same parameters, types,
+  shapes and kinds of number: a correct ``f`` that integrates with other tolerances, or calls the
+  quantile function once per order, asks about other points of the same kind), while the test has
+  made no more such calls than the reference's ``f`` made in all, plus WINDOW.
+
+Every other call (another form, or past that budget) is answered by the student's own ``g`` in the
+kernel (the stand-in is told ``side.NOT_SERVED``). What a served blank answers says nothing about the
+next submission's hidden cases, which its own seed draws (tests/test_harvest.py).
 """
 
 from __future__ import annotations
@@ -68,6 +75,26 @@ def _matches(got, want) -> bool:
     return False
 
 
+def _form(value) -> object:
+    """A call's (or a value's) form: its structure, types, shapes and kinds of number, not its values."""
+    if isinstance(value, dict):  # a call's arguments by name; a dict argument (info) is written into: any content
+        return ("arguments", tuple(sorted((str(k), _form(v) if not isinstance(v, dict) else ("dict",))
+                                          for k, v in value.items())))
+    if isinstance(value, (tuple, list)):
+        return (type(value).__name__, tuple(_form(item) for item in value))
+    if isinstance(value, np.ndarray):
+        return ("array", value.shape, value.dtype.kind)
+    if isinstance(value, (bool, np.bool_)):
+        return ("bool",)
+    if isinstance(value, (int, float, complex, np.number)):
+        return ("number", np.asarray(value).dtype.kind)
+    if isinstance(value, np.random.Generator) or callable(value):
+        return (type(value).__name__ if not callable(value) else "callable",)
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return (type(value).__qualname__, tuple(_form(getattr(value, f.name)) for f in dataclasses.fields(value)))
+    return (type(value).__name__, value if isinstance(value, (str, type(None))) else None)
+
+
 def _bound(function: Callable, args: tuple, kwargs: dict) -> dict | None:
     """A call's arguments by parameter name, defaults filled in, so that ``f(x, u)`` and ``f(x, u=u)``
     are the same call; None if they do not fit ``function``'s signature."""
@@ -96,6 +123,10 @@ class ReferenceUse:
         self.calls = calls
         """blank -> the arguments (by parameter name) of each call not yet answered; None: answer every call."""
         self.served = served or {}
+        self.forms = {name: [_form(call) for call in made] for name, made in (calls or {}).items()}
+        """blank -> the form of each call the reference made."""
+        self.budget = {name: len(made) + WINDOW for name, made in (calls or {}).items()}
+        """blank -> how many calls of the same form as the reference's, but other values, it still answers."""
 
     @classmethod
     def of(cls, reference_function: Callable, served: dict[str, Callable], args: tuple, kwargs: dict) -> "ReferenceUse":
@@ -143,6 +174,9 @@ class ReferenceUse:
             if bound.keys() == want.keys() and all(_matches(bound[key], want[key]) for key in want):
                 del self.calls[name][index]
                 return True
+        if self.budget.get(name, 0) > 0 and _form(bound) in self.forms.get(name, []):
+            self.budget[name] -= 1
+            return True
         return False
 
     def answerer(self, name: str, function: Callable) -> Callable:
