@@ -185,13 +185,14 @@ def test_a_served_blank_answers_only_the_calls_the_reference_makes_and_a_few_of_
     assert np.allclose(got[0], want[0]) and np.allclose(got[1], want[1])  # both calls served, to rounding
     harvest = ("def step(x, rng):\n    return -1.0\n"
                "def run(x, rng):\n"
-               "    return [step(np.ones(5), rng)] + [float(np.ravel(step(x + k, rng))[0]) for k in range(40)]\n")
+               "    return [step(np.ones(5, dtype=int), rng)] + [float(np.ravel(step(x + k, rng))[0]) for k in range(40)]\n")
     student = isolate(kernel(_define(harvest), "run", earlier=frozenset({"step"})), reference, ("step", "run"))
     other_form, *same_form = student(np.array([1.0]), np.random.default_rng(5))
     assert other_form == -1.0, "a call of another form than the reference's is answered by the student's own step"
     served = [value for value in same_form if value != -1.0]
-    # x + 0 and x + 1 (= 2 x) are the reference's own two calls; then its budget: its 2 calls plus WINDOW
-    assert len(served) == 2 + 2 + served_calls.WINDOW and same_form[len(served):] == [-1.0] * (40 - len(served))
+    # x + 0 and x + 1 (= 2 x) are the reference's own two calls; then its budget of numbers: twice the
+    # two its calls held (x, one number each), plus WINDOW times its largest call's (one)
+    assert len(served) == 2 + 2 * 2 + served_calls.WINDOW and same_form[len(served):] == [-1.0] * (40 - len(served))
 
 
 def test_a_served_call_is_the_same_call_by_position_or_by_keyword(kernel):

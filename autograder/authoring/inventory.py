@@ -122,22 +122,22 @@ def print_inventory(labs: list[Lab]) -> None:
         print(line((i.lab, i.blanks, f"{i.autograded_points:g}", f"{i.written_answers} ({i.written_points:g})",
                     i.visible_checks, i.hidden_tests, i.hidden_assertions, i.mistakes, len(i.claims))))
     for i in inventories:
-        print(f"\nThe blanks of {i.lab}, in the notebook's order (points of the hidden test, catalogued mistakes, "
-              "correct alternatives):")
+        print(f"\nThe blanks of {i.lab}, in order (hidden test's points, catalogued mistakes, correct alternatives):")
         name_w = max(len(name) for name in i.blank_points)
         for name, points in i.blank_points.items():
             mistakes = i.blank_mistakes[name]
             print(f"  {name:<{name_w}}  {points:>4g} pt  {count(mistakes, 'mistake'):<12}"
                   f"{count(i.blank_alternatives[name], 'alternative')}")
-        caught, mistakes = i.visible_caught
-        m = i.mutation
-        print(f"The visible checks fail {caught} of the {count(mistakes, 'catalogued mistake')} "
-              f"({caught / max(mistakes, 1):.0%}). Mutants of the reference (autograder/authoring/mutants.py): "
-              f"{m.mutants}, of which the hidden tests kill {m.killed}, {m.equivalent} are listed as equivalent "
-              f"(solutions/{i.lab.replace('-', '_')}/mutants.py) and {len(m.surviving)} survive; the message of "
-              f"{m.narrowed} of the {m.killed} killed ({m.narrowed / max(m.killed, 1):.0%}) narrows the cause (the kinds "
-              "of case it is wrong on, or a catalogued mistake).")
         print(f"Claims that {i.lab} states, each recomputed by a check (solutions/{i.lab.replace('-', '_')}/claims.py):")
         for cid, summary in i.claims.items():
             print(textwrap.fill(f"{cid}: {summary}", 100, initial_indent="  ", subsequent_indent="      ",
                                 break_on_hyphens=False))
+        caught, mistakes = i.visible_caught
+        m = i.mutation
+        print(textwrap.fill(
+            f"Right both ways: the visible checks fail {caught} of the {count(mistakes, 'catalogued mistake')} "
+            f"({caught / max(mistakes, 1):.0%}). Mutants of the reference (autograder/authoring/mutants.py): {m.mutants}, "
+            f"of which the hidden tests kill {m.killed}, {m.equivalent} are listed as equivalent "
+            f"(solutions/{i.lab.replace('-', '_')}/mutants.py) and {len(m.surviving)} survive; the message of {m.narrowed} "
+            f"of the {m.killed} killed ({m.narrowed / max(m.killed, 1):.0%}) narrows the cause (the kinds of case it is "
+            "wrong on, or a catalogued mistake).", 100, break_on_hyphens=False))

@@ -12,10 +12,11 @@ copy of the same arguments with every served blank recorded, inside the other se
   or by keyword, defaults filled in; numbers within a relative 1e-6, a random generator in the same
   state; a dict, which the call writes into, whatever it held), each as many times as the reference
   made it, among its next WINDOW calls not answered yet;
-- otherwise, when they have the form of one of the reference's calls (the same parameters, types,
-  shapes and kinds of number: a correct ``f`` that integrates with other tolerances, or calls the
-  quantile function once per order, asks about other points of the same kind), while the test has
-  made no more such calls than the reference's ``f`` made in all, plus WINDOW.
+- otherwise, when they have the form of one of the reference's calls (the same parameters, types and
+  kinds of number, arrays of any shape: a correct ``f`` that integrates with other tolerances or a
+  vectorised solver, or calls the quantile function once per order, asks about other points of the
+  same kind), while the numbers such calls have asked about stay within twice those the reference's
+  calls held, plus WINDOW times its largest call's.
 
 Every other call (another form, or past that budget) is answered by the student's own ``g`` in the
 kernel (the stand-in is told ``side.NOT_SERVED``). What a served blank answers says nothing about the
@@ -82,8 +83,8 @@ def _form(value) -> object:
                                           for k, v in value.items())))
     if isinstance(value, (tuple, list)):
         return (type(value).__name__, tuple(_form(item) for item in value))
-    if isinstance(value, np.ndarray):
-        return ("array", value.shape, value.dtype.kind)
+    if isinstance(value, np.ndarray):  # of any shape: the blanks take one state or a cloud of them
+        return ("array", value.dtype.kind)
     if isinstance(value, (bool, np.bool_)):
         return ("bool",)
     if isinstance(value, (int, float, complex, np.number)):
@@ -93,6 +94,17 @@ def _form(value) -> object:
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         return (type(value).__qualname__, tuple(_form(getattr(value, f.name)) for f in dataclasses.fields(value)))
     return (type(value).__name__, value if isinstance(value, (str, type(None))) else None)
+
+
+def _size(value) -> int:
+    """How many numbers a call's arguments hold (at least 1)."""
+    if isinstance(value, dict):
+        return max(1, sum(_size(v) for v in value.values() if not isinstance(v, dict)))
+    if isinstance(value, (tuple, list)):
+        return max(1, sum(_size(item) for item in value))
+    if isinstance(value, np.ndarray):
+        return max(1, value.size)
+    return 1
 
 
 def _bound(function: Callable, args: tuple, kwargs: dict) -> dict | None:
@@ -125,8 +137,10 @@ class ReferenceUse:
         self.served = served or {}
         self.forms = {name: [_form(call) for call in made] for name, made in (calls or {}).items()}
         """blank -> the form of each call the reference made."""
-        self.budget = {name: len(made) + WINDOW for name, made in (calls or {}).items()}
-        """blank -> how many calls of the same form as the reference's, but other values, it still answers."""
+        self.budget = {name: 2 * sum(map(_size, made)) + WINDOW * max(map(_size, made), default=0)
+                       for name, made in (calls or {}).items()}
+        """blank -> how many numbers it still answers about in calls of a form of the reference's but other
+        values: twice as many as the reference's calls held, plus WINDOW of its largest."""
 
     @classmethod
     def of(cls, reference_function: Callable, served: dict[str, Callable], args: tuple, kwargs: dict) -> "ReferenceUse":
@@ -174,8 +188,8 @@ class ReferenceUse:
             if bound.keys() == want.keys() and all(_matches(bound[key], want[key]) for key in want):
                 del self.calls[name][index]
                 return True
-        if self.budget.get(name, 0) > 0 and _form(bound) in self.forms.get(name, []):
-            self.budget[name] -= 1
+        if _form(bound) in self.forms.get(name, []) and _size(bound) <= self.budget.get(name, 0):
+            self.budget[name] -= _size(bound)
             return True
         return False
 
