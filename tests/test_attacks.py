@@ -549,10 +549,12 @@ def test_a_submissions_html_is_inert_where_the_instructor_views_it(runs):
     """nbgrader's formgrader shows a graded notebook as a page of the instructor's Jupyter server, and
     rendered a script in a student's Markdown answer or displayed output as live HTML: it ran as the
     instructor, with the server's API (the reference, terminals, the grades). The course's autograde
-    runs InertHtml right after the kernel; the page then holds the text, and no script
-    (tests/test_hostile_pages.py opens formgrader and the feedback page in Chromium)."""
+    runs InertHtml right after the kernel and the integrity flags (whose notes quote the student's code),
+    before anything is saved; the page then holds the text, and no script (tests/test_hostile_pages.py
+    opens formgrader and the feedback page in Chromium)."""
     preprocessors = nbgrader_apps.course_config().Autograde.autograde_preprocessors
-    assert preprocessors[preprocessors.index(GradingExecute) + 1] is InertHtml
+    names = [p.__name__ for p in preprocessors]
+    assert names.index("InertHtml") == names.index("FlagCheating") + 1 == names.index("GradingExecute") + 2, names
     nb = copy.deepcopy(runs["wire"][0])
     nb.cells.append(nbformat.v4.new_markdown_cell(
         "My derivation: $x<y$. <!-- a note --!><img src=x onerror=\"alert('answer')\"> --> <script>alert('answer')</script>"))

@@ -27,12 +27,13 @@ FIX = '''
 def check_predict(func):
     """The fixed test: B_f is tested in kupdate and run_filter, so predict is graded on x_f only."""
     func = isolate(func, ref, BLANKS)
-    rng = np.random.default_rng(1104)
+    rng = cases.rng(1104)
     for n, _ in SIZES:
         x, B, A, Q = rng.standard_normal(n), random_spd(rng, n), rng.standard_normal((n, n)), random_spd(rng, n)
-        x_f, _ = check_pair(func(x.copy(), B.copy(), A.copy(), Q.copy()), "predict(x, B, A, Q)", "x_f", "B_f")
-        check_close(check_array(x_f, f"x_f with n = {n}", (n,)), ref.predict(x, B, A, Q)[0],
-                    f"x_f on a random case with n = {n}", show_expected=False)
+        with case(n=_state(n)):
+            x_f, _ = check_pair(func(x.copy(), B.copy(), A.copy(), Q.copy()), "predict(x, B, A, Q)", "x_f", "B_f")
+            check_close(check_array(x_f, f"x_f with n = {n}", (n,)), ref.predict(x, B, A, Q)[0],
+                        f"x_f on a random case with n = {n}", show_expected=False)
 '''
 
 

@@ -29,7 +29,8 @@ def test_grading_refuses_to_start_without_the_reference(tmp_path, monkeypatch):
     starts (otherwise every hidden test would fail and nbgrader would still report success)."""
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(
         "### BEGIN HIDDEN TESTS\nfrom solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate)\n"
-        "### END HIDDEN TESTS\n")])
+        "### END HIDDEN TESTS\n", metadata={"nbgrader": {"grade": True, "solution": False, "locked": True,
+                                                         "points": 2, "grade_id": "test_kupdate", "schema_version": 3}})])
     monkeypatch.setitem(sys.modules, "solutions.train_kf.hidden_tests", None)  # import fails, as without the course root
     started = []
     monkeypatch.setattr(GradingExecute, "async_start_new_kernel_client", lambda self: started.append(1))

@@ -207,6 +207,7 @@ class GradingExecute(Execute):
                                  store_history=False, allow_stdin=False)
         try:
             peer, why_not = compare.connect(listener, deadline, lambda: self._replied(msg_id))
+            printed = room = 0
             if peer is None:
                 outputs = [compare.error_output("AssertionError", why_not)]
             else:
@@ -214,7 +215,6 @@ class GradingExecute(Execute):
                     room = self._output.room(index)
                     outputs, printed = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
                                                           deadline, self._memory_bytes())
-                    self._output.count(cell, index, printed, min(printed, room))
                 except compare.KernelStopped:
                     if not self._finished_alive(msg_id):
                         raise DeadKernelError("Kernel died") from None
@@ -229,6 +229,8 @@ class GradingExecute(Execute):
             listener.close()
         failures = [o for o in outputs if o.output_type == "error"]
         cell.outputs += outputs
+        if printed:
+            self._output.count(cell, index, printed, min(printed, room))  # after them: its note ends the cell
         if failures:
             self._fail(cell, f"{failures[0].ename}: {failures[0].evalue}")
         else:
