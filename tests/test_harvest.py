@@ -88,9 +88,9 @@ def _table(autograded: nbformat.NotebookNode) -> dict[tuple[str, str], str]:
     for cell in autograded.cells:
         for output in cell.get("outputs", []):
             for line in str(output.get("text", "")).splitlines():
-                if line.startswith("HARVEST "):
-                    _, name, key, value = line.split(" ")
-                    table[name, key] = value
+                parts = line.split(" ")
+                if parts[0] == "HARVEST" and len(parts) == 4:  # a line the output cap cut is left out
+                    table[parts[1], parts[2]] = parts[3]
     return table
 
 
