@@ -32,6 +32,7 @@ import ast
 import codecs
 import copy
 import functools
+import hashlib
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -147,9 +148,12 @@ def _base(lab: Lab, plant: bool) -> NotebookNode:
 
 
 def _add_cell_after_setup(nb: NotebookNode, source: str) -> NotebookNode:
-    """Insert a student-added code cell (no nbgrader metadata) right after the set-up cell."""
+    """Insert a student-added code cell (no nbgrader metadata) right after the set-up cell. Its cell id
+    comes from its source, so that the same cheat is the same file every time it is built (a regraded
+    file keeps its hidden cases; nbformat would draw a random id)."""
     index = next(i for i, c in enumerate(nb.cells) if cells.meta(c).get("grade_id") == "setup") + 1
-    nb.cells.insert(index, nbformat.v4.new_code_cell(source))
+    cell_id = "added-" + hashlib.sha256(source.encode()).hexdigest()[:12]
+    nb.cells.insert(index, nbformat.v4.new_code_cell(source, id=cell_id))
     return nb
 
 
