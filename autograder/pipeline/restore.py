@@ -10,6 +10,7 @@ What it changed goes into a grader's note at the top, which the student sees in 
 
 from __future__ import annotations
 
+import hashlib
 import re
 
 from nbformat import NotebookNode
@@ -62,8 +63,11 @@ def add_grader_notes(nb: NotebookNode, notes: list[str]) -> None:
     if existing:
         nb.cells.pop(0)
     body = "\n".join(f"- {as_markdown(note)}" for note in existing + notes)
+    # an id from the notes, not a random one: the graded notebook is then the same file every time the
+    # same submission is graded, and so are its hidden cases (autograder/pipeline/grading_secret.py)
+    note_id = "grader-note-" + hashlib.sha256("\n".join(existing + notes).encode()).hexdigest()[:12]
     nb.cells.insert(0, new_markdown_cell(f"{NOTE_TITLE} Your notebook was graded with these changes:\n{body}",
-                                         metadata={NOTES_KEY: existing + notes}))
+                                         metadata={NOTES_KEY: existing + notes}, id=note_id))
 
 
 def _has_id(cell: NotebookNode) -> bool:
