@@ -88,6 +88,17 @@ def isolate(func: Callable, reference: types.ModuleType, blanks: Iterable[str], 
     return _observable(_isolated(func, reference, blanks, warnings_fail))
 
 
+def with_globals(function: Callable, names: dict[str, Callable]) -> Callable:
+    """A copy of ``function`` that sees ``names`` in place of its module's (anything but a plain
+    function is returned as it is)."""
+    if not isinstance(function, types.FunctionType):
+        return function
+    copied = types.FunctionType(function.__code__, {**function.__globals__, **names}, function.__name__,
+                                function.__defaults__, function.__closure__)
+    copied.__kwdefaults__ = function.__kwdefaults__
+    return copied
+
+
 def _isolated(func: Callable, reference: types.ModuleType, blanks: Iterable[str], warnings_fail: bool) -> Callable:
     """``isolate``'s copy of ``func``, not yet observable."""
     compare = sys.modules.get("autograder.pipeline.compare")  # imported by the grader only, not in a kernel run by hand
@@ -96,9 +107,7 @@ def _isolated(func: Callable, reference: types.ModuleType, blanks: Iterable[str]
     if not isinstance(func, types.FunctionType):
         raise AssertionError(f"{func!r} should be a function defined with `def`.")
     others = {name: getattr(reference, name) for name in called_blanks(reference, func.__name__, blanks)}
-    namespace = {**func.__globals__, **others}
-    copy = types.FunctionType(func.__code__, namespace, func.__name__, func.__defaults__, func.__closure__)
-    copy.__kwdefaults__ = func.__kwdefaults__
+    copy = with_globals(func, others)
     if not warnings_fail:
         return copy
 

@@ -29,10 +29,11 @@ import contextlib
 import copy
 import dataclasses
 import inspect
-import types
 from collections.abc import Callable
 
 import numpy as np
+
+from autograder.hidden_tests.isolate import with_globals
 
 WINDOW = 16
 """A call is looked for among the next WINDOW calls of the reference's that are not answered yet: an
@@ -118,16 +119,6 @@ def _bound(function: Callable, args: tuple, kwargs: dict) -> dict | None:
     return dict(bound.arguments)
 
 
-def _with_globals(function: Callable, names: dict[str, Callable]) -> Callable:
-    """A copy of ``function`` that sees ``names`` in place of its module's."""
-    if not isinstance(function, types.FunctionType):
-        return function
-    copied = types.FunctionType(function.__code__, {**function.__globals__, **names}, function.__name__,
-                                function.__defaults__, function.__closure__)
-    copied.__kwdefaults__ = function.__kwdefaults__
-    return copied
-
-
 class ReferenceUse:
     """The calls the reference's ``f`` made of each served blank, on one call's arguments."""
 
@@ -168,8 +159,8 @@ class ReferenceUse:
         # may make them itself (the update written out with the gain, where the reference calls the step)
         proxies = {name: (lambda *a, _name=name, **k: recorders[_name](*a, **k)) for name in served}
         for name, function in served.items():
-            recorders[name] = recording(name, _with_globals(function, proxies))
-        recorded = _with_globals(reference_function, proxies)
+            recorders[name] = recording(name, with_globals(function, proxies))
+        recorded = with_globals(reference_function, proxies)
         try:
             recorded(*call_args, **call_kwargs)
         except Exception:  # noqa: BLE001 (the reference may reject the case: what it called until then counts)

@@ -23,7 +23,6 @@ from __future__ import annotations
 
 import functools
 import math
-import types
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -35,7 +34,7 @@ import solutions.reentry_pf.reference as ref
 from autograder.hidden_tests import cases
 from autograder.hidden_tests.case_kinds import case
 from autograder.hidden_tests.diagnosis import diagnosed
-from autograder.hidden_tests.isolate import isolate
+from autograder.hidden_tests.isolate import isolate, with_globals
 from autograder.labs import lab_of
 from course import falling_object
 from course.checks import check_array, check_close, check_pair, count
@@ -295,11 +294,7 @@ def _run_with_quantile_ranges(b: np.ndarray, N: int, rng: np.random.Generator,
         ranges.append(acceptable_quantiles(np.asarray(samples), np.asarray(weights), orders))
         return ref.credibility_interval(samples, weights, p)
 
-    f = ref.run_particle_filter
-    run = types.FunctionType(f.__code__, {**f.__globals__, "credibility_interval": recording}, f.__name__,
-                             f.__defaults__, f.__closure__)
-    run.__kwdefaults__ = f.__kwdefaults__
-    want = run(b, N, rng, **options)
+    want = with_globals(ref.run_particle_filter, {"credibility_interval": recording})(b, N, rng, **options)
     low = {name: np.empty_like(getattr(want, name)) for name in QUANTILE_FIELDS}
     high = {name: np.empty_like(getattr(want, name)) for name in QUANTILE_FIELDS}
     n_times = b.shape[0]
