@@ -13,8 +13,8 @@ bundle installed as students install it does not.
 
 ``chromium()`` launches Debian's ``chromium`` (``apt-get install chromium``; ``.ci/run`` installs
 it) through Playwright: Playwright's own browser download is not available, so it is pointed at
-that executable. Like the PostgreSQL test, the browser test never skips: without Chromium it fails
-and says how to install it.
+that executable. The browser tests are marked ``needs("chromium")`` (tests/machine_needs.py): without
+Chromium they are skipped on a user's machine, saying how to install it, and fail in CI.
 """
 
 from __future__ import annotations

@@ -183,6 +183,7 @@ def title_of(markup: str) -> str:
     return re.search(r"<title>(.*?)</title>", markup, re.S).group(1).strip()
 
 
+@pytest.mark.needs("chromium")
 def test_the_feedback_page_of_a_hostile_submission_runs_nothing(course, browser):
     path = nbgrader_apps.feedback_page(course, LAB.id, STUDENT)
     url = path.as_uri()
@@ -225,6 +226,7 @@ def formgrader(course: Path, home: Path) -> Iterator[tuple[str, str]]:
         _stop(server)
 
 
+@pytest.mark.needs("chromium")
 def test_formgraders_view_of_a_hostile_submission_runs_nothing(course, browser, tmp_path):
     with Gradebook(f"sqlite:///{course / 'gradebook.db'}") as gradebook:
         submission = gradebook.find_submission_notebook(LAB.id, LAB.id, STUDENT).id

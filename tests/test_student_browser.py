@@ -35,6 +35,7 @@ NOTEBOOK = f"release/{LAB.id}/{LAB.notebook_name}"
 WAIT_MS = 120_000  # generous: a kernel start and a run on a loaded 2-core CI machine
 INSTRUCTOR_TOOLS = ("Formgrader", "Create Assignment", "Assignment List")
 expect.set_options(timeout=WAIT_MS)  # every wait on the page's state (Playwright's default is 5 s)
+pytestmark = pytest.mark.needs("chromium")
 
 
 @pytest.fixture(scope="module")
