@@ -515,13 +515,14 @@ def check_square_root(
     if np.all(error <= rtol * scale + tiny):
         return
     worst = float(np.max(error / (scale + tiny)))
+    # "its S.T @ S", not f"{name}.T @ {name}": a name is often a phrase ("S for the step of ...")
     if show_expected:
         detail = (
-            f"{name}.T @ {name} should be\n{np.array2string(P, precision=6)}\nbut it is\n"
+            f"its S.T @ S should be\n{np.array2string(P, precision=6)}\nbut it is\n"
             f"{np.array2string(S.T @ S, precision=6)}"
         )
     else:
-        detail = f"{name}.T @ {name} differs from the reference covariance by up to {worst:.3g} (relative)"
+        detail = f"its S.T @ S differs from the reference covariance by up to {worst:.3g} (relative)"
     raise AssertionError(f"{name} is not a square root of the right covariance: {detail}. {hint}".strip())
 
 

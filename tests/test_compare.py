@@ -253,6 +253,21 @@ def test_warnings_fail_with_a_message_or_reach_the_check_that_asked_for_them(ker
     assert np.isnan(value[0]) and [w.category for w in caught] == [RuntimeWarning]
 
 
+def test_a_plot_drawn_with_pyplot_is_told_to_draw_on_its_axes_not_to_look_for_a_negative_log(kernel):
+    """A student's plot that draws with plt.plot leaves the graded Axes without labelled artists, and its
+    legend warns: the message said to look for "a log or square root of a negative number" (fairness
+    review of reentry-srekf)."""
+    source = ("def draw(ax, t):\n    import matplotlib.pyplot as plt\n    plt.plot(t, t, label='truth')\n"
+              "    ax.legend()\n    return ax\n")
+    from matplotlib.figure import Figure
+
+    student = kernel(_define(source), "draw")
+    with pytest.raises(AssertionError) as failed:
+        isolate(student, type(np)("reference"), ("draw",))(Figure().subplots(), np.arange(3.0))
+    message = str(failed.value)
+    assert "No artists with labels" in message and "draw with ax.plot" in message and "negative" not in message, message
+
+
 def test_an_object_the_wire_cannot_carry_is_a_clear_failure(kernel):
     """The eq-dunder trick (an object that equals anything) never reaches a comparison."""
     source = ("class Anything:\n    def __eq__(self, other):\n        return True\n"

@@ -693,6 +693,12 @@ def test_check_helpers_accept_right_and_reject_wrong_answers(seed: int) -> None:
         starship.check_square_root(np.linalg.cholesky(P), P, "S")
     with pytest.raises(AssertionError, match="not a square root"):
         starship.check_square_root(np.triu(P), P, "S")
+    # a hidden test names its case in a phrase; the message must not paste ".T @ S" onto it
+    for show_expected in (True, False):
+        with pytest.raises(AssertionError) as failed:
+            starship.check_square_root(2 * S, P, "S for the step of a Gaussian, with 3 noise inputs",
+                                       show_expected=show_expected)
+        assert "inputs.T" not in str(failed.value) and "its S.T @ S" in str(failed.value), str(failed.value)
     x = np.array([9000.0, -300.0, 1e-3])
     starship.check_jacobian(ref.ballistic_jacobian(x), ref.ballistic_dynamics, x, "J")
     with pytest.raises(AssertionError, match="finite differences"):

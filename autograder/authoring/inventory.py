@@ -140,4 +140,6 @@ def print_inventory(labs: list[Lab]) -> None:
             f"of which the hidden tests kill {m.killed}, {m.equivalent} are listed as equivalent "
             f"(solutions/{i.lab.replace('-', '_')}/mutants.py) and {len(m.surviving)} survive; the message of {m.narrowed} "
             f"of the {m.killed} killed ({m.narrowed / max(m.killed, 1):.0%}) narrows the cause (the kinds of case it is "
-            "wrong on, or a catalogued mistake).", 100, break_on_hyphens=False))
+            f"wrong on, or a catalogued mistake). Of the {m.plausible} killed mutants a student could plausibly write "
+            f"(autograder/authoring/mutants.py, PLAUSIBLE), the visible checks fail {m.plausible_seen} "
+            f"({m.plausible_seen / max(m.plausible, 1):.0%}).", 100, break_on_hyphens=False))

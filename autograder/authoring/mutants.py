@@ -38,7 +38,14 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from autograder.authoring.visible_checks import visible_verdicts
 from autograder.labs import Lab
+
+PLAUSIBLE = frozenset({"operator", "comparison", "sign", "transpose", "swap-arguments", "drop-term", "index", "off-by-one"})
+"""The kinds of mutant a student could plausibly write (a wrong sign or operator, a missing transpose or
+term, swapped arguments, an index or a range off by one); changed constants, dropped statements and
+negated returns are the mutation tool's, not a student's. The report says how many of these the
+visible checks already fail (issue: visible checks that can see the common mistakes)."""
 
 TIME_LIMIT_S = 20
 """A mutant whose hidden test runs longer than this is killed (it hangs, or it is far too slow)."""
@@ -231,17 +238,22 @@ class Report:
     narrowed: int
     """Killed mutants whose failing message says on which kinds of case the function is right and on
     which wrong (autograder/hidden_tests/case_kinds.py), or names a catalogued mistake."""
+    plausible: int
+    """Killed mutants of the PLAUSIBLE kinds."""
+    plausible_seen: int
+    """Of those, the ones that the blank's visible checks already fail, in the solved notebook."""
 
 
-def report(lab: Lab, blanks: list[str] | None = None) -> Report:
-    """Make and run every mutant of the lab's blanks (all of them by default)."""
+def report(lab: Lab, blanks: list[str] | None = None, *, visible: bool = True) -> Report:
+    """Make and run every mutant of the lab's blanks (all of them by default); with ``visible``, run the
+    visible checks on the plausible killed ones too (else ``plausible_seen`` is 0)."""
     from autograder import cells
 
     start = time.monotonic()
     reference = lab.reference()
     listed = equivalent(lab)
     total = dead = same = narrowed = 0
-    surviving = []
+    surviving, plausible = [], []
     for blank in blanks or cells.blank_names(cells.read(lab.source_notebook)):
         for mutant in mutants(blank, inspect.getsource(getattr(reference, blank))):
             total += 1
@@ -255,4 +267,8 @@ def report(lab: Lab, blanks: list[str] | None = None) -> Report:
             dead += 1
             message = " ".join([str(error), *getattr(error, "__notes__", [])])
             narrowed += f"Your {blank} is right on " in message or "Diagnosis:" in message
-    return Report(lab.id, total, dead, same, tuple(surviving), time.monotonic() - start, narrowed)
+            if mutant.id.split("@")[0] in PLAUSIBLE:
+                plausible.append(mutant)
+    verdicts = visible_verdicts(lab, [(f"{m.blank} {m.id}", m.blank, m.source) for m in plausible if visible])
+    seen = sum(verdicts.get(f"{m.blank} {m.id}") is not None for m in plausible)
+    return Report(lab.id, total, dead, same, tuple(surviving), time.monotonic() - start, narrowed, len(plausible), seen)

@@ -99,6 +99,24 @@ def with_globals(function: Callable, names: dict[str, Callable]) -> Callable:
     return copied
 
 
+WARNING_CAUSES = (
+    ("No artists with labels found to put in legend",
+     "Nothing labelled was drawn on the Axes you were given: draw with ax.plot and ax.fill_between on that ax. "
+     "plt.plot and plt.fill_between draw on pyplot's current Axes, which is another one when you are graded."),
+)
+"""(a warning message's beginning, its likely cause in a graded function): for warnings whose cause is not numeric."""
+
+
+def warning_failure(name: str, category: str, message: str) -> str:
+    """Why a graded function that warned fails: the warning, then its likely cause."""
+    cause = next((why for start, why in WARNING_CAUSES if message.startswith(start)), None)
+    if cause is None and category == "RuntimeWarning":
+        cause = ("Find the computation that triggers it (a log or square root of a negative number, a division by "
+                 "zero, an overflow) and fix it.")
+    return (f"{name} gave the warning {category}: {message.rstrip('.')}. A graded function must run without warnings. "
+            f"{cause or 'Find the call that gives it and change it.'}")
+
+
 def _isolated(func: Callable, reference: types.ModuleType, blanks: Iterable[str], warnings_fail: bool) -> Callable:
     """``isolate``'s copy of ``func``, not yet observable."""
     compare = sys.modules.get("autograder.pipeline.compare")  # imported by the grader only, not in a kernel run by hand
@@ -117,12 +135,7 @@ def _isolated(func: Callable, reference: types.ModuleType, blanks: Iterable[str]
             warnings.simplefilter("always")
             result = copy(*args, **kwargs)
         if caught:
-            first = caught[0]
-            raise AssertionError(
-                f"{func.__name__} gave the warning {first.category.__name__}: {first.message}. A graded function "
-                "must run without warnings: find the computation that triggers it (a log or square root of "
-                "a negative number, a division by zero, an overflow) and fix it."
-            )
+            raise AssertionError(warning_failure(func.__name__, caught[0].category.__name__, str(caught[0].message)))
         return result
 
     return without_warnings

@@ -50,7 +50,7 @@ from nbformat import NotebookNode
 from nbformat.v4 import new_output
 
 from autograder import cells
-from autograder.hidden_tests.isolate import called_blanks
+from autograder.hidden_tests.isolate import called_blanks, warning_failure
 from autograder.kernel import side
 from autograder.kernel.side import Peer, PeerGone, PeerTimeout, ProtocolError, Wire, warning_class
 from autograder.pipeline import served_calls
@@ -207,11 +207,7 @@ class StudentFunction:
         print(str(header.get("stderr", "")), end="", file=sys.stderr)
         caught = [(str(c), str(m)) for c, m in header.get("warnings", []) if isinstance(c, str)]
         if caught and header.get("op") == "return" and self.warnings_fail:
-            category, message = caught[0]
-            raise AssertionError(
-                f"{self.__name__} gave the warning {category}: {message}. A graded function must run without "
-                "warnings: find the computation that triggers it (a log or square root of a negative number, "
-                "a division by zero, an overflow) and fix it.")
+            raise AssertionError(warning_failure(self.__name__, *caught[0]))
         result = peer.apply_answer(header, buffers, args, kwargs)
         for category, message in caught:
             warnings.warn(message, warning_class(category), stacklevel=2)
@@ -289,9 +285,7 @@ def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[
         out.write(f"{w.category.__name__}: {w.message}\n")
     if caught and not outputs:
         first = caught[0]
-        outputs.append(error_output("AssertionError", f"{test.blank} gave the warning {first.category.__name__}: "
-                                    f"{first.message}. A graded function must run without warnings: find the "
-                                    "computation that triggers it and fix it."))
+        outputs.append(error_output("AssertionError", warning_failure(test.blank, first.category.__name__, str(first.message))))
     printed = out.getvalue()
     streams = [new_output("stream", name="stdout", text=printed)] if printed else []
     return streams + outputs, out.written

@@ -101,6 +101,10 @@ def check_simulate_radar(func: Callable) -> None:
                                    "simulate_radar(x0, t, sigma, rng)", "x_true", "b")
             x_true = check_array(x_true, f"x_true for {label}", (3, n), "One column per time t_j; rows h, v, beta.")
             b = check_array(b, f"b for {label}", (n,), "One reading per time t_j.")
+            # x(t_0) = x0: a truth that starts anywhere else is off for a reason no tolerance explains
+            check_close(x_true[:, 0], x0, f"the truth at the first time t[0] for {label}",
+                        "The object is at x0 at the first time t[0], which is not 0 here: start the integration at t[0].",
+                        rtol=1e-9, atol=1e-6, show_expected=False)
             want_x, want_b = ref.simulate_radar(x0, t, sigma, np.random.default_rng(seed))
             check_close(x_true[0], want_x[0], f"the true altitude for {label}", tolerance_hint, rtol=0.0, atol=1.0,
                         show_expected=False)

@@ -109,4 +109,7 @@ MISTAKES = (
     Mistake("plot_ballistic_coefficient", "truth-missing", "plots the estimate twice, never the truth",
             "ax.plot(t, c_true,", "ax.plot(t, c_mean,",
             hint="Your plot_ballistic_coefficient behaves as if it drew the estimate twice and never the truth."),
+    Mistake("plot_ballistic_coefficient", "pyplot-truth", "draws the truth with plt.plot, on pyplot's current Axes instead of ax",
+            "    ax.plot(t, c_true,", "    import matplotlib.pyplot as plt  # the notebook's set-up cell imports it\n    plt.plot(t, c_true,",
+            hint="Your plot_ballistic_coefficient behaves as if it drew the truth with plt.plot, which draws on pyplot's current Axes, not on the ax it is given."),
 )
