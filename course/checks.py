@@ -24,6 +24,10 @@ class NotWrittenYet(Exception):
     """A cell needs a blank that still holds its stub."""
 
 
+class NotPassingYet(AssertionError):
+    """``validate``: a blank does not pass its visible checks yet (its message already says why, once)."""
+
+
 def require(*functions: Callable) -> None:
     """Stop a cell early, with a clear message, if a blank it needs is not written yet."""
     if _hooks_installed():
@@ -367,7 +371,7 @@ def validate(function: Callable) -> None:
     else:
         message = (f"{name} has not passed its visible checks since you last defined it: run the check "
                    f"cell below {name} and fix what its message says.")
-    raise AssertionError(_wrap(message, len("AssertionError: ")))
+    raise NotPassingYet(_wrap(message, len("NotPassingYet: ")))
 
 
 # What an exception raised inside a student's function usually means, by type and message.
@@ -485,7 +489,9 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     called = _calls(checked) if checked else []
     message = explain(value, tb, list(dict.fromkeys(([checked] if checked else []) + required + called)))
     said = message or f"{etype.__name__}: {value}"
-    upstream = [] if isinstance(value, NotWrittenYet) else _not_passing([n for n in required + called if n != checked])
+    # NotPassingYet already names the blank that fails and what its check said: wrapping it would say it twice
+    upstream = ([] if isinstance(value, (NotWrittenYet, NotPassingYet))
+                else _not_passing([n for n in required + called if n != checked]))
     if upstream:
         w = _upstream(upstream)
         message = _wrap(f"This {'check' if checked else 'cell'} uses {w['your']}, which {w['does']} not pass "
