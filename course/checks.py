@@ -499,8 +499,10 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
                         f"then run this cell again.") + f"\n\n(The {f'check of {checked}' if checked else 'cell'} said:\n{said})"
     if checked is not None and not isinstance(value, NotWrittenYet):
         _passed.pop(checked, None)
+        # both causes, as either may be the one: the blank it uses, then what its own check said
         _failed[checked] = (_current(checked), f"Its check uses {w['your']}, which {w['does']} not pass {w['its']} own "
-                            f"visible checks yet: fix {w['that']} first." if upstream else f"Its check cell says:\n{said}")
+                            f"visible checks yet: fix {w['that']} first. Its check cell also says:\n{said}" if upstream
+                            else f"Its check cell says:\n{said}")
     if message is None:
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []

@@ -118,6 +118,8 @@ def test_in_a_kernel_a_check_explains_the_error_and_blames_the_blank_that_fails_
     assert check_update.startswith("This check uses your gain, which does not pass its visible checks yet; fix that first"), check_update
     assert "(The check of update said: LinAlgError in your update: Singular matrix" in check_update
     assert errors[5].ename == "NotPassingYet" and "update does not pass its visible checks yet. Its check uses your gain" in " ".join(text[5].split())
+    # update may fail for its own reason too: Validate says what its check said as well
+    assert "Its check cell also says: LinAlgError in your update" in " ".join(text[5].split()), text[5]
     assert "gain does not pass its visible checks yet. Its check cell says: LinAlgError in your gain" in " ".join(text[6].split())
     # said once: no "This cell uses your update, which does not pass ... (The cell said: update does not pass ...)"
     assert all(t.count("does not pass its visible checks yet") == 1 and "This cell uses" not in t for t in text[5:7]), text[5:7]
