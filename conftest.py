@@ -31,9 +31,15 @@ def pytest_addoption(parser: pytest.Parser) -> None:
     parser.addoption("--lab", action="append", default=[], metavar="LAB", type=lambda name: name.replace("_", "-"),
                      help="run only the tests of this lab (its id, e.g. train-kf; repeat for several): the others "
                           "are deselected, and the grading fixtures grade this lab only")
+    parser.addoption("--file-seconds", metavar="PATH", default=None,
+                     help="write each test file's busy seconds to PATH as JSON, as tests/file_seconds.json records them "
+                          "for the run's order (tests/time_per_file.py)")
 
 
 def pytest_configure(config: pytest.Config) -> None:
+    if hasattr(config.option, "loadscopereorder"):
+        # xdist would hand out files by their number of tests; tests/conftest.py orders them slowest first
+        config.option.loadscopereorder = False
     config.addinivalue_line("markers", "labs(*lab_ids): the labs a test concerns, for --lab (none: a test of the kit itself)")
     unknown = sorted(set(config.getoption("lab")) - {lab.id for lab in all_labs()})
     if unknown:

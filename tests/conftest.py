@@ -1,10 +1,12 @@
 """Runs every test that draws random numbers on seed 0 and 20 other seeds (see tests/random_draws.py)."""
 
+import json
+
 import pytest
 
 import machine_needs
 from random_draws import SEEDS
-from time_per_file import write_summary
+from time_per_file import SECONDS_FILE, slowest_first, write_summary
 
 
 def pytest_configure(config: pytest.Config) -> None:
@@ -18,8 +20,9 @@ def pytest_configure(config: pytest.Config) -> None:
 
 
 def pytest_collection_modifyitems(items: list[pytest.Item]) -> None:
-    """Skip, saying what to install, a test whose need this machine lacks (tests/machine_needs.py), unless
-    every test must run (CI): then it fails in its set-up."""
+    """Run the slowest files first (tests/time_per_file.py); skip, saying what to install, a test whose need
+    this machine lacks (tests/machine_needs.py), unless every test must run (CI): then it fails in its set-up."""
+    slowest_first(items, json.loads(SECONDS_FILE.read_text()) if SECONDS_FILE.exists() else {})
     if machine_needs.run_every_test():
         return
     for item in items:

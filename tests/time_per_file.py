@@ -8,8 +8,10 @@ needs to know to bring CI's time down (split a slow file, or move work between f
 
 from __future__ import annotations
 
+import json
 from collections import defaultdict
 from dataclasses import dataclass
+from pathlib import Path
 
 import pytest
 
@@ -59,11 +61,39 @@ def summary_lines(files: dict[str, FileTime], slowest: int = 15) -> list[str]:
     return lines
 
 
+SECONDS_FILE = Path(__file__).with_name("file_seconds.json")
+"""Each test file's busy seconds in a whole run of README's test command, which the run's order
+follows (``slowest_first``); ``--file-seconds`` writes it again."""
+UNKNOWN_SECONDS = 60.0
+"""The cost assumed for a file that the record does not name yet (a new one): early, not last."""
+
+
+def slowest_first(items: list[pytest.Item], seconds: dict[str, float]) -> None:
+    """Order ``items`` so that the files that took longest come first, each file's tests in their order.
+
+    With ``-n 2 --dist loadfile`` xdist hands whole files to the workers in this order (its own
+    reorder, by the number of tests, is turned off), so the longest files start at once and the
+    short ones fill in at the end: both workers finish close together."""
+    order = {path: i for i, path in enumerate(dict.fromkeys(item.nodeid.split("::")[0] for item in items))}
+    items.sort(key=lambda item: (-seconds.get(item.nodeid.split("::")[0], UNKNOWN_SECONDS),
+                                 order[item.nodeid.split("::")[0]]))
+
+
+def write_seconds(path: Path, files: dict[str, FileTime]) -> None:
+    """Record each file's busy seconds (rounded), for ``slowest_first`` in later runs."""
+    path.write_text(json.dumps({name: round(time.seconds) for name, time in sorted(files.items())}, indent=1) + "\n")
+
+
 def write_summary(terminalreporter: pytest.TerminalReporter) -> None:
-    """Write the summary under its own heading (nothing if no test ran)."""
+    """Write the summary under its own heading (nothing if no test ran); with ``--file-seconds PATH``,
+    record each file's seconds there."""
     reports = [report for reports in terminalreporter.stats.values() for report in reports
                if isinstance(report, pytest.TestReport) and report.duration]
-    lines = summary_lines(file_times(reports))
+    files = file_times(reports)
+    record = terminalreporter.config.getoption("file_seconds", None)
+    if record and files:
+        write_seconds(Path(record), files)
+    lines = summary_lines(files)
     if lines:
         terminalreporter.write_sep("=", "time per test file and worker")
         for line in lines:
