@@ -33,6 +33,7 @@ import signal
 import textwrap
 import time
 import types
+import warnings
 from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 
@@ -269,6 +270,10 @@ def report(lab: Lab, blanks: list[str] | None = None, *, visible: bool = True) -
             narrowed += f"Your {blank} is right on " in message or "Diagnosis:" in message
             if mutant.id.split("@")[0] in PLAUSIBLE:
                 plausible.append(mutant)
-    verdicts = visible_verdicts(lab, [(f"{m.blank} {m.id}", m.blank, m.source) for m in plausible if visible])
+    with warnings.catch_warnings(), np.errstate(all="ignore"):
+        # a mutant's NaNs and divisions by zero are what it is: its verdict is measured, its warnings would
+        # only fill the instructor's terminal (`python -m autograder labs`)
+        warnings.simplefilter("ignore", RuntimeWarning)
+        verdicts = visible_verdicts(lab, [(f"{m.blank} {m.id}", m.blank, m.source) for m in plausible if visible])
     seen = sum(verdicts.get(f"{m.blank} {m.id}") is not None for m in plausible)
     return Report(lab.id, total, dead, same, tuple(surviving), time.monotonic() - start, narrowed, len(plausible), seen)
