@@ -83,6 +83,15 @@ def _details(lines: list[str], student: str) -> list[str]:
     return lines[at:end]
 
 
+def test_the_table_prints_no_terminal_control_from_a_submissions_message():
+    """Adversarial review: a blank that raised an error whose message held escape sequences (cursor up,
+    erase line, window title, clipboard, hyperlink) had them printed raw, which can overprint rows."""
+    hostile = "ValueError: x\x1b[1A\x1b[2Kalice 9/9 full marks\x1b]0;owned\x07\x1b]52;c;cm0gLXJm\x07\x9b2J\x1b]8;;http://x\x1b\\ok\rz"
+    text = table.format_table([_row("mallory", {"test_a": hostile}, ["test_a"])], width=100)
+    assert not re.search(r"[\x00-\x09\x0b-\x1f\x7f-\x9f]", text), repr(text)
+    assert "alice 9/9 full marks" in text, "the words stay, as plain text"
+
+
 def test_the_table_fits_100_columns_with_whole_words_and_each_lost_cell_once():
     rows = [
         _row("a-student-with-a-very-long-identifier-from-the-lms-export", {"test_a": LONG}, ["test_a"]),

@@ -31,6 +31,7 @@ from autograder.kernel import sandbox
 from autograder.labs import ROOT
 from autograder.kernel.sandbox import SandboxedKernelManager, launcher_command
 from autograder.kernel.manager import PRIVATE_PARENT
+from autograder.kernel.remove_tree import remove_tree
 
 KERNEL_ARGUMENTS = ["--HistoryManager.hist_file=:memory:", "--IPKernelApp.log_level=ERROR"]
 
@@ -302,6 +303,49 @@ def test_a_sandboxed_kernel_runs_the_labs_work_and_reaches_nothing_else(graded_c
     }
     assert (alice / "figure.png").stat().st_size > 0 and (alice / "notes.txt").exists()
     assert not planted.exists() and not (graded_class["work"] / "grades.csv").exists()
+
+
+def test_a_kernel_holds_none_of_the_graders_terminal_or_log(graded_class, capfd):
+    """Adversarial review: the kernel inherited the grader's stdin, stdout and stderr, so it could read the
+    instructor's typeahead from the terminal, truncate and flood the grading log, and write escape codes
+    or forged table rows into the grader's output. Its descriptors 0, 1 and 2 are now /dev/null."""
+    code = PROBE_HELPERS + """
+import stat, sys
+null = os.stat("/dev/null").st_rdev
+# ipykernel keeps a copy of the descriptors it was started with, before it captured 1 and 2 for the notebook
+started = [0, sys.stdout._original_stdstream_copy, sys.stderr._original_stdstream_copy]
+for fd in started[1:]:
+    os.write(fd, b"KIT-FORGED-ROW alice 9/9 full marks\\n")
+print(json.dumps([stat.S_ISCHR(os.fstat(fd).st_mode) and os.fstat(fd).st_rdev == null for fd in started]))
+"""
+    printed = run_in_kernel(code, graded_class["alice"])
+    assert json.loads(printed.strip().splitlines()[-1]) == [True, True, True], printed
+    grader = capfd.readouterr()
+    assert "KIT-FORGED-ROW" not in grader.out + grader.err
+
+
+NEST = """
+import os
+for _ in range(3000):  # past PATH_MAX, by chdir, deeper than shutil.rmtree's recursion in Python 3.11
+    os.mkdir("d")
+    os.chdir("d")
+open("payload", "w").write("left behind")
+"""
+
+
+def test_a_folder_a_kernel_nested_3000_deep_is_removed(tmp_path):
+    """Adversarial review: shutil.rmtree raised RecursionError on it (ignore_errors does not cover that),
+    so the kernel's private folder and the scratch copy stayed in /tmp and the submission was not graded."""
+    subprocess.run([sys.executable, "-c", NEST], cwd=tmp_path, check=True)
+    with pytest.raises(RecursionError):
+        shutil.rmtree(tmp_path / "d", ignore_errors=True)
+    remove_tree(tmp_path / "d")
+    assert not (tmp_path / "d").exists()
+
+
+def test_a_kernel_that_nests_its_private_folder_deep_leaves_nothing(graded_class):
+    """run_in_kernel asserts that the private folder is gone after the kernel."""
+    run_in_kernel(f"os = __import__('os'); os.chdir(os.environ['TMPDIR']); exec({NEST!r})", graded_class["alice"])
 
 
 def test_a_grading_kernel_gets_none_of_the_graders_secrets_in_its_environment(graded_class, monkeypatch):

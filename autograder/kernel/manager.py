@@ -26,6 +26,7 @@ from jupyter_client.manager import AsyncKernelManager
 from traitlets import CaselessStrEnum, Integer, List, Type, Unicode
 
 from autograder.labs import ROOT
+from autograder.kernel.remove_tree import remove_tree
 from autograder.kernel.sandbox import launcher_command, wanted_layers
 
 PRIVATE_PARENT = "/tmp"
@@ -146,7 +147,7 @@ class SandboxedKernelManager(AsyncKernelManager):
         private = Path(tempfile.mkdtemp(prefix="kit-", dir=PRIVATE_PARENT))
         for name in ("tmp", "home", "ipython", "matplotlib", "runtime"):
             (private / name).mkdir()
-        weakref.finalize(self, shutil.rmtree, private, ignore_errors=True)
+        weakref.finalize(self, remove_tree, private)
         self.connection_file = str(private / "kernel.json")
         self.ip = str(private / "ipc")
         return private
@@ -175,6 +176,10 @@ class SandboxedKernelManager(AsyncKernelManager):
             MPLCONFIGDIR=str(self._private / "matplotlib"),
             JUPYTER_RUNTIME_DIR=str(self._private / "runtime"),
         )
+        # the kernel's own file descriptors 0-2 go nowhere: inherited, they were the grader's terminal and
+        # log, which a kernel could read typeahead from, truncate, flood or write escape codes to (what a
+        # kernel prints reaches the notebook through its messages, not through these)
+        kw.update(stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
         return [*launcher_command(read, write, wanted_layers()), *kernel_cmd], kw
 
     async def _async_shutdown_kernel(self, now: bool = False, restart: bool = False) -> None:
@@ -189,7 +194,7 @@ class SandboxedKernelManager(AsyncKernelManager):
         """jupyter_client's clean-up, and the private folder removed unless the kernel restarts."""
         await super()._async_cleanup_resources(restart=restart)
         if not restart and self._private is not None:
-            shutil.rmtree(self._private, ignore_errors=True)
+            remove_tree(self._private)  # the kernel wrote in it: of any depth
             self._private = None
 
 

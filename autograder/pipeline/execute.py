@@ -43,6 +43,7 @@ from traitlets import Float, Integer
 
 from autograder import cells
 from autograder.kernel import sandbox
+from autograder.kernel.remove_tree import remove_tree
 from autograder.hidden_tests import cases
 from autograder.pipeline import compare, confined_check, grading_secret, verdicts
 from autograder.pipeline.output_caps import OutputBudget
@@ -352,16 +353,17 @@ def _scratch_copy(resources: dict):
     sends nbgrader's write to the gradebook or another student's file. Yields the scratch folder."""
     metadata = resources.setdefault("metadata", {})
     folder = metadata.get("path")
-    with tempfile.TemporaryDirectory(prefix="kit-work-") as scratch:
+    scratch = tempfile.mkdtemp(prefix="kit-work-")
+    try:
         if folder and os.path.isdir(folder):
             for entry in os.scandir(folder):
                 if entry.is_file(follow_symlinks=False):
                     shutil.copy2(entry.path, scratch)
         metadata["path"] = scratch
-        try:
-            yield scratch
-        finally:
-            metadata["path"] = folder
+        yield scratch
+    finally:
+        metadata["path"] = folder
+        remove_tree(scratch)  # the kernel wrote in it: of any depth (autograder/kernel/remove_tree.py)
 
 
 @functools.cache

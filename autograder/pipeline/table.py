@@ -3,6 +3,7 @@ its points, at most 100 columns wide."""
 
 from __future__ import annotations
 
+import re
 import shutil
 import textwrap
 
@@ -10,6 +11,10 @@ from autograder.pipeline.grades import GradeRow
 
 TABLE_WIDTH = 100
 """The widest the summary table gets, in characters (narrower if the terminal is)."""
+CONTROL = re.compile(r"[\x00-\x09\x0b-\x1f\x7f-\x9f]")
+"""Every control character but the newline: ESC and CSI begin the terminal's escape sequences (move the
+cursor, erase a line, set the window's title or the clipboard, make a link), which a submission's error
+message could hold; the table prints none of them, whatever a message says."""
 
 
 def _lost_lines(row: GradeRow) -> list[str]:
@@ -52,7 +57,7 @@ def format_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = N
             lines += line(student, lab_id, "-", "not graded: see the log")
     lines.append("-" * width)
     lines += textwrap.wrap("Scores count the autograded cells only: written answers are graded by hand in formgrader.", width)
-    return "\n".join(lines)
+    return CONTROL.sub("", "\n".join(lines))
 
 
 def print_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None) -> None:
