@@ -174,6 +174,22 @@ def test_a_students_upload_without_times_cannot_stop_the_class(tmp_path):
     assert [path for path, _ in report.skipped] == ["bob_2026-10-09-10-00-00_upload/alice_x.ipynb"]
 
 
+def test_a_file_name_that_reads_as_an_impossible_time_is_that_students_refusal(tmp_path):
+    """Adversarial review: an LMS that writes <name>_<student's file name> let dave name his file
+    2026-13-45-99-99-99_sub.ipynb, which the default pattern read as a time: collect raised and
+    collected nobody."""
+    download = tmp_path / "download"
+    download.mkdir()
+    (download / "bob_2026-10-09-11-00-00_sub.ipynb").write_text(notebook("bob"))
+    (download / "dave_2026-13-45-99-99-99_sub.ipynb").write_text(notebook("dave"))
+    students = tmp_path / "students.csv"
+    students.write_text(STUDENTS)
+    report = collect(LAB, download, students, tmp_path / "out")
+    assert report.students == ["s002"] and tag(tmp_path / "out/s002/train-kf/train-kf.ipynb") == "bob"
+    [(path, reason)] = report.skipped
+    assert path == "dave_2026-13-45-99-99-99_sub.ipynb" and "dave (s004)" in reason and "not a date" in reason
+
+
 def test_a_student_list_mapping_one_name_twice_is_refused(download, tmp_path):
     zip_path, _ = download
     students = tmp_path / "twice.csv"

@@ -234,7 +234,13 @@ class StudentIdCollector(FileNameCollectorPlugin):
             if name not in self.students:
                 return f"unknown student {name!r}: not in the student list"
         stamp = match.groupdict().get("timestamp")
-        return Collected(relative, self.students[name], parse_time(stamp, self.timezone) if stamp else None)
+        try:
+            time = parse_time(stamp, self.timezone) if stamp else None
+        except (ValueError, TypeError, OverflowError):
+            # a student's own file name after the LMS's name can look like a time that is no date: that file is
+            # this student's refusal, never the whole class's (it stopped collect for everyone)
+            return f"{self._label(name)}: the submission time its name gives, {stamp!r}, is not a date, so it is not collected"
+        return Collected(relative, self.students[name], time)
 
     def _make_plan(self) -> dict[str, dict]:
         """Every file of the extracted download, as nbgrader walks it: the collected notebooks' infos
