@@ -190,6 +190,22 @@ def test_a_file_name_that_reads_as_an_impossible_time_is_that_students_refusal(t
     assert path == "dave_2026-13-45-99-99-99_sub.ipynb" and "dave (s004)" in reason and "not a date" in reason
 
 
+def test_a_timestamp_that_is_no_time_is_left_out_with_a_note_and_the_submission_is_graded(tmp_path):
+    """Adversarial review: a timestamp.txt that nbgrader cannot read made the submission "not graded"."""
+    from autograder.pipeline.restore import grader_notes
+
+    for student, stamp in (("s001", "the day before yesterday"), ("s002", "2026-10-09 10:00:00.000000 UTC")):
+        (tmp_path / "subs" / student / LAB.id).mkdir(parents=True)
+        (tmp_path / "subs" / student / LAB.id / LAB.notebook_name).write_text(notebook(student))
+        (tmp_path / "subs" / student / LAB.id / "timestamp.txt").write_text(stamp)
+    intake.import_submissions(tmp_path / "subs", tmp_path / "course", [LAB])
+    taken = tmp_path / "course" / "submitted"
+    assert not (taken / "s001" / LAB.id / "timestamp.txt").exists()
+    assert any("timestamp.txt does not hold a time" in note
+               for note in grader_notes(nbformat.read(taken / "s001" / LAB.id / LAB.notebook_name, as_version=4)))
+    assert (taken / "s002" / LAB.id / "timestamp.txt").read_text() == "2026-10-09 10:00:00.000000 UTC"
+
+
 def test_a_student_list_mapping_one_name_twice_is_refused(download, tmp_path):
     zip_path, _ = download
     students = tmp_path / "twice.csv"

@@ -11,6 +11,7 @@ from collections.abc import Callable
 from pathlib import Path
 
 import nbformat
+from nbgrader.utils import parse_utc
 from nbformat import NotebookNode
 
 from autograder import cells
@@ -106,12 +107,15 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
         for student in by_lab[lab.id]:
             folder = submissions / student / lab.id
             nb, notes = read_submission(folder, lab)
+            stamp = _submission_time(folder / "timestamp.txt")
+            if isinstance(stamp, str):
+                notes.append(stamp)
             add_grader_notes(nb, notes)
             target = workdir / "submitted" / student / lab.id
             target.mkdir(parents=True, exist_ok=True)
             files = {lab.notebook_name: (nbformat.writes(nb).rstrip("\n") + "\n").encode()}  # as nbformat.write
-            if (folder / "timestamp.txt").exists() and not (folder / "timestamp.txt").is_symlink():
-                files["timestamp.txt"] = (folder / "timestamp.txt").read_bytes()
+            if isinstance(stamp, bytes):
+                files["timestamp.txt"] = stamp
             for stale in target.iterdir():
                 if stale.name in files or stale.name.startswith(PARTIAL):
                     continue
@@ -122,6 +126,22 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
             for name, data in files.items():
                 _replace(target / name, data)
     return by_lab
+
+
+def _submission_time(path: Path) -> bytes | str | None:
+    """The ``timestamp.txt`` to copy (bytes), or a note on why it is left out (str), or None if there is none.
+
+    One that nbgrader cannot read as a time made the whole submission "not graded" (adversarial review):
+    it is left out, so the submission is graded with no late penalty, and the note tells the instructor."""
+    if not path.exists() or path.is_symlink():
+        return None
+    data = path.read_bytes()[:200]
+    try:
+        parse_utc(data.decode().strip())
+    except (ValueError, OverflowError, UnicodeDecodeError, TypeError):
+        return ("Its timestamp.txt does not hold a time, so it was left out: no late penalty was computed. "
+                "Check when it was submitted.")
+    return data
 
 
 PARTIAL = ".partial-"
