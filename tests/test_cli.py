@@ -83,6 +83,13 @@ def _details(lines: list[str], student: str) -> list[str]:
     return lines[at:end]
 
 
+def test_the_table_shows_a_late_penalty_and_the_total_that_grades_csv_has():
+    """The summary said "alice 9/9 full marks" while grades.csv had late_penalty 4.5 and total 4.5."""
+    late = GradeRow("alice", "train-kf", {"test_a": 9.0}, {"test_a": 9.0}, frozenset({"test_a"}), late_penalty=4.5)
+    lines = _details(table.format_table([late], width=100).splitlines(), "alice")
+    assert lines == ["    Late: a penalty of 4.5 points, so its total is 4.5 (grades.csv's total)."], lines
+
+
 def test_the_table_prints_no_terminal_control_from_a_submissions_message():
     """Adversarial review: a blank that raised an error whose message held escape sequences (cursor up,
     erase line, window title, clipboard, hyperlink) had them printed raw, which can overprint rows."""

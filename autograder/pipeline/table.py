@@ -49,7 +49,9 @@ def format_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = N
         else:
             result = f"lost {len(row.lost)} of {len(row.autograded)} cells"
         lines += line(row.student, row.lab, f"{row.auto_score:g}/{row.auto_max:g}", result)
-        for text in [*row.notes, *_lost_lines(row)]:
+        late = ([f"Late: a penalty of {row.late_penalty:g} points, so its total is {row.total:g} (grades.csv's total)."]
+                if row.late_penalty else [])
+        for text in [*late, *row.notes, *_lost_lines(row)]:
             lines += textwrap.wrap(" ".join(text.split()), width, initial_indent=indent, subsequent_indent=indent + "  ",
                                    max_lines=3, placeholder=" ...", break_on_hyphens=False)
     for lab_id, students in (failures or {}).items():
