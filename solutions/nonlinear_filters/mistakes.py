@@ -25,6 +25,11 @@ MISTAKES = (
     Mistake("unscented_points", "centre-weight-kappa-over-n", "centre weight kappa/n: the weights no longer sum to 1",
             "[kappa / (n + kappa)]", "[kappa / n]",
             hint="Your unscented_points behaves as if the centre weight were kappa/n: the weights then no longer sum to 1."),
+    Mistake("unscented_points", "centre-weight-one-over-n-plus-kappa",
+            "centre weight 1/(n + kappa): right for kappa = 1 only, and the weights no longer sum to 1",
+            "[kappa / (n + kappa)]", "[1.0 / (n + kappa)]",
+            hint="Your unscented_points behaves as if the centre weight were 1/(n + kappa) instead of kappa/(n + kappa): "
+                 "the two agree only when kappa = 1."),
     Mistake("cut4_points", "conjugate-unscaled", "leaves the conjugate points (+-1, ..., +-1) unscaled",
             "r2 * signs", "signs",
             hint="Your cut4_points behaves as if the conjugate points (+-1, ..., +-1) were left unscaled."),
