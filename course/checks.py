@@ -140,6 +140,16 @@ def check_symmetric(matrix: Any, name: str, hint: str = "") -> None:
         )
 
 
+def check_true(condition: Any, what_is_wrong: str, hint: str = "") -> None:
+    """Check a yes/no property of a result (``condition``, a bool or an array of them, all true).
+
+    ``what_is_wrong`` says in words what it means when the property does not hold ("the correction for a
+    bearing near +-pi is larger than 30 m"): the message says that, not "expected 1 but got 0".
+    """
+    if not bool(np.all(condition)):
+        raise AssertionError(f"{what_is_wrong[:1].upper()}{what_is_wrong[1:]}. {hint}".strip())
+
+
 def random_spd(rng: np.random.Generator, n: int) -> np.ndarray:
     """A random symmetric positive definite n x n matrix with a modest condition number."""
     factor = rng.standard_normal((n, n))

@@ -131,10 +131,40 @@ VISIBLY_FAILED = {
     "castaway-bob": ("joseph_covariance/swapped-transposes", "run_rank2/restarts", "run_rank4/flow-at-new-time",
                      "run_rank4/handout-Q"),
     "nonlinear-filters": ("moment_error/unweighted", "moment_error/degree-at-most", "bootstrap_pf_step/bearing-not-wrapped",
-                          "bootstrap_pf_step/noise-before-f"),
+                          "bootstrap_pf_step/noise-before-f", "unscented_points/centre-weight-one-over-n-plus-kappa",
+                          "ekf_update/angle-index-hard-coded", "ekf_update/wraps-every-component",
+                          "bootstrap_pf_step/noise-L-untransposed"),
 }
 """Mistakes that passed the visible checks until issue 30 added a hand-checkable case for each (a 2-state filter
-that moves, a full R, a current that changes in time, ...): the visible checks must keep failing them."""
+that moves, a full R, a current that changes in time, ...): the visible checks must keep failing them. The last four
+of nonlinear-filters passed them until the fairness review of that lab added a case with kappa = 2, the angle at other
+places of the measurement (p = 1, and the bearing first of p = 2), and a 2-D process noise with a non-diagonal Q."""
+
+VISIBLE_MESSAGES = {
+    "nonlinear-filters": {
+        # the check of P_yy comes before the check of the mean, which a P_yy without R makes wrong as well
+        "sigma_point_update/no-R": ("Did you add R to P_yy", None),
+        # yes/no checks say in words what is wrong, not "expected 1 but got 0"
+        "ekf_update/bearing-not-wrapped": ("moves the target by more than 30 m", "expected 1 but got 0"),
+        "bootstrap_pf_step/noise-before-f": ("the variance of x_new - f(x)", "expected 1 but got 0"),
+    },
+}
+"""Mistakes whose visible check must say a given phrase, and must not say another (None: no such phrase)."""
+
+
+@pytest.mark.parametrize("lab", [Lab(lab_id) for lab_id in sorted(VISIBLE_MESSAGES)], ids=sorted(VISIBLE_MESSAGES))
+def test_the_visible_checks_name_the_cause(lab: Lab):
+    """Each listed mistake in place of the model answer: the first visible check it fails names its cause."""
+    mistakes = {f"{m.blank}/{m.slug}": m for m in catalogue(lab)}
+    model = cells.model_answers(cells.read(lab.source_notebook))
+    listed = [mistakes[key] for key in VISIBLE_MESSAGES[lab.id]]
+    verdicts = visible_verdicts(lab, [(f"{m.blank}/{m.slug}", m.blank, m.apply(model[m.blank])) for m in listed])
+    problems = []
+    for key, (said, unsaid) in VISIBLE_MESSAGES[lab.id].items():
+        message = "" if verdicts[key] is None else _message(verdicts[key], key.split("/")[0])
+        if said not in message or (unsaid is not None and unsaid in message):
+            problems.append(f"{key}: {message or 'passes the visible checks'}")
+    assert not problems, "\n".join(problems)
 
 
 @pytest.mark.parametrize("lab", [Lab(lab_id) for lab_id in sorted(VISIBLY_FAILED)], ids=sorted(VISIBLY_FAILED))

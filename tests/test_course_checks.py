@@ -5,7 +5,7 @@ import pytest
 
 from autograder import cells
 from course.checks import (NotWrittenYet, check_array, check_axis_label, check_close, check_pair, check_symmetric,
-                           label_has_unit, parse_unit, random_spd, require)
+                           check_true, label_has_unit, parse_unit, random_spd, require)
 from over_labs import over_labs
 from random_draws import random_draws
 
@@ -47,6 +47,15 @@ def test_check_close_shows_expected_values_only_when_asked():
         check_close([1.0, 3.0], [1.0, 2.0], "x", show_expected=False)
     assert "largest difference from the reference is 1" in str(hidden.value) and "2." not in str(hidden.value)
     check_close([1.0, 2.0 + 1e-12], [1.0, 2.0], "x")
+
+
+def test_a_yes_no_check_says_in_words_what_is_wrong():
+    check_true(True, "never said")
+    check_true(np.array([True, True]), "never said")
+    with pytest.raises(AssertionError) as raised:
+        check_true(np.array([True, False]), "the correction is larger than 30 m", "Wrap the bearing.")
+    assert str(raised.value) == "The correction is larger than 30 m. Wrap the bearing."
+    assert "expected" not in str(raised.value)
 
 
 def test_shape_and_pair_checks_say_what_was_wrong():

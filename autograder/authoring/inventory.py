@@ -14,7 +14,7 @@ from autograder.labs import Lab
 from autograder.catalogues.mistakes import catalogue
 from course.checks import count
 
-CHECK_HELPERS = {"check_array", "check_close", "check_pair", "check_symmetric"}
+CHECK_HELPERS = {"check_array", "check_close", "check_pair", "check_symmetric", "check_true"}
 
 
 @dataclass(frozen=True)

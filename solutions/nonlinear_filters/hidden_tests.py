@@ -3,13 +3,14 @@
 seed (``cases.rng``, one stream per check; the seed of a generator handed to the student is drawn
 from that stream too).
 
-Point sets are compared as sets (any order of the points is right). The filter steps are compared
-on random nonlinear f and h (a linear f and h make them the Kalman filter, and the reference is
-exactly that). The particle filter step is random; its checks are exact where the step is
-determined (weights, which runs resample, systematic resampling's offspring counts, with a
-negligible process noise), and one statistical check tests the process noise. Its false-fail
-probability for a correct step is at most 5 x 1e-7 = 5e-7 on every submission seed (five chi-square
-tails, see ``_check_pf_noise``).
+Point sets are compared as sets (any order of the points is right). The filter steps are compared on random
+nonlinear f and h (a linear f and h make them the Kalman filter, and the reference is exactly that), and on
+measurements with their angle at every place (alone, first of two, in the middle of three) or none, with
+differences beyond +-pi in the components that are not angles, so that an answer that wraps a fixed component,
+or every one, fails on every seed. The particle filter step is random; its checks are exact where the step is
+determined (weights, which runs resample, systematic resampling's offspring counts, with a negligible process
+noise), and one statistical check tests the process noise. Its false-fail probability for a correct step is at
+most 5 x 1e-7 = 5e-7 on every submission seed (five chi-square tails, see ``_check_pf_noise``).
 """
 
 from __future__ import annotations
@@ -26,6 +27,7 @@ from autograder.hidden_tests.diagnosis import diagnosed
 from autograder.hidden_tests.isolate import isolate
 from autograder.labs import lab_of
 from course import cut
+from course.air_traffic import symmetric_sqrt
 from course.checks import check_array, check_close, check_pair, random_spd
 
 BLANKS = lab_of(__name__).blanks()
@@ -198,6 +200,82 @@ def _bearing_case(rng: np.random.Generator) -> tuple:
     return m, P, y, h, np.diag([25.0, 0.02**2])
 
 
+# The angle cases: measurements of a target almost due west of a radar at the origin, made of
+# components at fixed places, so that an answer that wraps a fixed component (the radar's bearing,
+# the second of two), or every component, fails on every submission seed; the numbers are drawn.
+_COMPONENTS = ("range", "bearing", "range from a second radar")
+_SECOND_RADAR = np.array([800.0, -600.0])
+
+
+def _component(X, name: str):
+    """One measurement component of states X (..., 3) = (xi, eta, range bias)."""
+    if name == "bearing":
+        return np.arctan2(X[..., 1], X[..., 0])
+    if name == "range":
+        return np.hypot(X[..., 0], X[..., 1]) + X[..., 2]
+    return np.hypot(X[..., 0] - _SECOND_RADAR[0], X[..., 1] - _SECOND_RADAR[1])
+
+
+def _component_jacobian(x: np.ndarray, name: str) -> np.ndarray:
+    """The gradient of one component at a state x (3,)."""
+    if name == "bearing":
+        r2 = x[0] ** 2 + x[1] ** 2
+        return np.array([-x[1] / r2, x[0] / r2, 0.0])
+    if name == "range":
+        r = np.hypot(x[0], x[1])
+        return np.array([x[0] / r, x[1] / r, 1.0])
+    d = x[:2] - _SECOND_RADAR
+    return np.array([d[0] / np.hypot(*d), d[1] / np.hypot(*d), 0.0])
+
+
+_ORDINALS = ("first", "second", "third")
+
+
+def _angles_kind(angles: tuple[int, ...], p: int) -> str:
+    """How a case's message names where its angle is."""
+    if not angles:
+        return "no angle (angles=())"
+    if p == 1:
+        return "an angle as the only component"
+    return f"an angle as the {_ORDINALS[angles[0]]} of {p} components"
+
+
+def _other_kind(beyond: bool) -> str:
+    """How a case's message names the size of its differences in components that are not angles."""
+    return "a difference beyond +-pi in a component that is not an angle" if beyond else \
+        "no difference beyond +-pi in a component that is not an angle"
+
+
+def _beyond_pi(differences: np.ndarray, angles: tuple[int, ...]) -> bool:
+    """Whether a component that is not an angle differs by more than pi (there, wrapping changes it)."""
+    others = [i for i in range(differences.shape[-1]) if i not in angles]
+    return bool(others) and bool(np.any(np.abs(differences[..., others]) > np.pi))
+
+
+def _angle_cases(rng: np.random.Generator) -> list[tuple]:
+    """Cases (m, P, y, h, H_jacobian, R, angles) of every layout: a bearing alone (p = 1); range, bearing and a
+    second radar's range (the bearing in the middle of p = 3); bearing then range (the bearing first of p = 2);
+    and two ranges, no angle. Each range is measured 5 to 20 m (more than pi) from the predicted one, and each
+    bearing across the cut at +-pi from the predicted bearing."""
+    found = []
+    for names, angles in [(("bearing",), (0,)), (("range", "bearing", "range from a second radar"), (1,)),
+                          (("bearing", "range"), (0,)), (("range", "range from a second radar"), ())]:
+        m = np.array([-3000.0 + 50.0 * rng.standard_normal(), -rng.uniform(20.0, 60.0), 10.0 + rng.standard_normal()])
+        P = np.diag([100.0**2, 300.0**2, 4.0])
+        y = np.array([np.pi - rng.uniform(0.005, 0.03) if name == "bearing"
+                      else _component(m, name) + rng.choice((-1.0, 1.0)) * rng.uniform(5.0, 20.0) for name in names])
+        R = np.diag([0.02**2 if name == "bearing" else 25.0 for name in names]) * rng.uniform(0.5, 2.0)
+        h = lambda X, names=names: np.stack([_component(X, name) for name in names], axis=-1)  # noqa: E731
+        H_jacobian = lambda x, names=names: np.stack([_component_jacobian(x, name) for name in names])  # noqa: E731
+        found.append((m, P, y, h, H_jacobian, R, angles))
+    return found
+
+
+def _point_differences(m, P, y, h, Z) -> np.ndarray:
+    """h(x_i) - y at the points of a rule (a case's label, not a comparison)."""
+    return h(m + Z @ symmetric_sqrt(P)) - y
+
+
 @diagnosed
 def check_sigma_point_update(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
@@ -207,16 +285,29 @@ def check_sigma_point_update(func: Callable) -> None:
         h = _random_map(rng, n, p)
         for name, (Z, w) in _rules_for(n, rng):
             label = f"sigma_point_update with {name} points, n = {n}, p = {p}, a random nonlinear h"
-            with case(n=_dimension(n), points=_points(name), bearing=_AWAY):
+            with case(n=_dimension(n), points=_points(name), bearing=_AWAY, angles=_angles_kind((), p),
+                      other=_other_kind(_beyond_pi(_point_differences(m, P, y, h, Z), ()))):
                 _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, R.copy(), Z.copy(), w.copy()),
                                 ref.sigma_point_update(m, P, y, h, R, Z, w), n, label)
     m, P, y, h, R = _bearing_case(rng)
     for name, (Z, w) in _rules_for(3, rng):
         label = (f"sigma_point_update with {name} points for a target due west (bearings near +-pi, angles=(1,)): "
                  "are the bearing differences wrapped to (-pi, pi]?")
-        with case(n=_dimension(3), points=_points(name), bearing=_NEAR_PI):
+        with case(n=_dimension(3), points=_points(name), bearing=_NEAR_PI, angles=_angles_kind((1,), 2),
+                  other=_other_kind(_beyond_pi(_point_differences(m, P, y, h, Z), (1,)))):
             _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, R.copy(), Z.copy(), w.copy(), (1,)),
                             ref.sigma_point_update(m, P, y, h, R, Z, w, (1,)), 3, label)
+    # the angle at other places, or none with differences beyond +-pi: only the components in angles are wrapped
+    for m, P, y, h, _, R, angles in _angle_cases(rng):
+        p = len(y)
+        for name, (Z, w) in _rules_for(3, rng):
+            label = (f"sigma_point_update with {name} points for a target due west, p = {p}, angles={angles}: "
+                     "are exactly the components listed in angles wrapped?")
+            with case(n=_dimension(3), points=_points(name), bearing=_NEAR_PI if angles else _AWAY,
+                      angles=_angles_kind(angles, p), other=_other_kind(_beyond_pi(_point_differences(m, P, y, h, Z),
+                                                                                   angles))):
+                _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, R.copy(), Z.copy(), w.copy(), angles),
+                                ref.sigma_point_update(m, P, y, h, R, Z, w, angles), 3, label)
 
 
 def _measured(p: int) -> str:
@@ -234,16 +325,27 @@ def check_ekf_update(func: Callable) -> None:
         h = lambda x, A=A, B=B, c=c: np.sin(x) @ A.T + (x**2) @ B.T + c  # noqa: E731
         H_jacobian = lambda x, A=A, B=B: A * np.cos(x) + 2 * B * x  # noqa: E731
         label = f"ekf_update with n = {n}, p = {p}, a random nonlinear h"
-        with case(n=_dimension(n), p=_measured(p), bearing=_AWAY):
+        with case(n=_dimension(n), p=_measured(p), bearing=_AWAY, angles=_angles_kind((), p),
+                  other=_other_kind(_beyond_pi(y - h(m), ()))):
             _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, H_jacobian, R.copy()),
                             ref.ekf_update(m, P, y, h, H_jacobian, R), n, label)
     m, P, y, h, R = _bearing_case(rng)
     H_jacobian = lambda x: np.array([[x[0] / np.hypot(x[0], x[1]), x[1] / np.hypot(x[0], x[1]), 1.0],  # noqa: E731
                                      [-x[1] / (x[0] ** 2 + x[1] ** 2), x[0] / (x[0] ** 2 + x[1] ** 2), 0.0]])
     label = "ekf_update for a target due west (bearing near +-pi, angles=(1,)): is the bearing innovation wrapped?"
-    with case(n=_dimension(3), p=_measured(2), bearing=_NEAR_PI):
+    with case(n=_dimension(3), p=_measured(2), bearing=_NEAR_PI, angles=_angles_kind((1,), 2),
+              other=_other_kind(_beyond_pi(y - h(m), (1,)))):
         _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, H_jacobian, R.copy(), (1,)),
                         ref.ekf_update(m, P, y, h, H_jacobian, R, (1,)), 3, label)
+    # the angle at other places, or none with innovations beyond +-pi: only the components in angles are wrapped
+    for m, P, y, h, H_jacobian, R, angles in _angle_cases(rng):
+        p = len(y)
+        label = (f"ekf_update for a target due west, p = {p}, angles={angles}: are exactly the components listed "
+                 "in angles wrapped?")
+        with case(n=_dimension(3), p=_measured(p), bearing=_NEAR_PI if angles else _AWAY,
+                  angles=_angles_kind(angles, p), other=_other_kind(_beyond_pi(y - h(m), angles))):
+            _check_mean_cov(func(m.copy(), P.copy(), y.copy(), h, H_jacobian, R.copy(), angles),
+                            ref.ekf_update(m, P, y, h, H_jacobian, R, angles), 3, label)
 
 
 # --- the particle filter step ------------------------------------------------------------------
@@ -251,6 +353,8 @@ def check_ekf_update(func: Callable) -> None:
 PF_N = 2000
 TINY_Q = 1e-20 * np.eye(3)
 """A process noise so small (1e-10 per state) that the propagated particles are f(X) to rounding."""
+PF_ANGLES_N = 500
+"""Particles in each angle case: the residuals of the ranges spread over tens of metres, the bearings over +-pi."""
 NOISE_N = 100_000
 NOISE_ALPHA = 1e-7
 """Each of the five chi-square checks of the process noise fails a correct step with probability NOISE_ALPHA."""
@@ -277,13 +381,19 @@ _FLAT = "a flat likelihood"
 _NEGLIGIBLE, _NOISY = "a negligible process noise", "a process noise Q"
 
 
-def _pf_case(resampled: bool, likelihood: str, noise: str = _NEGLIGIBLE):
+_RADAR_LAYOUT = _angles_kind((1,), 2)
+"""The measurement of every case but the angle cases: (range, bearing), angles=(1,)."""
+
+
+def _pf_case(resampled: bool, likelihood: str, noise: str = _NEGLIGIBLE, angles: str = _RADAR_LAYOUT):
     """One case of the particle filter step, by what sets it apart (autograder/hidden_tests/case_kinds.py)."""
-    return case(resampling="resampling" if resampled else "no resampling", likelihood=likelihood, noise=noise)
+    return case(resampling="resampling" if resampled else "no resampling", likelihood=likelihood, noise=noise,
+                angles=angles)
 
 
-def _pf_call(func: Callable, X, logw, y, rng, f, h, Q, R, ess_fraction: float, label: str):
-    result = func(X.copy(), logw.copy(), y.copy(), rng, f, h, Q.copy(), R.copy(), (1,), ess_fraction)
+def _pf_call(func: Callable, X, logw, y, rng, f, h, Q, R, ess_fraction: float, label: str,
+             angles: tuple[int, ...] = (1,)):
+    result = func(X.copy(), logw.copy(), y.copy(), rng, f, h, Q.copy(), R.copy(), angles, ess_fraction)
     X_new, logw_new = check_pair(result, label, "X", "logw")
     X_new = check_array(X_new, f"the particles from {label}", X.shape, "Return the particles as an (N, n) array.")
     logw_new = check_array(logw_new, f"the log-weights from {label}", logw.shape, "Return one log-weight per particle.")
@@ -312,6 +422,33 @@ def _check_pf_weights(func: Callable) -> None:
         check_close(logw_new, want, f"the log-weights from {label}",
                     "w_new is proportional to w_old p(y | x): check the likelihood, R^-1, and the wrapping of the bearing.",
                     rtol=1e-7, atol=1e-6, show_expected=False)
+
+
+def _check_pf_angles(func: Callable) -> None:
+    """Exact, as _check_pf_weights: the log-weights without resampling, for a bearing alone (p = 1), a bearing in
+    the middle of p = 3, a bearing first of p = 2, and two ranges without an angle (residuals of tens of metres):
+    an answer that wraps a fixed component, or every one, fails on every submission seed."""
+    rng = cases.rng(1510)
+    f = lambda X: X + 0.1 * np.sin(X)  # noqa: E731 (a model that keeps the particles' bearings on both sides of +-pi)
+    for names, angles in [(("bearing",), (0,)), (("range", "bearing", "range from a second radar"), (1,)),
+                          (("bearing", "range"), (0,)), (("range", "range from a second radar"), ())]:
+        step_seed = int(rng.integers(2**63))  # the seed of the generator the step draws from
+        X = _pf_particles(rng, PF_ANGLES_N)
+        logw = _normalised(0.3 * rng.standard_normal(PF_ANGLES_N))
+        h = lambda X, names=names: np.stack([_component(X, name) for name in names], axis=-1)  # noqa: E731
+        y = np.array([np.pi - 0.01 if name == "bearing" else np.median(_component(f(X), name))
+                      + rng.uniform(-20.0, 20.0) for name in names])
+        R = np.diag([0.05**2 if name == "bearing" else 30.0**2 for name in names])
+        p = len(names)
+        label = (f"bootstrap_pf_step with ess_fraction=0 (no resampling), p = {p}, angles={angles}: are exactly the "
+                 "residual components listed in angles wrapped?")
+        with _pf_case(False, _DIAGONAL, angles=_angles_kind(angles, p)):
+            _, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, 0.0, label,
+                                   angles)
+            _, want = ref.bootstrap_pf_step(X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, angles, 0.0)
+            check_close(logw_new, want, f"the log-weights from {label}",
+                        "Wrap the residual components listed in angles, wherever they are, and no other.",
+                        rtol=1e-7, atol=1e-6, show_expected=False)
 
 
 def _check_pf_no_resampling(func: Callable) -> None:
@@ -409,8 +546,11 @@ def _check_pf_noise(func: Callable) -> None:
     A = np.array([[1.5, 0.4, 0.0], [-0.3, 0.8, 0.2], [0.1, 0.0, 1.2]])
     f = lambda X: X @ A.T  # noqa: E731
     h = lambda X: np.stack((X[..., 0], np.arctan2(X[..., 1], X[..., 0])), axis=-1)  # noqa: E731
-    Q = random_spd(rng, 3)
-    L = np.linalg.cholesky(Q)
+    # Q = L L^T from a Cholesky factor with off-diagonal entries as large as its diagonal: rows z @ L (covariance
+    # L^T L) then differ from N(0, Q) by at least 20% in total variance, far beyond what the checks let through
+    L = np.diag(rng.uniform(0.5, 1.2, 3))
+    L[np.tril_indices(3, -1)] = rng.choice((-1.0, 1.0), 3) * rng.uniform(0.8, 1.5, 3)
+    Q = L @ L.T
     X = _pf_particles(rng, NOISE_N)
     logw = np.full(NOISE_N, -np.log(NOISE_N))
     label = "bootstrap_pf_step's process noise (a flat likelihood, no resampling)"
@@ -438,6 +578,7 @@ def _check_pf_noise(func: Callable) -> None:
 def check_bootstrap_pf_step(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     _check_pf_weights(func)
+    _check_pf_angles(func)
     _check_pf_no_resampling(func)
     _check_pf_resampling(func)
     _check_pf_threshold(func)

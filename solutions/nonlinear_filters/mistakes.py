@@ -25,6 +25,11 @@ MISTAKES = (
     Mistake("unscented_points", "centre-weight-kappa-over-n", "centre weight kappa/n: the weights no longer sum to 1",
             "[kappa / (n + kappa)]", "[kappa / n]",
             hint="Your unscented_points behaves as if the centre weight were kappa/n: the weights then no longer sum to 1."),
+    Mistake("unscented_points", "centre-weight-one-over-n-plus-kappa",
+            "centre weight 1/(n + kappa): right for kappa = 1 only, and the weights no longer sum to 1",
+            "[kappa / (n + kappa)]", "[1.0 / (n + kappa)]",
+            hint="Your unscented_points behaves as if the centre weight were 1/(n + kappa) instead of kappa/(n + kappa): "
+                 "the two agree only when kappa = 1."),
     Mistake("cut4_points", "conjugate-unscaled", "leaves the conjugate points (+-1, ..., +-1) unscaled",
             "r2 * signs", "signs",
             hint="Your cut4_points behaves as if the conjugate points (+-1, ..., +-1) were left unscaled."),
@@ -84,6 +89,12 @@ MISTAKES = (
     Mistake("sigma_point_update", "deviations-about-y", "forms P_yy and P_xy from differences about y, not about y_hat",
             "DY = E - e_bar[..., None, :]", "DY = E",
             hint="Your sigma_point_update behaves as if P_yy and P_xy used the differences from the measurement y instead of from the predicted measurement."),
+    Mistake("sigma_point_update", "angle-index-hard-coded",
+            "wraps component 1 whenever p = 2, the radar's bearing, whatever angles lists",
+            "    E[..., list(angles)] = wrap_angle(E[..., list(angles)])\n",
+            "    if E.shape[-1] == 2:\n        E[..., 1] = wrap_angle(E[..., 1])\n",
+            hint="Your sigma_point_update behaves as if it wrapped the second component of two, the radar's bearing, "
+                 "whatever angles lists: wrap exactly the components that angles lists, at any position and for any p."),
     Mistake("ekf_update", "bearing-not-wrapped", "does not wrap the bearing innovation",
             "    e[..., list(angles)] = wrap_angle(e[..., list(angles)])\n", "",
             hint="Your ekf_update behaves as if the bearing innovation were not wrapped to (-pi, pi]."),
@@ -92,6 +103,16 @@ MISTAKES = (
     Mistake("ekf_update", "joseph-without-KRK", "writes the Joseph form without its + K R K^T term",
             "A @ P @ A.swapaxes(-1, -2) + K @ R @ K.swapaxes(-1, -2)", "A @ P @ A.swapaxes(-1, -2)",
             hint="Your ekf_update behaves as if the Joseph form lacked its + K R K^T term."),
+    Mistake("ekf_update", "angle-index-hard-coded",
+            "wraps component 1 whenever p = 2, the radar's bearing, whatever angles lists",
+            "    e[..., list(angles)] = wrap_angle(e[..., list(angles)])\n",
+            "    if e.shape[-1] == 2:\n        e[..., 1] = wrap_angle(e[..., 1])\n",
+            hint="Your ekf_update behaves as if it wrapped the second innovation component of two, the radar's bearing, "
+                 "whatever angles lists: wrap exactly the components that angles lists, at any position and for any p."),
+    Mistake("ekf_update", "wraps-every-component", "wraps every component of the innovation, not only the angles",
+            "    e[..., list(angles)] = wrap_angle(e[..., list(angles)])\n", "    e = wrap_angle(e)\n",
+            hint="Your ekf_update behaves as if it wrapped every innovation component to (-pi, pi], not only those "
+                 "listed in angles: a range innovation of a few metres is not an angle, and wrapping changes it."),
     Mistake("bootstrap_pf_step", "resample-every-step", "resamples at every step, whatever the effective sample size",
             "resample = ess < ess_fraction * N", "resample = ess > 0",
             hint="Your bootstrap_pf_step behaves as if it resampled at every step, whatever the effective sample size."),
@@ -105,4 +126,15 @@ MISTAKES = (
             "X = f(X) + rng.standard_normal(X.shape) @ np.linalg.cholesky(Q).T",
             "X = f(X + rng.standard_normal(X.shape) @ np.linalg.cholesky(Q).T)",
             hint="Your bootstrap_pf_step behaves as if it added the process noise before the model f instead of after it."),
+    Mistake("bootstrap_pf_step", "angle-index-hard-coded",
+            "wraps residual component 1 whenever p = 2, the radar's bearing, whatever angles lists",
+            "    E[..., list(angles)] = wrap_angle(E[..., list(angles)])\n",
+            "    if E.shape[-1] == 2:\n        E[..., 1] = wrap_angle(E[..., 1])\n",
+            hint="Your bootstrap_pf_step behaves as if it wrapped the second residual component of two, the radar's "
+                 "bearing, whatever angles lists: wrap exactly the components that angles lists, at any position and "
+                 "for any p."),
+    Mistake("bootstrap_pf_step", "noise-L-untransposed", "draws the process noise as z @ L, whose covariance is L^T L, not Q",
+            "rng.standard_normal(X.shape) @ np.linalg.cholesky(Q).T", "rng.standard_normal(X.shape) @ np.linalg.cholesky(Q)",
+            hint="Your bootstrap_pf_step behaves as if it drew the process noise as rows z @ L with Q = L L^T: their "
+                 "covariance is L^T L, not Q. Rows of standard normals times L.T, z @ L.T, have covariance Q."),
 )
