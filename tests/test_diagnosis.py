@@ -183,10 +183,15 @@ def test_two_mistakes_that_match_give_no_diagnosis(monkeypatch, seed):
 NARROWED = {
     ("train-kf", "nees/divided-by-n"):
         "Your nees is right on every case with a scalar state (n = 1) and wrong on every case with a state vector (n > 1).",
+    ("castaway-bob", "run_rank2/global-sigma-gps"):
+        "Your run_rank2 is right on every case with the default sigma_gps (50 m) and wrong on every case with another "
+        "sigma_gps.",
 }
 """Mistakes whose failing hidden test must say where the function is right and where wrong in a sentence that
 points at the cause (autograder/hidden_tests/case_kinds.py). From a fairness review: a NEES divided by n was said to
-be right on a single time and wrong on several, while the hidden cases with n = 1 were those with T = 1."""
+be right on a single time and wrong on several, while the hidden cases with n = 1 were those with T = 1; run_rank2 with
+the notebook's SIGMA_GPS, right on a single fix or a few and wrong on many, while those were the cases with the default
+sigma_gps."""
 
 
 @pytest.mark.parametrize("lab, made", [(Lab(lab_id), made) for lab_id, made in NARROWED],
