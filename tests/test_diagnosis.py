@@ -20,6 +20,7 @@ from autograder.hidden_tests import diagnosis
 from autograder.hidden_tests.isolate import isolate
 from autograder.hidden_tests.diagnosis import LEAD, diagnose, diagnosed, mistake_function
 from autograder.catalogues.mistakes import Mistake, catalogue
+from autograder.labs import Lab
 from lab_code import define, hidden_tests
 from over_labs import LABS, about, chosen, over_labs
 from random_draws import random_draws
@@ -177,3 +178,28 @@ def test_two_mistakes_that_match_give_no_diagnosis(monkeypatch, seed):
     assert diagnose(lambda x: 3.0 * x, check_twice) is None
     check_twice = _toy_lab(monkeypatch, (THREE,), seed)
     assert diagnose(lambda x: 3.0 * x, check_twice) is THREE
+
+
+NARROWED = {
+    ("train-kf", "nees/divided-by-n"):
+        "Your nees is right on every case with a scalar state (n = 1) and wrong on every case with a state vector (n > 1).",
+    ("castaway-bob", "run_rank2/global-sigma-gps"):
+        "Your run_rank2 is right on every case with the default sigma_gps (50 m) and wrong on every case with another "
+        "sigma_gps.",
+}
+"""Mistakes whose failing hidden test must say where the function is right and where wrong in a sentence that
+points at the cause (autograder/hidden_tests/case_kinds.py). From a fairness review: a NEES divided by n was said to
+be right on a single time and wrong on several, while the hidden cases with n = 1 were those with T = 1; run_rank2 with
+the notebook's SIGMA_GPS, right on a single fix or a few and wrong on many, while those were the cases with the default
+sigma_gps."""
+
+
+@pytest.mark.parametrize("lab, made", [(Lab(lab_id), made) for lab_id, made in NARROWED],
+                         ids=[f"{lab_id}/{made}" for lab_id, made in NARROWED])
+def test_the_narrowing_sentence_points_at_the_cause(lab, made):
+    blank, slug = made.split("/")
+    mistake = next(m for m in catalogue(lab) if m.blank == blank and m.slug == slug)
+    wrong = define(lab, mistake.apply(_answers(lab)[blank]), blank)
+    with pytest.raises(Exception) as caught:
+        getattr(hidden_tests(lab), f"check_{blank}")(wrong)
+    assert NARROWED[lab.id, made] in _message(caught.value), _message(caught.value)

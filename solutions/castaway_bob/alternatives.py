@@ -28,6 +28,10 @@ ALTERNATIVES = (
                 '''def observation_matrix():
     return np.hstack((np.eye(2), np.zeros((2, 2))))
 '''),
+    Alternative("observation_matrix", "eye-rows", "the first two rows of the 4 x 4 identity",
+                '''def observation_matrix():
+    return np.eye(4)[:2]
+'''),
     Alternative("trailing_mean", "cumsum", "vectorised with cumulative sums",
                 '''def trailing_mean(y, order=3):
     y = np.asarray(y, dtype=float)
@@ -52,6 +56,21 @@ ALTERNATIVES = (
     Alternative("trailing_mean", "comprehension", "a list comprehension of window means",
                 '''def trailing_mean(y, order=3):
     return np.array([np.mean(y[max(0, n + 1 - order):n + 1], axis=0) for n in range(len(y))])
+'''),
+    Alternative("trailing_mean", "backwards", "a loop back from each fix that stops at the first fix, counting what it adds",
+                '''def trailing_mean(y, order=3):
+    n = len(y)
+    out = np.zeros((n, 2))
+    for k in range(n):
+        total = np.zeros(2)
+        count = 0
+        for j in range(k, k - order, -1):
+            if j < 0:
+                break
+            total += y[j]
+            count += 1
+        out[k] = total / count
+    return out
 '''),
     Alternative("kalman_gain", "inverse", "K = P H^T (H P H^T + R)^-1 with np.linalg.inv",
                 '''def kalman_gain(P, H, R):
@@ -112,6 +131,15 @@ def kalman_gain(P, H, R):
     P_minus = np.dot(A, np.dot(P, A.T)) + Q
     K = kalman_gain(P_minus, H, R)
     return [x_minus + np.dot(K, y - np.dot(H, x_minus)), joseph_covariance(P_minus, K, H, R)]
+'''),
+    Alternative("kalman_step", "in-place-input", "adds the known input in place to the predicted mean",
+                '''def kalman_step(x, P, y, A, H, Q, R, u=None):
+    x_pred = A @ x
+    if u is not None:
+        x_pred += u
+    P_pred = A @ P @ A.T + Q
+    K = kalman_gain(P_pred, H, R)
+    return x_pred + K @ (y - H @ x_pred), joseph_covariance(P_pred, K, H, R)
 '''),
     Alternative("run_rank2", "lists", "keeps the running estimate and appends to lists",
                 '''def run_rank2(y, sigma_walk=30.0, sigma_gps=50.0):
@@ -219,6 +247,11 @@ def kalman_gain(P, H, R):
     error = estimates - truth
     return np.sqrt(np.sum(error**2) / error.shape[0])
 '''),
+    Alternative("track_rmse", "frobenius", "the Frobenius norm of the errors over the square root of the number of fixes",
+                '''def track_rmse(estimates, truth):
+    d = np.asarray(estimates, dtype=float) - np.asarray(truth, dtype=float)
+    return np.linalg.norm(d) / np.sqrt(len(d))
+'''),
     Alternative("ellipse_area", "eigenvalues", "pi times the two semi-axes n_sigma sqrt(lambda_i), from np.linalg.eigvalsh",
                 '''def ellipse_area(P, n_sigma=2.0):
     lam = np.linalg.eigvalsh(P)
@@ -233,5 +266,10 @@ def kalman_gain(P, H, R):
     Alternative("ellipse_area", "product-of-eigenvalues", "sqrt of the product of the eigenvalues",
                 '''def ellipse_area(P, n_sigma=2.0):
     return n_sigma**2 * np.pi * np.sqrt(np.prod(np.linalg.eigvalsh(P), axis=-1))
+'''),
+    Alternative("ellipse_area", "semi-axes-product", "pi times the product of the semi-axes n_sigma sqrt(lambda), by np.prod",
+                '''def ellipse_area(P, n_sigma=2.0):
+    lam = np.linalg.eigvalsh(P)
+    return np.pi * np.prod(n_sigma * np.sqrt(lam), axis=-1)
 '''),
 )

@@ -163,10 +163,13 @@ def _random_fixes(rng: np.random.Generator, n: int, speed: float) -> np.ndarray:
 def check_run_rank2(func: Callable) -> None:
     func = isolate(func, ref, BLANKS)
     rng = cases.rng(5106)
-    for n, sigma_walk, sigma_gps in ((1, 30.0, 50.0), (2, 10.0, 50.0), (15, 45.0, 20.0), (80, 25.0, 70.0)):
+    # the default sigma_gps with a few and with many fixes, and another one with both too: a mistake that shows only
+    # with another sigma_gps (the notebook's SIGMA_GPS for the argument) is then not told apart by the number of fixes
+    for n, sigma_walk, sigma_gps in ((1, 30.0, 50.0), (2, 10.0, 50.0), (3, 20.0, 25.0), (15, 45.0, 20.0),
+                                     (40, 30.0, 50.0), (80, 25.0, 70.0)):
         y = _random_fixes(rng, n, rng.uniform(0.0, 0.6))
         label = f"run_rank2 on {count(n, 'random fix')} with sigma_walk = {sigma_walk}, sigma_gps = {sigma_gps}"
-        with case(fixes=_fixes(n)):
+        with case(fixes=_fixes(n), gps="the default sigma_gps (50 m)" if sigma_gps == 50.0 else "another sigma_gps"):
             xs, Ps = check_pair(func(y.copy(), sigma_walk=sigma_walk, sigma_gps=sigma_gps), label, "estimates",
                                 "covariances")
             want_x, want_P = ref.run_rank2(y, sigma_walk=sigma_walk, sigma_gps=sigma_gps)

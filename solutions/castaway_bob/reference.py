@@ -20,6 +20,10 @@ from typing import Callable
 
 import numpy as np
 
+# Bob's parameters, which the notebook's set-up imports too: a catalogued mistake that uses one of them in place of
+# an argument (run_rank2 with SIGMA_GPS) runs here, where the diagnosis and the tests define it, as in a notebook.
+from course.ocean import ALPHA, SIGMA_F, SIGMA_GPS  # noqa: F401
+
 
 def transition_matrix(dt: float, alpha: float) -> np.ndarray:
     """A (4 x 4) of (4) for the state [x, y, wx, wy]: a step of dt [s], damping alpha per step."""

@@ -27,6 +27,16 @@ def gain_information_form(B, H, R):
     information = B_inv + HtRinv @ H
     return scipy.linalg.cho_solve(scipy.linalg.cho_factor(information), HtRinv)
 '''),
+    Alternative("gain_information_form", "cho-solve-all", "every solve a Cholesky solve: with B, with R, and with the information matrix",
+                '''import scipy.linalg
+
+def gain_information_form(B, H, R):
+    n = B.shape[0]
+    B_inv = scipy.linalg.cho_solve(scipy.linalg.cho_factor(B), np.eye(n))
+    RiH = scipy.linalg.cho_solve(scipy.linalg.cho_factor(R), H)
+    M = B_inv + H.T @ RiH
+    return scipy.linalg.cho_solve(scipy.linalg.cho_factor(M), RiH.T)
+'''),
     Alternative("gain_covariance_form", "inverse", "multiplies by the inverse of the innovation covariance",
                 '''def gain_covariance_form(B, H, R):
     return B @ H.T @ np.linalg.inv(H @ B @ H.T + R)
@@ -100,6 +110,21 @@ def gain_covariance_form(B, H, R):
     innovation = y - H @ x_f
     return x_f + K @ innovation, (np.eye(B_f.shape[0]) - K @ H) @ B_f
 '''),
+    Alternative("kupdate", "KSKt", "B_a = B_f - K S K^T with the innovation covariance S, symmetrised; the innovation as x_f - K (H x_f - y)",
+                '''def kupdate(x_f, B_f, y, H, R):
+    S = H @ B_f @ H.T + R
+    K = gain_covariance_form(B_f, H, R)
+    x_a = x_f - K @ (H @ x_f - y)
+    B_a = B_f - K @ S @ K.T
+    return x_a, 0.5 * (B_a + B_a.T)
+'''),
+    Alternative("kupdate", "information-gain-dot", "the information-form gain with .dot, and (I - K H) B symmetrised",
+                '''def kupdate(x_f, B_f, y, H, R):
+    K = gain_information_form(B_f, H, R)
+    x_a = x_f + K.dot(y - H.dot(x_f))
+    B_a = (np.eye(B_f.shape[0]) - K.dot(H)).dot(B_f)
+    return x_a, (B_a + B_a.T) / 2
+'''),
     Alternative("run_filter", "lists", "appends each analysis to lists and stacks them at the end",
                 '''def run_filter(y, x0, B0, A, Q, H, R):
     estimates, covariances = [], []
@@ -148,5 +173,21 @@ def gain_covariance_form(B, H, R):
     L = np.linalg.cholesky(covariances)
     whitened = np.linalg.solve(L, errors[:, :, None])[:, :, 0]
     return np.sum(whitened**2, axis=1)
+'''),
+    Alternative("nees", "einsum-solve", "one stacked solve, then the dot products by np.einsum",
+                '''def nees(errors, covariances):
+    solved = np.linalg.solve(covariances, errors[..., None])[..., 0]
+    return np.einsum("ti,ti->t", errors, solved)
+'''),
+    Alternative("nees", "triangular-loop", "a loop that whitens each error with a triangular solve against its Cholesky factor",
+                '''import scipy.linalg
+
+def nees(errors, covariances):
+    out = np.empty(len(errors))
+    for t in range(len(errors)):
+        L = np.linalg.cholesky(covariances[t])
+        z = scipy.linalg.solve_triangular(L, errors[t], lower=True)
+        out[t] = z @ z
+    return out
 '''),
 )

@@ -45,6 +45,15 @@ MISTAKES = (
     Mistake("kupdate", "gain-without-R", "K = B H^T (H B H^T)^-1 inline, without R",
             "K = gain_covariance_form(B_f, H, R)", "K = B_f @ H.T @ np.linalg.pinv(H @ B_f @ H.T)",
             hint="Your kupdate behaves as if its gain ignored the observation noise R; the gain functions you wrote above include it."),
+    Mistake("kupdate", "innovation-reversed", "x_a = x_f + K (H x_f - y): the innovation taken the wrong way round",
+            "y - H @ x_f", "H @ x_f - y",
+            hint="Your kupdate behaves as if the innovation were taken the wrong way round, H x_f - y: the analysis moves away "
+                 "from the fix. The innovation is y - H x_f, what the fix says minus what the forecast expected."),
+    Mistake("kupdate", "joseph-eye-2", "the Joseph form with np.eye(2): right only for a state of size 2",
+            "B_a = B_f - K @ H @ B_f",
+            "I_KH = np.eye(2) - K @ H\n    B_a = I_KH @ B_f @ I_KH.T + K @ R @ K.T", raises=ValueError,
+            hint="Your kupdate behaves as if it used a 2 x 2 identity whatever the state's size: it works for n = 2 only. "
+                 "Size the identity from the inputs, np.eye(len(x_f))."),
     Mistake("run_filter", "stores-forecast", "stores the forecast instead of the analysis",
             "x, B = kupdate(x, B, y[t], H, R)\n        xs[t], Bs[t] = x, B",
             "xs[t], Bs[t] = x, B\n        x, B = kupdate(x, B, y[t], H, R)",
@@ -56,6 +65,17 @@ MISTAKES = (
             "x, B = predict(x, B, A, Q)\n        x, B = kupdate(x, B, y[t], H, R)",
             "x, B = kupdate(x, B, y[t], H, R)\n        x, B = predict(x, B, A, Q)",
             hint="Your run_filter behaves as if it assimilated each fix before forecasting to its time: predict first, then update."),
+    Mistake("run_filter", "update-then-forecast", "assimilates each fix into the belief it has, stores it, then forecasts",
+            "x, B = predict(x, B, A, Q)\n        x, B = kupdate(x, B, y[t], H, R)\n        xs[t], Bs[t] = x, B",
+            "x, B = kupdate(x, B, y[t], H, R)\n        xs[t], Bs[t] = x, B\n        x, B = predict(x, B, A, Q)",
+            hint="Your run_filter behaves as if it assimilated each fix into the belief it had, stored the analysis and only "
+                 "then forecast: the first fix then updates x0, B0 without the forecast to its time. Each step forecasts "
+                 "first, then assimilates the fix, then stores the analysis."),
+    Mistake("run_filter", "stores-prior-first", "stores x0, B0 as the first row and filters from the second fix on, skipping the first",
+            "for t in range(T):", "xs[0], Bs[0] = x0, B0\n    for t in range(1, T):",
+            hint="Your run_filter behaves as if it stored the prior x0, B0 as the first row and began filtering at the second "
+                 "fix: the first fix is never assimilated. Row t is the analysis after fix t, so the loop covers every fix, "
+                 "from the first."),
     Mistake("nees", "times-B", "e^T B e: multiplies by the covariance instead of solving with it",
             "np.linalg.solve(covariances, errors[:, :, None])", "(covariances @ errors[:, :, None])",
             hint="Your nees behaves as if it multiplied the error by the covariance instead of solving with it: e^T B^-1 e needs B^-1."),
@@ -66,4 +86,8 @@ MISTAKES = (
     Mistake("nees", "root", "returns the Mahalanobis distance sqrt(e^T B^-1 e), not its square",
             "return np.sum(errors * scaled, axis=1)", "return np.sqrt(np.sum(errors * scaled, axis=1))",
             hint="Your nees behaves as if it returned the square root of e^T B^-1 e: the NEES is the squared distance itself."),
+    Mistake("nees", "divided-by-n", "divides e^T B^-1 e by the state dimension n (reads 'normalised' as a mean over the states)",
+            "return np.sum(errors * scaled, axis=1)", "return np.sum(errors * scaled, axis=1) / errors.shape[1]",
+            hint="Your nees behaves as if it divided e^T B^-1 e by the state dimension n: the NEES is e^T B^-1 e itself, "
+                 "normalised by the covariance, and for a consistent filter its mean is n."),
 )
