@@ -130,6 +130,28 @@ def test_a_plot_blank_draws_on_the_axes_the_check_gave_it(kernel):
     assert diagnosis._same(diagnosis._leaves(ax), diagnosis._leaves(local)), "the diagnosis sees the plot as drawn"
 
 
+def test_a_legend_made_from_handles_and_labels_crosses_with_its_entries(kernel):
+    """Fairness review: a correct plot that labels its legend with ax.legend(handles, labels), on unlabelled
+    artists, lost its points: the grader's copy of the Axes called ax.legend() alone, which found no
+    labelled artist (and warned)."""
+    source = ("def plot(ax, t, truth, mean, std):\n"
+              "    truth_line, = ax.plot(t, truth)\n"
+              "    mean_line, = ax.plot(t, mean)\n"
+              "    band = ax.fill_between(t, mean + 3 * std, mean - 3 * std, alpha=0.3)\n"
+              "    ax.set(xlabel='t, sec', ylabel='c in m$^2$/kg')\n"
+              "    ax.legend([truth_line, mean_line, band], ['truth', 'estimate', '99.7% region'])\n"
+              "    return ax\n")
+    student = kernel(_define(source), "plot")
+    t = np.linspace(0, 10, 21)
+    truth, mean, std = np.sin(t), np.sin(t) + 0.01, 0.1 + 0.01 * t
+    ax = Figure().subplots()
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        returned = student(ax, t, truth, mean, std)
+    check_band_plot(ax, returned, t, truth, mean, std, "plot")
+    assert [x.get_text() for x in ax.get_legend().get_texts()] == ["truth", "estimate", "99.7% region"]
+
+
 def test_course_objects_and_callbacks_cross(kernel):
     """A course dataclass comes back as itself; a function the check passes in is called back in the
     grader's process, however often the student's function calls it."""

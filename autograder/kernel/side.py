@@ -335,8 +335,13 @@ def _draw(ax, drawing, codec: Codec, buffers, peer) -> None:
     ax.set_xlabel(str(drawing.get("xlabel", "")))
     ax.set_ylabel(str(drawing.get("ylabel", "")))
     ax.set_title(str(drawing.get("title", "")))
-    if drawing.get("legend") is not None:
-        ax.legend()
+    if isinstance(drawing.get("legend"), list):
+        from matplotlib.lines import Line2D
+
+        # the legend's own entries, whatever made them: labels on the artists, or handles and labels given to
+        # ax.legend(handles, labels); ax.legend() alone found no labelled artist in the second case (and warned)
+        texts = [str(text) for text in drawing["legend"][:100]]
+        ax.legend(handles=[Line2D([], []) for _ in texts], labels=texts)
 
 
 # -- calls ---------------------------------------------------------------------------------------

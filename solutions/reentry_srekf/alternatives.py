@@ -268,6 +268,19 @@ ALTERNATIVES = (
     ax.legend(loc="best")
     return ax
 '''),
+    Alternative("plot_ballistic_coefficient", "legend-handles", "unlabelled artists named by ax.legend(handles, labels), "
+                "'t, sec' and 'c in m$^2$/kg' (fairness review: lost its points through grade)",
+                '''def plot_ballistic_coefficient(ax, t, c_true, c_mean, c_std):
+    """Draw truth, estimate and 99.7% region of c (m^2/kg) against t (s) on ax; return ax."""
+    truth, = ax.plot(t, c_true, "k")
+    estimate, = ax.plot(t, c_mean, "C0--")
+    band = ax.fill_between(t, c_mean + 3 * c_std, c_mean - 3 * c_std, color="C0", alpha=0.2)
+    ax.set_xlabel("t, sec")
+    ax.set_ylabel("c in m$^2$/kg")
+    ax.set_title("Ballistic coefficient")
+    ax.legend([truth, estimate, band], ["truth", "estimate", "99.7% region"])
+    return ax
+'''),
     Alternative("plot_ballistic_coefficient", "brackets-in", "'t in s' and 'ballistic coefficient [m^2/kg]', arrays converted first, a grid",
                 '''def plot_ballistic_coefficient(ax, t, c_true, c_mean, c_std):
     """Draw truth, estimate and 99.7% region of c (m^2/kg) against t (s) on ax; return ax."""
