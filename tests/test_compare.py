@@ -107,6 +107,11 @@ def test_what_the_call_writes_into_its_arguments_comes_back(kernel, seed):
     assert remote_info["ess"] == 3.5 and remote_info["parents"].tolist() == local_info["parents"].tolist()
 
 
+BAND_CASE = (np.linspace(0, 10, 21), np.sin(np.linspace(0, 10, 21)), np.sin(np.linspace(0, 10, 21)) + 0.01,
+             0.1 + 0.01 * np.linspace(0, 10, 21))
+"""t, truth, mean and std of a plot blank's case."""
+
+
 def test_a_plot_blank_draws_on_the_axes_the_check_gave_it(kernel):
     """The Axes the check passes is drawn on with the same lines, band, labels and legend, and is the
     object returned, so the plot checks inspect it as they would locally."""
@@ -118,8 +123,7 @@ def test_a_plot_blank_draws_on_the_axes_the_check_gave_it(kernel):
               "    ax.legend()\n"
               "    return ax\n")
     student = kernel(_define(source), "plot")
-    t = np.linspace(0, 10, 21)
-    truth, mean, std = np.sin(t), np.sin(t) + 0.01, 0.1 + 0.01 * t
+    t, truth, mean, std = BAND_CASE
     ax = Figure().subplots()
     returned = student(ax, t, truth, mean, std)
     assert returned is ax
@@ -142,8 +146,7 @@ def test_a_legend_made_from_handles_and_labels_crosses_with_its_entries(kernel):
               "    ax.legend([truth_line, mean_line, band], ['truth', 'estimate', '99.7% region'])\n"
               "    return ax\n")
     student = kernel(_define(source), "plot")
-    t = np.linspace(0, 10, 21)
-    truth, mean, std = np.sin(t), np.sin(t) + 0.01, 0.1 + 0.01 * t
+    t, truth, mean, std = BAND_CASE
     ax = Figure().subplots()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
