@@ -136,12 +136,17 @@ VISIBLY_FAILED = {
                           "bootstrap_pf_step/noise-before-f", "unscented_points/centre-weight-one-over-n-plus-kappa",
                           "ekf_update/angle-index-hard-coded", "ekf_update/wraps-every-component",
                           "bootstrap_pf_step/noise-L-untransposed"),
+    "reentry-pf": ("run_particle_filter/roots-composed-backwards",),
+    "reentry-srekf": ("sqrt_time_update/noise-transposed", "sqrt_measurement_update/noise-transposed",
+                      "sqrt_measurement_update/noise-variance"),
 }
 """Mistakes that passed the visible checks until issue 30 added a hand-checkable case for each (a 2-state filter
 that moves, a full R, a current that changes in time, ...), or a fairness review did (a NEES that is not 1, a scalar
 state in kupdate, ...): the visible checks must keep failing them. The last four
 of nonlinear-filters passed them until the fairness review of that lab added a case with kappa = 2, the angle at other
-places of the measurement (p = 1, and the bearing first of p = 2), and a 2-D process noise with a non-diagonal Q."""
+places of the measurement (p = 1, and the bearing first of p = 2), and a 2-D process noise with a non-diagonal Q.
+The reentry ones passed them until the fairness review of those labs added a run with scripted parents (N = 3), a
+non-diagonal S_Q and a non-diagonal S_R."""
 
 VISIBLE_MESSAGES = {
     "train-kf": {"nees/root": ("take no square root", None)},
@@ -154,11 +159,19 @@ VISIBLE_MESSAGES = {
         "ekf_update/bearing-not-wrapped": ("moves the target by more than 30 m", "expected 1 but got 0"),
         "bootstrap_pf_step/noise-before-f": ("the variance of x_new - f(x)", "expected 1 but got 0"),
     },
+    "reentry-srekf": {
+        # the check of S_R comes first, on a case whose residual is zero and whose S is diagonal
+        "sqrt_measurement_update/noise-variance": ("S_R is the upper-triangular square root of R", "the residual is y - h(mu)"),
+        "sqrt_measurement_update/noise-transposed": ("S_R is the upper-triangular square root of R", "not with 1"),
+        # the name of the handout's S_I reads as a matrix, not as "S_I for idx = [2, 4, 0][2, 0]"
+        "marginal/no-qr": ("but S_I[2, 0] =", "[2, 4, 0]["),
+    },
 }
 """Mistakes whose visible check must say a given phrase, the hint that points at the cause, and must not say
 another (None: no such phrase). The fairness reviews found the square root's hint on a case whose NEES is 1, which
 a square root leaves alone; a Joseph form without its right transpose told only the size of P^ - P^.T; a P_yy
-without R told to check the innovation's sign; yes/no checks that said "expected 1 but got 0"."""
+without R told to check the innovation's sign; yes/no checks that said "expected 1 but got 0"; a stacked R or S_R.T
+told of the residual's sign or of the blocks' sizes."""
 
 
 @pytest.mark.parametrize("lab", [Lab(lab_id) for lab_id in sorted(VISIBLE_MESSAGES)], ids=sorted(VISIBLE_MESSAGES))

@@ -63,7 +63,7 @@ def check_tracking_dynamics(func: Callable) -> None:
         with case(x="a cloud of one particle (3, 1)" if N == 1 else "a cloud of particles (3, N)"):
             f = check_array(func(float(rng.uniform(0.0, 30.0)), x.copy()), label, (3, N),
                             "Return one column of derivatives per particle: rows dh/dt, dv/dt, dbeta/dt.")
-            check_close(f, ref.tracking_dynamics(0.0, x), label, "Check the signs of (1) and (2) and rho(h) = gamma exp(-eta h).",
+            check_close(f, ref.tracking_dynamics(0.0, x), label, "Check each term of the drag in (2), g rho(h) v^2 / (2 beta): the factor g, rho(h) = gamma exp(-eta h), v^2 and 2 beta; and the signs of (1) and (2).",
                         rtol=1e-10, atol=1e-9, show_expected=False)
     for x in _random_states(rng, 5).T:
         label = "tracking_dynamics(t, x) for one state x of shape (3,)"
