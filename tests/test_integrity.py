@@ -203,3 +203,75 @@ def test_every_cheat_builds_a_valid_notebook(lab):
         nb = cheat.notebook(lab)
         nbformat.validate(nb)
         assert nb != submissions.solved(lab), cheat.name
+
+
+# -- what the scan may cost the grader ----------------------------------------------------------------
+# A submission's code is parsed in the grader: IPython's transform of magics costs magic lines times
+# lines (120 magics among 40,000 lines took 146 s), and a syntax tree hundreds of bytes per character
+# (a 6 MB list literal took the grader to 9 GB). Before the caps, nothing bounded either.
+
+
+def _with_added_cell(source: str) -> NotebookNode:
+    nb = submissions.solved(TRAIN)
+    nb.cells.insert(2, nbformat.v4.new_code_cell(source))
+    return nb
+
+
+def test_a_cell_larger_than_the_scan_reads_is_not_parsed_and_costs_every_blank(monkeypatch):
+    source = "x = [" + "1, " * (scan.MAX_SCANNED_CELL_CHARS // 3) + "]\n"
+    parsed = []
+    monkeypatch.setattr(scan, "parse", lambda code: parsed.append(len(code)) or None)
+    [finding] = scan.static_findings(_with_added_cell(source), TRAIN)
+    assert finding.blanks is None and f"{len(source):,} characters" in finding.reason, finding
+    assert max(parsed) < scan.MAX_SCANNED_CELL_CHARS
+
+
+def test_the_scan_reads_at_most_its_cap_of_a_notebook(monkeypatch):
+    monkeypatch.setattr(scan, "MAX_SCANNED_CHARS", 40_000)
+    nb = submissions.solved(TRAIN)
+    for k in range(4):
+        nb.cells.insert(2, nbformat.v4.new_code_cell(f"y{k} = 1\n" * 2_000))  # 14,000 characters each
+    [finding] = scan.static_findings(nb, TRAIN)  # one finding for all the cells it did not read
+    assert finding.blanks is None and "it reads 40,000 in all" in finding.reason, finding
+    assert "did not read 2 cells" in finding.reason, finding
+
+
+def test_the_confined_scan_finds_what_the_scan_finds():
+    from autograder.integrity.confined import confined_findings
+
+    assert confined_findings(submissions.solved(TRAIN), TRAIN) == []
+    assert confined_findings(honest_habits_notebook(), TRAIN) == []
+    cheat = cheats.get("patch-allclose").notebook(TRAIN)
+    assert confined_findings(cheat, TRAIN) == scan.static_findings(cheat, TRAIN) != []
+
+
+def test_a_scan_over_its_cpu_time_is_stopped_and_costs_every_blank():
+    """50 magics among 10,000 lines, under the size caps: 13 s of the grader's CPU before; here the
+    child stops at 1 s and the grader spends none of it."""
+    import resource
+    import time
+
+    from autograder.integrity.confined import confined_findings
+
+    source = "".join(f"a{i} = %time 1\n" for i in range(50)) + "b = 1\n" * 10_000
+    assert len(source) < scan.MAX_SCANNED_CELL_CHARS
+    own, start = time.process_time(), time.monotonic()
+    [finding] = confined_findings(_with_added_cell(source), TRAIN, cpu_seconds=1)
+    assert finding.blanks is None and "ran out of its time" in finding.reason, finding
+    assert time.process_time() - own < 1.0
+    assert time.monotonic() - start < 60
+    assert resource.getrusage(resource.RUSAGE_CHILDREN).ru_utime > 0.5
+
+
+def test_a_scan_over_its_memory_is_stopped_and_costs_every_blank():
+    """A list literal under the size caps, whose syntax tree needs more than the child may grow: the
+    grader does not grow (before, the tree grew and stayed in the grader's process, cached)."""
+    import resource
+
+    from autograder.integrity.confined import confined_findings
+
+    before = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss
+    source = "x = [" + "1," * 45_000 + "]\n"
+    [finding] = confined_findings(_with_added_cell(source), TRAIN, memory_bytes=8 << 20)
+    assert finding.blanks is None and "nothing checked" in finding.reason, finding
+    assert resource.getrusage(resource.RUSAGE_SELF).ru_maxrss - before < 20_000  # KiB

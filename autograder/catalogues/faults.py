@@ -102,6 +102,23 @@ def _hidden_markers(lab: Lab, blank: str) -> tuple[str, bytes]:
     return _file(lab, nb)
 
 
+def _nbgrader_metadata(lab: Lab, blank: str) -> tuple[str, bytes]:
+    """The solved notebook with one nbgrader flag or key changed in each of six cells: each alone made
+    nbgrader 0.9.6 fail on the whole submission (the kind of edit a notebook tool or a JSON edit makes)."""
+    nb = submissions.solved(lab)
+    tests = [c for c in nb.cells if cells.is_autograded_test(c) and cells.grade_id(c) != f"test_{blank}"]
+    answers = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) != blank]
+    written = [c for c in nb.cells if c.cell_type == "markdown" and cells.meta(c).get("solution")]
+    [test] = [c for c in nb.cells if cells.is_autograded_test(c) and cells.grade_id(c) == f"test_{blank}"]
+    test.metadata["nbgrader"]["grade"] = False
+    tests[0].metadata["nbgrader"]["solution"] = True
+    tests[1].metadata["nbgrader"]["task"] = True
+    tests[2].metadata["nbgrader"].update(score=1, kit_note="hi", comment="<b>x</b>")
+    answers[0].metadata["nbgrader"].update(grade=True, points=5)
+    written[0].metadata["nbgrader"]["grade"] = False
+    return _file(lab, nb)
+
+
 def _wrong_name(lab: Lab, blank: str) -> tuple[str, bytes]:
     return f"{lab.id} (1).ipynb", _solved_bytes(lab)
 
@@ -114,6 +131,10 @@ FAULTS = (
     Fault("reordered", "the solved notebook with its cells in reverse order", _reordered, None, "not in the lab's order"),
     Fault("deleted-cells", "the solved notebook without its set-up, check and test cells", _deleted, None,
           "put back as released"),
+    Fault("nbgrader-metadata", "the solved notebook with nbgrader flags changed (a test cell that says grade: "
+          "false, solution: true or task: true, an answer that says grade: true, a written answer that says grade: "
+          "false, keys nbgrader does not know); each alone made nbgrader give up on the whole submission",
+          _nbgrader_metadata, None, "was not as released"),
     Fault("infinite-loop", "a blank that never returns (while True: pass)",
           lambda lab, blank: _with_code_in_blank(lab, blank, "while True:\n    pass"), "blank", "CellTimeoutError"),
     Fault("sleep-loop", "a blank that sleeps in a loop and ignores interrupts",

@@ -1,7 +1,8 @@
 """Taking away the points that a dishonest submission games, and flagging it for review.
 
 Runs right after GradingExecute and before nbgrader saves the scores. It scans the submission's
-code (autograder/integrity/scan.py), records a failing verdict for the test cell of every blank a finding
+code (autograder/integrity/scan.py, in a child process capped in CPU time and memory:
+autograder/integrity/confined.py), records a failing verdict for the test cell of every blank a finding
 games (autograder/pipeline/verdicts.py: the score is 0 whatever the kernel showed), shows the reason
 there as an error, and writes each reason as a "Flagged
 for review" note at the top of the notebook, where the instructor's table and the feedback show it.
@@ -14,7 +15,8 @@ from nbformat.v4 import new_output
 from nbgrader.preprocessors import NbGraderPreprocessor
 
 from autograder import cells
-from autograder.integrity.scan import Finding, static_findings
+from autograder.integrity.confined import confined_findings
+from autograder.integrity.scan import Finding
 from autograder.labs import Lab
 from autograder.pipeline import verdicts
 from autograder.pipeline.restore import add_grader_notes
@@ -29,7 +31,7 @@ class FlagCheating(NbGraderPreprocessor):
     def preprocess(self, nb: NotebookNode, resources: dict) -> tuple[NotebookNode, dict]:
         lab = Lab(resources["nbgrader"]["assignment"])
         findings: list[Finding] = []
-        for finding in static_findings(nb, lab):
+        for finding in confined_findings(nb, lab):
             if finding.reason not in [f.reason for f in findings]:
                 findings.append(finding)
         blanks = cells.blank_names(cells.read(lab.source_notebook))

@@ -23,6 +23,13 @@ visible checks redefined, a cell wrapped in a try/except that discards every err
 it is flagged for review and costs no points. ``FlagCheating`` (autograder/integrity/flag.py) zeroes
 the test cells of the blanks a finding games, and flags the submission with the reasons.
 
+The scan parses code in the grader's process, where IPython's transform of magics costs time that
+grows with magic lines times lines, and a syntax tree costs hundreds of bytes per character: so it
+parses a cell of at most MAX_SCANNED_CELL_CHARS characters, and at most MAX_SCANNED_CHARS of a
+notebook's code in all. A cell beyond either is not parsed; it is a finding that costs every blank
+(unscanned code could do anything the scan looks for). The grader runs the whole scan in a child
+process capped in CPU time and memory (autograder/integrity/confined.py).
+
 Edited and deleted test cells need no detector: the sanitize step (RestoreLabCells, then
 nbgrader's OverwriteCells) restores them from the gradebook. Hard-coded answers for the visible
 cases need none either: the hidden tests use random inputs.
@@ -46,6 +53,12 @@ from autograder.labs import Lab
 
 if TYPE_CHECKING:
     from autograder.integrity.walker import Context
+
+
+MAX_SCANNED_CELL_CHARS = 100_000
+"""The most code of one cell that the scan parses (a lab's largest answer cell is about 6,000)."""
+MAX_SCANNED_CHARS = 500_000
+"""The most code of one notebook that the scan parses in all (a solved notebook has about 27,000)."""
 
 
 @dataclass(frozen=True)
@@ -77,7 +90,8 @@ def static_findings(nb: NotebookNode, lab: Lab) -> list[Finding]:
     from the gradebook before grading, whatever the submission holds.
     """
     path = lab.source_notebook
-    return Scan(nb, _source_notebook(str(path), path.stat().st_mtime_ns)).findings()
+    scan = Scan(nb, _source_notebook(str(path), path.stat().st_mtime_ns))
+    return scan.unscanned + scan.findings()
 
 
 @functools.lru_cache(maxsize=16)
@@ -85,11 +99,27 @@ def _source_notebook(path: str, mtime_ns: int) -> NotebookNode:
     return cells.read(Path(path))
 
 
+def _too_large(cell: str, size: int) -> Finding:
+    where = f"cell {cell}" if cell else "a cell the student added"
+    return Finding(cell, None, f"The scan did not read {where}: it holds {size:,} characters of code, more than "
+                               f"the {MAX_SCANNED_CELL_CHARS:,} the scan reads of one cell, so nothing checked what it does.")
+
+
+def _beyond_notebook_cap(labels: list[str], scanned: int) -> Finding:
+    named = [label or "a cell the student added" for label in labels]
+    shown = ", ".join(named[:5]) + (f" and {len(named) - 5} more" if len(named) > 5 else "")
+    return Finding("", None, f"The scan stopped after {scanned:,} characters of the notebook's code (it reads "
+                             f"{MAX_SCANNED_CHARS:,} in all) and did not read {len(named)} cells ({shown}), "
+                             "so nothing checked what they do.")
+
+
 class Scan:
     def __init__(self, nb: NotebookNode, source_nb: NotebookNode):
         self.blanks = cells.blank_names(source_nb)
         known = {cells.grade_id(c): c for c in source_nb.cells if cells.meta(c).get("grade_id")}
         self.cells: list[tuple[str, str | None, ast.Module]] = []  # (label, blank of the answer cell, tree)
+        self.unscanned: list[Finding] = []  # cells too large to parse
+        scanned, beyond = 0, []
         locked_trees = []
         for cell in source_nb.cells:
             if cell.cell_type == "code" and not cells.is_answer(cell):
@@ -105,11 +135,21 @@ class Scan:
                 continue  # locked: restored by nbgrader
             if original is not None and original.cell_type != "code":
                 continue  # a written answer turned into code: nbgrader turns it back
-            tree = parse(cell.source)
+            source = cell.source if isinstance(cell.source, str) else "".join(cell.source)
+            if len(source) > MAX_SCANNED_CELL_CHARS:
+                self.unscanned.append(_too_large(gid or "", len(source)))
+                continue
+            if scanned + len(source) > MAX_SCANNED_CHARS:
+                beyond.append(gid or "")
+                continue
+            scanned += len(source)
+            tree = parse(source)
             if tree is None:
                 continue
             blank = gid if original is not None and gid in self.blanks else None
             self.cells.append((gid or "", blank, tree))
+        if beyond:
+            self.unscanned.append(_beyond_notebook_cap(beyond, scanned))
         self.modules: dict[str, str] = {}  # name bound by an import -> dotted module or object path
         self.locked_imports: dict[str, str] = {}
         for tree in locked_trees:

@@ -5,11 +5,17 @@ A student can drag cells around or delete them by accident. nbgrader restores de
 the order it finds them. ``RestoreLabCells`` rebuilds the submission on the released notebook's
 skeleton: every nbgrader cell in the lab's order (the student's version where there is one, the
 released one otherwise), and every cell the student added right after the lab cell it followed.
-What it changed goes into a grader's note at the top, which the student sees in the feedback.
+Each lab cell's nbgrader metadata (its grade, solution, task and locked flags, points, checksum) is
+put back as released, and keys the release does not have are dropped: nbgrader 0.9.6 fails on the
+whole submission when a test cell says ``grade: false``, ``solution: true`` or ``task: true``, when
+an answer cell says ``grade: true`` or a written answer ``grade: false``, or when a cell's nbgrader
+metadata holds a key its schema lacks (``score``, ``comment``). What it changed goes into a
+grader's note at the top, which the student sees in the feedback.
 """
 
 from __future__ import annotations
 
+import copy
 import hashlib
 import re
 
@@ -123,6 +129,12 @@ class RestoreLabCells(NbGraderPreprocessor):
             notes.append(f"Cells that were missing were put back as released: {', '.join(missing)}.")
 
         by_id = {cells.grade_id(c): c for c in released.cells if _has_id(c)}
+        retagged = [i for i in order if i in mine and mine[i].metadata["nbgrader"] != by_id[i].metadata["nbgrader"]]
+        for i in retagged:
+            mine[i].metadata["nbgrader"] = copy.deepcopy(by_id[i].metadata["nbgrader"])
+        if retagged:
+            notes.append(f"The nbgrader metadata of cells {', '.join(retagged)} was not as released; "
+                         "it was graded as released.")
         nb.cells = added[None] + [c for i in order for c in [mine.get(i, by_id[i]), *added.get(i, [])]]
         _keep_cell_ids_unique(nb, restored=[by_id[i] for i in missing])
         add_grader_notes(nb, notes)
