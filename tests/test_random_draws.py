@@ -86,7 +86,7 @@ def _pytest(folder: Path) -> subprocess.CompletedProcess:
 
 
 def test_a_seeded_test_runs_on_21_seeds_and_an_unmarked_one_is_refused(tmp_path):
-    for name in ("conftest.py", "random_draws.py", "time_per_file.py"):
+    for name in ("conftest.py", "machine_needs.py", "random_draws.py", "time_per_file.py"):
         shutil.copy(TESTS / name, tmp_path / name)
     (tmp_path / "test_demo.py").write_text(
         "import numpy as np\nfrom random_draws import random_draws\n\n"
