@@ -112,6 +112,12 @@ BAND_CASE = (np.linspace(0, 10, 21), np.sin(np.linspace(0, 10, 21)), np.sin(np.l
 """t, truth, mean and std of a plot blank's case."""
 
 
+def _drawn(kernel, source: str):
+    """A new Axes, and what the kernel's ``plot`` defined by ``source`` returned when it drew BAND_CASE on it."""
+    ax = Figure().subplots()
+    return ax, kernel(_define(source), "plot")(ax, *BAND_CASE)
+
+
 def test_a_plot_blank_draws_on_the_axes_the_check_gave_it(kernel):
     """The Axes the check passes is drawn on with the same lines, band, labels and legend, and is the
     object returned, so the plot checks inspect it as they would locally."""
@@ -122,10 +128,8 @@ def test_a_plot_blank_draws_on_the_axes_the_check_gave_it(kernel):
               "    ax.set(xlabel='Time [s]', ylabel='c [m2/kg]')\n"
               "    ax.legend()\n"
               "    return ax\n")
-    student = kernel(_define(source), "plot")
     t, truth, mean, std = BAND_CASE
-    ax = Figure().subplots()
-    returned = student(ax, t, truth, mean, std)
+    ax, returned = _drawn(kernel, source)
     assert returned is ax
     check_band_plot(ax, returned, t, truth, mean, std, "plot")
     assert ax.get_xlabel() == "Time [s]" and [x.get_text() for x in ax.get_legend().get_texts()] == ["truth", "estimate", "3 sigma"]
@@ -145,12 +149,10 @@ def test_a_legend_made_from_handles_and_labels_crosses_with_its_entries(kernel):
               "    ax.set(xlabel='t, sec', ylabel='c in m$^2$/kg')\n"
               "    ax.legend([truth_line, mean_line, band], ['truth', 'estimate', '99.7% region'])\n"
               "    return ax\n")
-    student = kernel(_define(source), "plot")
     t, truth, mean, std = BAND_CASE
-    ax = Figure().subplots()
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        returned = student(ax, t, truth, mean, std)
+        ax, returned = _drawn(kernel, source)
     check_band_plot(ax, returned, t, truth, mean, std, "plot")
     assert [x.get_text() for x in ax.get_legend().get_texts()] == ["truth", "estimate", "99.7% region"]
 

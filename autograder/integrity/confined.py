@@ -17,15 +17,14 @@ from __future__ import annotations
 import json
 import os
 import resource
-import select
 import signal
-import sys
 import time
 import traceback
 from typing import NoReturn
 
 from nbformat import NotebookNode
 
+from autograder.forked_child import cap_memory, read_all, write_reply
 from autograder.integrity.scan import Finding, static_findings
 from autograder.labs import Lab
 
@@ -54,7 +53,7 @@ def confined_findings(nb: NotebookNode, lab: Lab, cpu_seconds: int = SCAN_CPU_SE
         _child(nb, lab, write_end, cpu_seconds, memory_bytes)
     os.close(write_end)
     try:
-        answer = _read_all(read_end, time.monotonic() + wall_seconds)
+        answer = read_all(read_end, time.monotonic() + wall_seconds)
     finally:
         os.close(read_end)
     if answer is None:
@@ -90,11 +89,7 @@ def _child(nb: NotebookNode, lab: Lab, fd: int, cpu_seconds: int, memory_bytes: 
         hard_cpu = resource.getrlimit(resource.RLIMIT_CPU)[1]
         hard = cpu_seconds + 2 if hard_cpu == resource.RLIM_INFINITY else min(cpu_seconds + 2, hard_cpu)
         resource.setrlimit(resource.RLIMIT_CPU, (min(cpu_seconds, hard), hard))
-        if memory_bytes and sys.platform == "linux":  # elsewhere RLIMIT_AS is not enforced
-            size = int(open("/proc/self/statm").read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-            hard = resource.getrlimit(resource.RLIMIT_AS)[1]
-            cap = size + memory_bytes if hard == resource.RLIM_INFINITY else min(size + memory_bytes, hard)
-            resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
+        cap_memory(memory_bytes)
         try:
             reply: dict = {"findings": [{"cell": f.cell, "blanks": f.blanks, "reason": f.reason}
                                         for f in static_findings(nb, lab)]}
@@ -104,22 +99,7 @@ def _child(nb: NotebookNode, lab: Lab, fd: int, cpu_seconds: int, memory_bytes: 
             reply = {"over": "depth of nesting"}
         except BaseException:  # noqa: BLE001 (the grader's fault: the parent raises it as ScanFailed)
             reply = {"failed": traceback.format_exc()}
-        view = memoryview(json.dumps(reply).encode())
-        while view:
-            view = view[os.write(fd, view):]
+        write_reply(fd, reply)
         os._exit(0)
     finally:
         os._exit(1)
-
-
-def _read_all(fd: int, deadline: float) -> bytes | None:
-    """Everything the child writes to ``fd`` until it closes it; None if ``deadline`` passes first."""
-    parts = []
-    while True:
-        ready, _, _ = select.select([fd], [], [], max(0.0, deadline - time.monotonic()))
-        if not ready:
-            return None
-        chunk = os.read(fd, 1 << 20)
-        if not chunk:
-            return b"".join(parts)
-        parts.append(chunk)

@@ -16,10 +16,7 @@ from __future__ import annotations
 
 import json
 import os
-import resource
-import select
 import signal
-import sys
 import time
 import traceback
 from typing import Callable, NoReturn
@@ -27,6 +24,7 @@ from typing import Callable, NoReturn
 import nbformat
 from nbformat import NotebookNode
 
+from autograder.forked_child import cap_memory, read_all, write_reply
 from autograder.pipeline.compare import KernelStopped, error_output
 from autograder.kernel.side import PeerTimeout
 
@@ -57,7 +55,7 @@ def run(check: Callable[[], tuple[list[NotebookNode], int]], deadline: float | N
         _child(check, write_end, memory_bytes)
     os.close(write_end)
     try:
-        answer = _read_all(read_end, None if deadline is None else deadline + GRACE_S)
+        answer = read_all(read_end, None if deadline is None else deadline + GRACE_S)
     finally:
         os.close(read_end)
     if answer is None:
@@ -85,11 +83,7 @@ def _child(check: Callable[[], tuple[list[NotebookNode], int]], fd: int, memory_
     exit (status 0 once the answer is written) without running anything of the parent's: no atexit
     handlers, no finalizers."""
     try:
-        if memory_bytes and sys.platform == "linux":  # elsewhere RLIMIT_AS is not enforced
-            size = int(open("/proc/self/statm").read().split()[0]) * os.sysconf("SC_PAGE_SIZE")
-            hard = resource.getrlimit(resource.RLIMIT_AS)[1]
-            cap = size + memory_bytes if hard == resource.RLIM_INFINITY else min(size + memory_bytes, hard)
-            resource.setrlimit(resource.RLIMIT_AS, (cap, hard))
+        cap_memory(memory_bytes)
         try:
             outputs, printed = check()
             reply: dict = {"outputs": outputs, "printed": printed}
@@ -97,23 +91,7 @@ def _child(check: Callable[[], tuple[list[NotebookNode], int]], fd: int, memory_
             reply = {"raised": type(error).__name__}
         except BaseException:  # noqa: BLE001 (the grader's fault: the parent raises it as CheckFailed)
             reply = {"failed": traceback.format_exc()}
-        view = memoryview(json.dumps(reply).encode())
-        while view:
-            view = view[os.write(fd, view):]
+        write_reply(fd, reply)
         os._exit(0)
     finally:
         os._exit(1)
-
-
-def _read_all(fd: int, deadline: float | None) -> bytes | None:
-    """Everything the child writes to ``fd`` until it closes it; None if ``deadline`` passes first."""
-    parts = []
-    while True:
-        wait = None if deadline is None else max(0.0, deadline - time.monotonic())
-        ready, _, _ = select.select([fd], [], [], wait)
-        if not ready:
-            return None
-        chunk = os.read(fd, 1 << 20)
-        if not chunk:
-            return b"".join(parts)
-        parts.append(chunk)
