@@ -122,7 +122,7 @@ def course(tmp_path_factory) -> Path:
     """The hostile submission graded into a course folder (feedback pages written)."""
     class_dir, workdir = tmp_path_factory.mktemp("class"), tmp_path_factory.mktemp("course")
     submissions.write(hostile_notebook(), class_dir, STUDENT, LAB)
-    grading.grade(class_dir, workdir, jobs=1)  # flagged for review (it imports IPython.display), pages written
+    grading.grade(class_dir, workdir, jobs=1)  # pages written
     return workdir
 
 

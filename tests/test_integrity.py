@@ -30,13 +30,17 @@ TRAIN = get_lab("train-kf")
 
 HONEST_HABITS = '''%timeit -n 3 -r 1 predict(np.zeros(2), np.eye(2), np.eye(2), np.eye(2))
 import functools
+import inspect
 import json
 import math
 import traceback
 import warnings
 from dataclasses import dataclass
 
+import IPython.display as ipd
 import scipy.optimize
+from IPython import display as ipython_display
+from IPython.display import Markdown, display
 
 
 @dataclass
@@ -63,9 +67,16 @@ ax.legend()
 fig.savefig("my_figure.png")
 plt.close(fig)
 print(Result(1.0) == Result(1.0), square(3), json.dumps({"a": 1}), math.pi, scipy.optimize.brentq(math.sin, 3, 4))
+display(Markdown(f"**{len(globals())} names defined**"))
+ipd.display(ipd.Math(r"\\hat x_k"))
+ipython_display.clear_output()
+print(sorted(name for name in globals() if not name.startswith("_")))
+print(inspect.getsource(kupdate), inspect.signature(kupdate))
 '''
 """Things honest students do that the defences must not mind: magics, imports, a dataclass (which has
-__eq__), a traceback printed, files written and read in their own folder, a figure saved."""
+__eq__), a traceback printed, files written and read in their own folder, a figure saved, rich output
+shown with IPython.display, a look at the notebook's names and at a function's own source (the review
+of stop 39 found the last three flagged at the cost of every blank)."""
 
 
 def honest_habits_notebook() -> NotebookNode:

@@ -15,6 +15,7 @@ from autograder.integrity.rules import (
     REFERENCE_ATTRIBUTES,
     SHARED_ATTRIBUTES,
     SHELL_PACKAGES,
+    DISPLAY_MODULE,
     SYSTEM_PACKAGES,
     SYSTEM_SUBMODULES,
 )
@@ -33,6 +34,8 @@ class NameRules(Walker):
             self.hit(node, "reference", "uses a relative import, which reaches packages beside the notebook", context)
             return
         module = node.module or ""
+        if module == "IPython" and all(alias.name == "display" for alias in node.names):
+            module = "IPython.display"  # from IPython import display
         if self.check_module(module, node, context):
             return
         for alias in node.names:
@@ -41,6 +44,8 @@ class NameRules(Walker):
 
     def check_module(self, module: str, node: ast.AST, context: Context) -> bool:
         top = module.split(".")[0]
+        if module == DISPLAY_MODULE or module.startswith(DISPLAY_MODULE + "."):
+            return True  # rich output only: it shows in the student's own page and decides no score
         if top in HIDDEN_PACKAGES:
             self.hit(node, "reference", f"imports the hidden package {module}", context)
         elif top in IMPORT_MACHINERY:
@@ -72,8 +77,6 @@ class NameRules(Walker):
             self.hit(node, "shared", "reaches the IPython shell that runs the tests (get_ipython)", context)
         elif name in ("exec", "eval", "compile") and isinstance(node.ctx, ast.Load) and not self.shadowed(name, context):
             self.hit(node, "shared", f"runs code built at run time ({name}), which this scan cannot see", context)
-        elif name == "globals" and isinstance(node.ctx, ast.Load) and not self.shadowed(name, context):
-            self.hit(node, "reference", "reads the notebook's namespace through globals()", context)
 
     def visit_Attribute(self, node: ast.Attribute, context: Context):
         store = isinstance(node.ctx, (ast.Store, ast.Del))

@@ -53,6 +53,9 @@ SYSTEM_PACKAGES = frozenset({"subprocess", "pty", "multiprocessing", "ctypes", "
                              "shelve", "shutil", "socket", "http", "urllib", "requests", "_posixsubprocess",
                              "posix", "nt", "sysconfig", "site"})
 SYSTEM_SUBMODULES = frozenset({"unittest.mock", "mock"})
+DISPLAY_MODULE = "IPython.display"
+"""The one part of IPython a student may import: display, Markdown, Math, HTML and the rest show rich
+output, which the page sanitises and which decides no score (the verdict is the grader's)."""
 
 REFERENCE_ATTRIBUTES = frozenset({
     "f_back", "f_globals", "f_locals", "f_builtins", "f_code", "tb_frame", "gi_frame", "cr_frame", "ag_frame",
@@ -65,13 +68,15 @@ SHARED_ATTRIBUTES = frozenset({"__builtins__", "__setattr__", "__delattr__"})
 MODULE_REFERENCE = {
     "sys": {"modules", "path", "meta_path", "path_hooks", "path_importer_cache", "_getframe", "_current_frames",
             "exc_info", "last_traceback", "last_value"},
-    "inspect": {"currentframe", "stack", "trace", "getouterframes", "getinnerframes", "getsource", "getsourcelines",
-                "getsourcefile", "getfile", "getmodule", "getclosurevars", "getmembers", "getframeinfo"},
+    "inspect": {"currentframe", "stack", "trace", "getouterframes", "getinnerframes", "getsourcefile", "getfile",
+                "getmodule", "getclosurevars", "getmembers", "getframeinfo"},
     "traceback": {"walk_stack", "walk_tb"},
     "types": {"FunctionType", "CodeType", "MethodType", "LambdaType", "ModuleType"},
     "gc": {"get_objects", "get_referrers", "get_referents"},
 }
-"""Module attributes that are routes to the reference or to the hidden tests' variables."""
+"""Module attributes that are routes to the reference or to the hidden tests' variables. Not
+``inspect.getsource``: it reads the source of an object the kernel already holds, and no object of the
+reference is ever in the kernel (students print their own functions with it)."""
 MODULE_SHARED = {
     "sys": {"excepthook", "displayhook", "breakpointhook", "unraisablehook", "settrace", "setprofile",
             "addaudithook", "audit", "__excepthook__", "__displayhook__"},
