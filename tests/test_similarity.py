@@ -181,3 +181,24 @@ def test_command_prints_and_writes_the_report_and_changes_nothing(class_dir, cap
     assert header == "lab,blank,student_a,student_b,score,tokens,model_answer"
     assert "train-kf,kupdate,disguised,solved,1,52,yes" in rows
     assert {p: p.read_bytes() for p in class_dir.rglob("*") if p.is_file()} == before
+
+
+def test_answers_too_large_or_too_deep_to_parse_are_listed_and_the_rest_compared(tmp_path):
+    """A hostile answer cannot make the report take the instructor's memory or time (before: a
+    1 MB list literal was parsed, a tree of hundreds of MB, and compared token by token; a sum of
+    1,000 terms, nested deeper than unparsing follows, raised RecursionError out of the report)."""
+    import time
+
+    huge = "def predict(x, B, A, Q):\n    return [" + "1, " * 400_000 + "]\n"
+    deep = "def kupdate(x_f, B_f, y, H, R):\n    return 1" + " + 1" * 1_000 + "\n"
+    for student, nb in {"huge": with_answers({"predict": huge, "kupdate": deep}),
+                        submissions.SOLVED: submissions.solved(LAB), "copy": submissions.solved(LAB)}.items():
+        path = tmp_path / student / LAB.id / LAB.notebook_name
+        path.parent.mkdir(parents=True)
+        nbformat.write(nb, path)
+    start = time.monotonic()
+    report = similarity.compare(tmp_path, [LAB])
+    assert time.monotonic() - start < 60
+    assert any("huge" in line and f"more than the {similarity.MAX_COMPARED_CHARS:,}" in line for line in report.not_compared)
+    assert any("huge" in line and "kupdate is not valid Python, or is nested deeper" in line for line in report.not_compared)
+    assert ("predict", ("copy", submissions.SOLVED)) in {(g.blank, g.students) for g in report.groups}

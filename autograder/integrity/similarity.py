@@ -23,9 +23,14 @@ from pathlib import Path
 
 from autograder import cells, csv_cells
 from autograder.labs import Lab, all_labs
+from autograder.pipeline.intake import MAX_SUBMISSION_BYTES
 
 THRESHOLD = 0.8
 """Pairs scoring at least this are listed."""
+MAX_COMPARED_CHARS = 20_000
+"""The longest answer the report parses and compares (a lab's longest model answer is about 6,000
+characters): parsing costs hundreds of bytes per character and comparing costs up to the product of
+two answers' lengths, so a longer one is listed as not compared."""
 TEXT_STUB = "YOUR ANSWER HERE"
 
 
@@ -99,17 +104,19 @@ def _bound_names(tree: ast.AST, keep: set[str]) -> set[str]:
 
 def normalise_code(code: str, keep: set[str] = frozenset()) -> str | None:
     """Code with comments, docstrings, imports and formatting dropped and the names it binds
-    canonicalised, except ``keep`` (the blank's name). None if it is not valid Python."""
+    canonicalised, except ``keep`` (the blank's name). None if it is not valid Python or is nested too deep to read."""
     lines = [line for line in code.splitlines() if not line.lstrip().startswith(("%", "!"))]
     try:
         tree = ast.parse("\n".join(lines))
-    except SyntaxError:
+        tree = _Canonical(_bound_names(tree, set(keep))).visit(tree)
+        for node in ast.walk(tree):
+            if isinstance(getattr(node, "body", None), list) and not node.body:
+                node.body = [ast.Pass()]  # its only statements were imports or docstrings
+        return ast.unparse(ast.fix_missing_locations(tree))
+    except (SyntaxError, ValueError):  # not Python, or a null byte
         return None
-    tree = _Canonical(_bound_names(tree, set(keep))).visit(tree)
-    for node in ast.walk(tree):
-        if isinstance(getattr(node, "body", None), list) and not node.body:
-            node.body = [ast.Pass()]  # its only statements were imports or docstrings
-    return ast.unparse(ast.fix_missing_locations(tree))
+    except (RecursionError, MemoryError):  # nested deeper than parsing or unparsing can follow
+        return None
 
 
 def normalise_text(text: str) -> str:
@@ -187,6 +194,9 @@ def read_answers(folder: Path, labs: list[Lab]) -> tuple[dict[tuple[str, str], d
         stubs = {cells.grade_id(c): normalise(c.source, c.cell_type, cells.grade_id(c)) for c in release}
         for path in sorted(_submissions(folder).glob(f"*/{lab.id}/{lab.notebook_name}")):
             student = path.parent.parent.name
+            if (size := path.stat().st_size) > MAX_SUBMISSION_BYTES:
+                not_compared.append(f"{path}: {size:,} bytes, more than the {MAX_SUBMISSION_BYTES:,} the grader reads")
+                continue
             try:
                 found = [(cells.grade_id(c), c.source, c.cell_type) for c in cells.read(path).cells
                          if cells.is_answer(c) and cells.meta(c).get("grade_id") in stubs]
@@ -194,9 +204,13 @@ def read_answers(folder: Path, labs: list[Lab]) -> tuple[dict[tuple[str, str], d
                 not_compared.append(f"{path}: not a readable notebook ({type(error).__name__})")
                 continue
             for blank, source, cell_type in found:
+                if len(source) > MAX_COMPARED_CHARS:
+                    not_compared.append(f"{path}: the answer to {blank} holds {len(source):,} characters, more than "
+                                        f"the {MAX_COMPARED_CHARS:,} the report compares")
+                    continue
                 answer = normalise(source, cell_type, blank)
                 if answer is None:
-                    not_compared.append(f"{path}: the answer to {blank} is not valid Python")
+                    not_compared.append(f"{path}: the answer to {blank} is not valid Python, or is nested deeper than the report reads")
                 elif answer not in (stubs[blank], normalise_text(TEXT_STUB)):
                     answers.setdefault((lab.id, blank), {})[student] = answer
     return answers, not_compared
