@@ -1,4 +1,5 @@
-"""Synthetic submissions: the blank release notebook, the solved one, and one per catalogued mistake."""
+"""Synthetic submissions: the blank release notebook, the solved one, and one per catalogued mistake
+or one per group of catalogued mistakes in different blanks."""
 
 from __future__ import annotations
 
@@ -29,10 +30,31 @@ def solved(lab: Lab) -> NotebookNode:
 
 def with_mistake(lab: Lab, mistake: Mistake) -> NotebookNode:
     """The solved notebook with one mistake made in the answer cell of ``mistake.blank``."""
+    return with_mistakes(lab, [mistake])
+
+
+def with_mistakes(lab: Lab, mistakes: list[Mistake]) -> NotebookNode:
+    """The solved notebook with each mistake made in the answer cell of its blank (one per blank)."""
+    assert len({m.blank for m in mistakes}) == len(mistakes), "two mistakes in one blank"
     nb = copy.deepcopy(solved(lab))
-    [cell] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == mistake.blank]
-    cell.source = mistake.apply(cell.source)
+    for mistake in mistakes:
+        [cell] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == mistake.blank]
+        cell.source = mistake.apply(cell.source)
     return nb
+
+
+def mistake_groups(lab: Lab) -> dict[str, list[Mistake]]:
+    """Every catalogued mistake of ``lab`` in exactly one group, as few groups as can be: student id ->
+    its mistakes. No two mistakes of a group are in one blank, and a group's blanks are every other
+    blank of those that have mistakes (the first, third, ... or the second, fourth, ...), so that a
+    submission of a group also holds correct blanks that must keep their marks beside the wrong ones."""
+    mistaken = [b for b in cells.blank_names(cells.read(lab.source_notebook)) if any(m.blank == b for m in catalogue(lab))]
+    groups: dict[str, list[Mistake]] = {}
+    for parity, name in ((0, "odd"), (1, "even")):
+        per_blank = [[m for m in catalogue(lab) if m.blank == blank] for blank in mistaken[parity::2]]
+        for k in range(max(map(len, per_blank), default=0)):
+            groups[f"{lab.id}_mistakes-{name}-{k + 1}"] = [ms[k] for ms in per_blank if k < len(ms)]
+    return groups
 
 
 def write(nb: NotebookNode, folder: Path, student: str, lab: Lab) -> Path:
@@ -59,3 +81,16 @@ def write_class(labs: list[Lab], folder: Path) -> list[str]:
     for student, lab, nb in submissions:
         write(nb, folder, student, lab)
     return sorted({student for student, _, _ in submissions})
+
+
+def write_grouped_class(labs: list[Lab], folder: Path) -> None:
+    """Write ``blank`` and ``solved`` as ``write_class`` does, and each group of ``mistake_groups`` as a
+    student of its own who submits one lab: every catalogued mistake graded, in a third as many
+    submissions as one per mistake."""
+    if folder.exists():
+        shutil.rmtree(folder)
+    for lab in labs:
+        write(cells.read(lab.release_notebook), folder, BLANK, lab)
+        write(solved(lab), folder, SOLVED, lab)
+        for student, mistakes in mistake_groups(lab).items():
+            write(with_mistakes(lab, mistakes), folder, student, lab)
