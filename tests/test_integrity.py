@@ -68,7 +68,7 @@ fig.savefig("my_figure.png")
 plt.close(fig)
 print(Result(1.0) == Result(1.0), square(3), json.dumps({"a": 1}), math.pi, scipy.optimize.brentq(math.sin, 3, 4))
 display(Markdown(f"**{len(globals())} names defined**"))
-ipd.display(ipd.Math(r"\\hat x_k"))
+ipd.display(ipd.Math(r"\\hat x_k"), ipd.Image("my_figure.png"), ipd.Markdown(rf"$\\sigma = {math.pi:.2f}$ m"))
 ipython_display.clear_output()
 print(sorted(name for name in globals() if not name.startswith("_")))
 print(inspect.getsource(kupdate), inspect.signature(kupdate))
@@ -144,6 +144,18 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     "import sys\nsys.setrecursionlimit(5000)": [],
     "plt.rcParams['figure.figsize'] = (8, 4)": [],
     "class Vector:\n    def __sub__(self, other):\n        return self\n": [],
+    # IPython.display: rich output is allowed; the rest of IPython, folder listings and file reads are not
+    "from IPython.display import display, Markdown\ndisplay(Markdown(f'RMSE = {1.0:.2f} m'))": [],
+    "from IPython import display\ndisplay.display(display.Math(r'\\hat x'))": [],
+    "import IPython.display\nIPython.display.display(1)": [None],
+    "import IPython.display as ipd\nipd.FileLinks('.')": [None],
+    "from IPython.display import FileLinks": [None],
+    "from IPython.display import *": [None],
+    "from IPython.display import Code\nCode(filename='/etc/passwd')": [None],
+    "from IPython.display import Markdown\nMarkdown('../../other-student/train-kf/answers.md')": [None],
+    "from IPython.display import Markdown\ntext = 'x'\nMarkdown(text)": [()],
+    "print(len(globals()))": [],
+    "globals()['np'] = None": [None],
     "def check_close(*args, **kwargs):\n    pass\n": [()],
     "print('There are two solutions.')": [],
     "np.save('../../../gradebook.npy', np.zeros(1))": [None],

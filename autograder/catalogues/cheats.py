@@ -41,7 +41,7 @@ from nbformat import NotebookNode
 
 from autograder import cells
 from autograder.catalogues import submissions
-from autograder.labs import Lab
+from autograder.labs import ROOT, Lab
 from autograder.catalogues.mistakes import Mistake
 from autograder.catalogues.mistakes import catalogue as mistake_catalogue
 
@@ -169,7 +169,7 @@ def _replace_answer(body: str, before: str = "", plant: bool = False) -> Callabl
 
 def _names(lab: Lab, blank: str) -> dict[str, str]:
     _, call = _signature(lab, blank)
-    return {"module": lab.module, "blank": blank, "call": call}
+    return {"module": lab.module, "blank": blank, "call": call, "root": str(ROOT)}
 
 
 def _added_cell(source: str, plant: bool = True) -> Callable[[Lab], NotebookNode]:
@@ -186,6 +186,11 @@ _IMPORTLIB = _replace_answer("""
 import importlib
 return importlib.import_module("solutions.{module}.reference").{blank}({call})
 """)
+_DISPLAY_CODE = _added_cell("""\
+# IPython.display's Code reads the file it is given and shows it: the reference, in the feedback page
+from IPython.display import Code, display
+display(Code(filename="{root}/solutions/{module}/reference.py"))
+""", plant=False)
 _DUNDER_IMPORT = _replace_answer("""
 return __import__("solutions.{module}.reference", fromlist=["{blank}"]).{blank}({call})
 """)
@@ -297,6 +302,10 @@ return Peek("want_x"), Peek("want_B")
 _SHOWTRACEBACK = _added_cell("""\
 # Errors in later cells print nothing, so nbgrader sees no error.
 get_ipython().showtraceback = lambda *args, **kwargs: None
+""")
+_IPYTHON_THROUGH_DISPLAY = _added_cell("""\
+import IPython.display  # binds the name IPython: the whole of it, not only its display
+IPython.get_ipython().showtraceback = lambda *args, **kwargs: None
 """)
 _EXCEPTHOOK = _added_cell("""\
 import sys
@@ -473,6 +482,8 @@ CHEATS: tuple[Cheat, ...] = (
           "blank", frozenset({STATIC, SANDBOX}), _OPEN_EXEC),
     Cheat("exec-obfuscated-import", "an import of the reference hidden in rot13 and run with `exec`",
           "blank", frozenset({STATIC, SANDBOX}), _exec_obfuscated),
+    Cheat("display-shows-reference", "IPython.display's `Code(filename=...)` showing the reference's source "
+          "in the feedback page, to copy in the next submission", "all", frozenset({STATIC}), _DISPLAY_CODE),
     Cheat("gc-reference", "finding the loaded reference module through the garbage collector",
           "blank", frozenset({STATIC, GRADER}), _GC_SEARCH, exact=True),
     Cheat("patch-allclose", "monkeypatching `np.allclose`, `np.isclose` and `numpy.testing` so every check passes",
@@ -492,6 +503,9 @@ CHEATS: tuple[Cheat, ...] = (
           "value", "blank", frozenset({STATIC, GRADER}), _ARRAY_FRAME_WALK, labs=("train-kf",), exact=True),
     Cheat("showtraceback", "`get_ipython().showtraceback` replaced, so later errors print nothing (swallowed)",
           "all", frozenset({STATIC, GRADER}), _SHOWTRACEBACK, plants_mistake=True),
+    Cheat("ipython-through-display", "`import IPython.display`, which binds `IPython`, then "
+          "`IPython.get_ipython().showtraceback` replaced", "all", frozenset({STATIC, GRADER}), _IPYTHON_THROUGH_DISPLAY,
+          plants_mistake=True),
     Cheat("excepthook", "`sys.excepthook` replaced", "all", frozenset({STATIC, GRADER}), _EXCEPTHOOK, plants_mistake=True),
     Cheat("input-transformer", "an `input_transformers_cleanup` entry that rewrites the test cells to `pass`",
           "all", frozenset({STATIC, GRADER}), _INPUT_TRANSFORMER, plants_mistake=True),

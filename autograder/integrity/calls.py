@@ -7,6 +7,8 @@ import copy
 
 from autograder.integrity.rules import (
     CODE_MAGICS,
+    DISPLAY_MODULE,
+    DISPLAY_READERS,
     FORBIDDEN_DUNDERS,
     MAGIC_CALLS,
     NUMPY_READS,
@@ -53,6 +55,9 @@ class CallRules(Walker):
                 self.file_access(node, first_arg(node, "file"), open_writes(node, 1), context)
             elif name in ("Path", "PurePath", "PosixPath") and node.args:
                 self.file_path_seen(node.args[0], node, context)
+        if self.display_reader(func, context):
+            for arg in (node.args[:1] + [kw.value for kw in node.keywords if kw.arg in ("data", "filename", "url")]):
+                self.display_argument(node, arg, context)
         elif isinstance(func, ast.Attribute):
             path = self.module_of(func)
             method = func.attr
@@ -83,6 +88,27 @@ class CallRules(Walker):
             elif method == "join" and isinstance(func.value, ast.Constant):
                 self.string(node, fold(node), context)
         return None
+
+    def display_reader(self, func: ast.AST, context: Context) -> bool:
+        """Whether ``func`` is one of IPython.display's classes that read the file a string names."""
+        if isinstance(func, ast.Name):
+            path = None if self.shadowed(func.id, context) else self.scan.modules.get(func.id)
+        else:
+            path = self.module_of(func)
+        return path is not None and path.rpartition(".")[0] == DISPLAY_MODULE and path.rpartition(".")[2] in DISPLAY_READERS
+
+    def display_argument(self, node: ast.Call, arg: ast.AST, context: Context) -> None:
+        """The text (or file name) given to an IPython.display class: a name with a ``/`` in its
+        constant parts is read as a file's and checked as ``open`` checks it; text without one (TeX's
+        backslashes included) is at most a file of the student's own folder; a text computed at run time
+        is flagged for review and costs nothing (under the sandbox the kernel reads no file of the course)."""
+        folded = fold(arg)
+        pieces = [folded] if isinstance(folded, str) else constant_pieces(arg)
+        if pieces is None or (not any(p.strip() for p in pieces) and not isinstance(folded, str)):
+            self.hit(node, "none", "gives IPython.display a text computed at run time, which it reads as a file's "
+                                   "name if a file of that name exists: look at what the cell showed", context)
+        elif any("/" in piece or piece.startswith("~") for piece in pieces):
+            self.file_access(node, arg, False, context)
 
     def dynamic_attribute(self, node: ast.Call, name: str, context: Context) -> None:
         target, attr = node.args[0], fold(node.args[1])

@@ -16,6 +16,7 @@ from autograder.integrity.rules import (
     SHARED_ATTRIBUTES,
     SHELL_PACKAGES,
     DISPLAY_MODULE,
+    DISPLAY_NAMES,
     SYSTEM_PACKAGES,
     SYSTEM_SUBMODULES,
 )
@@ -27,7 +28,10 @@ class NameRules(Walker):
 
     def visit_Import(self, node: ast.Import, context: Context):
         for alias in node.names:
-            self.check_module(alias.name, node, context)
+            if alias.asname is None and alias.name.startswith(DISPLAY_MODULE):
+                self.check_module("IPython", node, context)  # binds IPython, the whole of it
+            else:
+                self.check_module(alias.name, node, context)
 
     def visit_ImportFrom(self, node: ast.ImportFrom, context: Context):
         if node.level:
@@ -35,7 +39,13 @@ class NameRules(Walker):
             return
         module = node.module or ""
         if module == "IPython" and all(alias.name == "display" for alias in node.names):
-            module = "IPython.display"  # from IPython import display
+            module = DISPLAY_MODULE  # from IPython import display
+        elif module == DISPLAY_MODULE:
+            for alias in node.names:
+                if alias.name not in DISPLAY_NAMES:
+                    self.hit(node, "shared", f"imports {alias.name} from IPython.display, which is not rich output "
+                                             "a lab needs", context)
+            return
         if self.check_module(module, node, context):
             return
         for alias in node.names:
@@ -44,7 +54,7 @@ class NameRules(Walker):
 
     def check_module(self, module: str, node: ast.AST, context: Context) -> bool:
         top = module.split(".")[0]
-        if module == DISPLAY_MODULE or module.startswith(DISPLAY_MODULE + "."):
+        if module == DISPLAY_MODULE:
             return True  # rich output only: it shows in the student's own page and decides no score
         if top in HIDDEN_PACKAGES:
             self.hit(node, "reference", f"imports the hidden package {module}", context)
@@ -134,6 +144,9 @@ class NameRules(Walker):
             return
         if top in HIDDEN_PACKAGES:
             self.hit(node, "reference", f"uses the hidden package {path}", context)
+            return
+        if path.startswith(DISPLAY_MODULE + ".") and parts[2] not in DISPLAY_NAMES:
+            self.hit(node, "shared", f"uses {path}, which is not rich output a lab needs", context)
             return
         for module, names in MODULE_REFERENCE.items():
             if top == module and len(parts) > 1 and parts[1] in names:

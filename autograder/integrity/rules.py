@@ -54,8 +54,17 @@ SYSTEM_PACKAGES = frozenset({"subprocess", "pty", "multiprocessing", "ctypes", "
                              "posix", "nt", "sysconfig", "site"})
 SYSTEM_SUBMODULES = frozenset({"unittest.mock", "mock"})
 DISPLAY_MODULE = "IPython.display"
-"""The one part of IPython a student may import: display, Markdown, Math, HTML and the rest show rich
-output, which the page sanitises and which decides no score (the verdict is the grader's)."""
+"""The one part of IPython a student may import, under a name of its own (``import IPython.display``
+binds ``IPython`` itself): rich output, which the page sanitises and which decides no score (the
+verdict is the grader's)."""
+DISPLAY_NAMES = frozenset({"display", "clear_output", "update_display", "DisplayHandle", "Markdown", "HTML", "Math",
+                           "Latex", "Pretty", "JSON", "SVG", "Image", "Javascript", "Code", "ProgressBar"})
+"""What a student may use of IPython.display. Not FileLink(s), which list folders, nor IFrame, Audio,
+Video and the rest, which fetch from the network."""
+DISPLAY_READERS = frozenset({"Markdown", "HTML", "Math", "Latex", "Pretty", "JSON", "SVG", "Image", "Javascript",
+                             "Code"})
+"""IPython.display classes that read the file a string names (as their first argument when the file
+exists, or ``filename=``; ``url=`` fetches): the scan reads that argument as a file's name."""
 
 REFERENCE_ATTRIBUTES = frozenset({
     "f_back", "f_globals", "f_locals", "f_builtins", "f_code", "tb_frame", "gi_frame", "cr_frame", "ag_frame",
