@@ -13,7 +13,7 @@ from nbgrader.coursedir import CourseDirectory
 
 from autograder.pipeline import grading, grades, nbgrader_apps
 from autograder.catalogues import submissions
-from autograder.labs import get_lab
+from autograder.labs import ROOT, get_lab
 from gradebook_sql import formgrader_gives, nbgrader_export
 
 LAB = get_lab("train-kf")
@@ -41,6 +41,9 @@ def test_grade_records_the_versions_beside_grades_csv(graded):
     record = json.loads((workdir / "grades.versions.json").read_text())
     assert {name: record["packages"][name] for name in ("numpy", "scipy", "nbgrader")} == {
         name: metadata.version(name) for name in ("numpy", "scipy", "nbgrader")}
+    # the course package the kernels imported (issue 32): this root's, with a hash of its files
+    assert record["kernel_course"]["path"] == str((ROOT / "course").resolve())
+    assert len(record["kernel_course"]["sha256"]) == 64
 
 
 def test_hand_grades_reach_grades_csv_through_nbgrader_export(graded):

@@ -27,7 +27,7 @@ import pytest
 from nbclient import NotebookClient
 from nbformat.v4 import new_code_cell, new_notebook
 
-from autograder.kernel import sandbox
+from autograder.kernel import manager, sandbox
 from autograder.labs import ROOT
 from autograder.kernel.sandbox import SandboxedKernelManager, launcher_command
 from autograder.kernel.manager import PRIVATE_PARENT
@@ -267,7 +267,7 @@ def test_a_sandboxed_kernel_runs_the_labs_work_and_reaches_nothing_else(graded_c
         "write in its folder": "write('notes.txt')",
         "write in TMPDIR": "__import__('tempfile').NamedTemporaryFile().close()",
         "TMPDIR in the private folder": f"check(__import__('tempfile').gettempdir().startswith('{PRIVATE_PARENT}/kit-'))",
-        "course from the course root": f"check(__import__('course').__file__ == {str(ROOT / 'course' / '__init__.py')!r})",
+        "course from the course root": f"check(os.path.realpath(__import__('course').__file__) == {str(ROOT / 'course' / '__init__.py')!r})",
         "read /proc/self": "read('/proc/self/status')",
         "read another process": "read('/proc/1/cmdline')",
         "list /tmp": "os.listdir('/tmp')",
@@ -457,3 +457,24 @@ def test_the_launcher_confines_a_plain_user_too(tcp_server):
         assert done.returncode == 0 and done.stderr == "", done.stderr
         assert json.loads(done.stdout) == {"uid": 65534, "write": "ok", "read": "EACCES", "connect": "ENETUNREACH"}
         assert secret.stat().st_mode & 0o004, "the secret is readable by others: only the sandbox keeps nobody out"
+
+
+def test_a_kernel_imports_the_course_package_of_the_root_being_graded(graded_class, tmp_path, monkeypatch):
+    """Issue 32: kernels imported the *installed* ``course``, which ``-e .`` from another checkout (a
+    second course folder, a shared environment) makes another checkout's, so a class was graded with
+    code other than the root's, silently. Here the root being graded is a second checkout whose
+    ``course/`` carries a marker; this environment's ``-e .`` points elsewhere. On the code before,
+    the kernel imported the installed package, without the marker."""
+    other = tmp_path / "other-checkout"
+    shutil.copytree(manager.ROOT / "course", other / "course", ignore=shutil.ignore_patterns("__pycache__"))
+    with (other / "course" / "__init__.py").open("a") as init:
+        init.write("\nCHECKOUT_MARKER = 'the other checkout'\n")
+    monkeypatch.setattr(manager, "ROOT", other)
+    manager.course_site.cache_clear()
+    try:
+        printed = run_in_kernel("import os, course\nprint(os.path.realpath(course.__file__), "
+                                "getattr(course, 'CHECKOUT_MARKER', 'none'), sep='|')", graded_class["alice"])
+    finally:
+        manager.course_site.cache_clear()
+    path, marker = printed.strip().split("|")
+    assert marker == "the other checkout" and path == str((other / "course" / "__init__.py").resolve()), printed

@@ -63,14 +63,16 @@ SYSTEM_WRITE_PATHS = ("/dev/null",)
 
 
 @cache
-def installed_course() -> str | None:
-    """The folder a grading kernel imports ``course`` from: the kernel has no PYTHONPATH, so that is
-    the installed package (``-e .`` points at a course root's ``course/``, not necessarily this one's);
-    None if it does not import."""
-    env = {name: value for name, value in os.environ.items() if name != "PYTHONPATH"}
-    found = subprocess.run([sys.executable, "-c", "import course, os; print(os.path.dirname(os.path.realpath(course.__file__)))"],
-                           cwd="/", env=env, capture_output=True, text=True, timeout=120, check=False)
-    return found.stdout.strip() or None if found.returncode == 0 else None
+def course_site() -> str:
+    """A folder that holds only ``course``, a link to this course root's ``course/``: the grading
+    kernel's PYTHONPATH, so that it imports the course package of the root being graded, whichever
+    checkout the environment's ``-e .`` points at (issue 32: kernels graded with another checkout's
+    ``course``), and reads nothing else of the root. Made once per process, under /tmp, and
+    removed when the process exits."""
+    site = Path(tempfile.mkdtemp(prefix="kit-course-", dir=PRIVATE_PARENT))
+    (site / "course").symlink_to(ROOT / "course", target_is_directory=True)
+    atexit.register(remove_tree, site)
+    return str(site)
 
 
 @cache
@@ -105,7 +107,7 @@ class SandboxedKernelManager(AsyncKernelManager):
     namespace) in a private folder made for each kernel, ``private_folder``, which also holds its
     TMPDIR, HOME, IPYTHONDIR, MPLCONFIGDIR and Jupyter runtime files, and which is removed when the
     kernel shuts down. The kernel may read the Python installation, the system's shared files
-    (``SYSTEM_READ_PATHS``), the course's ``course/`` package (and the installed one it imports), and
+    (``SYSTEM_READ_PATHS``), the course's ``course/`` package (which it imports through ``course_site``), and
     ``read_paths``; it may write in
     its working directory (the submission's folder, the ``cwd`` it is started with; the private
     folder when none is given), the private folder, ``SYSTEM_WRITE_PATHS`` and ``write_paths``.
@@ -134,7 +136,7 @@ class SandboxedKernelManager(AsyncKernelManager):
 
     def kernel_read_paths(self) -> list[str]:
         """Every path the kernel may read beneath: the defaults that exist here, and ``read_paths``."""
-        defaults = [*python_read_paths(), *SYSTEM_READ_PATHS, str(ROOT / "course"), installed_course() or ""]
+        defaults = [*python_read_paths(), *SYSTEM_READ_PATHS, str(ROOT / "course"), course_site()]
         return _unique([*(p for p in defaults if p and os.path.exists(p)), *self.read_paths])
 
     def kernel_write_paths(self, cwd: str) -> list[str]:
@@ -167,9 +169,10 @@ class SandboxedKernelManager(AsyncKernelManager):
         kernel_cmd, kw = await super()._async_pre_start_kernel(**kw)
         # the grader's environment may hold secrets (GRADEBOOK_URL with a password, PGPASSWORD, the
         # grading secret's file): the kernel gets only what a Python program needs to run alike
-        # everywhere, and no PYTHONPATH (it imports what is installed, `course`, nothing of the root)
+        # everywhere, and a PYTHONPATH of this root's `course` alone (nothing else of the root)
         kw["env"] = kernel_environment(kw["env"])
         kw["env"].update(
+            PYTHONPATH=course_site(),
             TMPDIR=str(self._private / "tmp"),
             HOME=str(self._private / "home"),
             IPYTHONDIR=str(self._private / "ipython"),

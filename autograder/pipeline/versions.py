@@ -9,6 +9,7 @@ says what was used.
 
 from __future__ import annotations
 
+import hashlib
 import json
 import platform
 import re
@@ -120,6 +121,16 @@ def kit_commit() -> dict[str, str | bool | None]:
     return {"commit": commit, "uncommitted_changes": None if status is None else bool(status)}
 
 
+def kernel_course() -> dict[str, str]:
+    """The ``course`` package that grading kernels import (this root's, autograder/kernel/manager.py's
+    ``course_site``): its folder and a SHA-256 over its Python files' paths and contents."""
+    folder = (ROOT / "course").resolve()
+    digest = hashlib.sha256()
+    for path in sorted(folder.rglob("*.py")):
+        digest.update(path.relative_to(folder).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return {"path": str(folder), "sha256": digest.hexdigest()}
+
+
 def environment() -> dict:
     """The record of the current grading environment."""
     differ = differences_from_lock(LOCK) if LOCK.exists() else None
@@ -129,6 +140,7 @@ def environment() -> dict:
         "platform": platform.platform(),
         "packages": {name: _installed(name) for name in PACKAGES},
         "kit": kit_commit(),
+        "kernel_course": kernel_course(),
         "lock_file": LOCK.name,
         "matches_lock": None if differ is None else not differ,
         "differs_from_lock": differ,
