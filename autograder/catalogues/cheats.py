@@ -186,6 +186,11 @@ _IMPORTLIB = _replace_answer("""
 import importlib
 return importlib.import_module("solutions.{module}.reference").{blank}({call})
 """)
+_NAMESPACE_BUILTINS = _replace_answer("""
+builtins = globals()["__builtins__"]  # exec, open and __import__, under names the scan does not read
+reference = builtins.__dict__["__import__"]("solutions.{module}.reference", fromlist=["{blank}"])
+return reference.{blank}({call})
+""")
 _DISPLAY_CODE = _added_cell("""\
 # IPython.display's Code reads the file it is given and shows it: the reference, in the feedback page
 from IPython.display import Code, display
@@ -482,6 +487,8 @@ CHEATS: tuple[Cheat, ...] = (
           "blank", frozenset({STATIC, SANDBOX}), _OPEN_EXEC),
     Cheat("exec-obfuscated-import", "an import of the reference hidden in rot13 and run with `exec`",
           "blank", frozenset({STATIC, SANDBOX}), _exec_obfuscated),
+    Cheat("namespace-builtins", "`globals()['__builtins__']`, then the reference imported through what it holds",
+          "blank", frozenset({STATIC, SANDBOX}), _NAMESPACE_BUILTINS, exact=True),
     Cheat("display-shows-reference", "IPython.display's `Code(filename=...)` showing the reference's source "
           "in the feedback page, to copy in the next submission", "all", frozenset({STATIC}), _DISPLAY_CODE),
     Cheat("gc-reference", "finding the loaded reference module through the garbage collector",

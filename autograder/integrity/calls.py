@@ -124,7 +124,7 @@ class CallRules(Walker):
             path = self.module_of(target)
             if path is not None:
                 self.check_path(f"{path}.{attr}", node, context, store=store)
-        elif self.module_of(target) is not None or isinstance(target, ast.Call):
+        else:  # on any object: print's __self__ is the builtins module, a function's __globals__ its module's namespace
             kind = "shared" if store else "reference"
             self.hit(node, kind, f"uses {name} with a computed attribute name on {self.module_of(target) or 'an object'}",
                      context)

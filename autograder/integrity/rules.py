@@ -61,6 +61,12 @@ DISPLAY_NAMES = frozenset({"display", "clear_output", "update_display", "Display
                            "Latex", "Pretty", "JSON", "SVG", "Image", "Javascript", "Code", "ProgressBar"})
 """What a student may use of IPython.display. Not FileLink(s), which list folders, nor IFrame, Audio,
 Video and the rest, which fetch from the network."""
+NAMESPACE_CALLS = frozenset({"globals", "vars", "locals"})
+"""Calls that return a namespace as a dict, whose values include ``__builtins__`` (exec, open,
+__import__): a student may look at its names, and nothing else (``NAMESPACE_NAME_USES``)."""
+NAMESPACE_NAME_USES = frozenset({"len", "sorted", "list", "set", "tuple", "iter", "print"})
+"""Calls that take a namespace and give only its names (or print it): ``len(globals())``."""
+NAMESPACE_WRITES = frozenset({"update", "setdefault", "pop", "popitem", "clear", "__setitem__", "__delitem__"})
 DISPLAY_READERS = frozenset({"Markdown", "HTML", "Math", "Latex", "Pretty", "JSON", "SVG", "Image", "Javascript",
                              "Code"})
 """IPython.display classes that read the file a string names (as their first argument when the file

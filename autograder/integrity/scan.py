@@ -46,7 +46,7 @@ from typing import TYPE_CHECKING
 from nbformat import NotebookNode
 
 from autograder import cells
-from autograder.integrity.rules import is_check_helper
+from autograder.integrity.rules import NAMESPACE_CALLS, NAMESPACE_NAME_USES, NAMESPACE_WRITES, is_check_helper
 from autograder.integrity.syntax import bound_names, catches_everything, does_nothing, local_names, parse
 from autograder.integrity.visitor import Visitor
 from autograder.labs import Lab
@@ -97,6 +97,11 @@ def static_findings(nb: NotebookNode, lab: Lab) -> list[Finding]:
 @functools.lru_cache(maxsize=16)
 def _source_notebook(path: str, mtime_ns: int) -> NotebookNode:
     return cells.read(Path(path))
+
+
+def _top(tree: ast.Module, node: ast.AST) -> ast.stmt | None:
+    """The top-level statement of ``tree`` that holds ``node``."""
+    return next((stmt for stmt in tree.body if any(inner is node for inner in ast.walk(stmt))), None)
 
 
 def _too_large(cell: str, size: int) -> Finding:
@@ -210,6 +215,7 @@ class Scan:
             Visitor(self, label).run(tree)
             self._swallow_all(label, tree)
             self._rebinds_helpers(label, tree)
+            self._namespace_uses(label, tree)
         out: list[Finding] = []
         seen = set()
         for hit in self.hits:
@@ -257,6 +263,38 @@ class Scan:
                 self.hits.append(Hit(label, body[0], "none", "wraps the whole cell in a try/except that discards "
                                       "every error, so the cell can never fail", body[0], None))
                 return
+
+    def _namespace_uses(self, label: str, tree: ast.Module) -> None:
+        """globals(), vars() and locals() used for anything but their names: the values hold
+        ``__builtins__`` (exec, open, __import__), which no plain name reaches. Allowed: ``len``,
+        ``sorted`` and the like, ``in``, iteration, ``.keys()``, and a key that is a constant name
+        without leading underscores. (Writes by subscript are the store rules'.)"""
+        parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
+        for node in ast.walk(tree):
+            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in NAMESPACE_CALLS
+                    and node.func.id not in self.defined and not (node.func.id == "vars" and node.args)):
+                continue
+            parent, name = parents.get(node), node.func.id
+            if isinstance(parent, ast.Subscript) and parent.value is node:
+                key = parent.slice.value if isinstance(parent.slice, ast.Constant) else None
+                if isinstance(parent.ctx, (ast.Store, ast.Del)) or (isinstance(key, str) and not key.startswith("_")):
+                    continue
+                what = f"reads {key!r} from {name}()" if isinstance(key, str) else f"reads from {name}() by a computed name"
+            elif isinstance(parent, ast.Attribute) and parent.value is node:
+                if parent.attr == "keys":
+                    continue
+                kind = "shared" if parent.attr in NAMESPACE_WRITES else "reference"
+                self.hits.append(Hit(label, node, kind, f"uses {name}().{parent.attr}, which reaches the values of the "
+                                      "notebook's namespace, __builtins__ among them", _top(tree, node), None))
+                continue
+            elif ((isinstance(parent, ast.Call) and isinstance(parent.func, ast.Name) and parent.func.id in NAMESPACE_NAME_USES)
+                  or (isinstance(parent, ast.Compare) and node in parent.comparators)
+                  or (isinstance(parent, (ast.For, ast.comprehension)) and parent.iter is node)):
+                continue
+            else:
+                what = f"takes {name}() as a whole"
+            self.hits.append(Hit(label, node, "reference", f"{what}, which reaches the values of the notebook's "
+                                  "namespace, __builtins__ among them", _top(tree, node), None))
 
     def _rebinds_helpers(self, label: str, tree: ast.Module) -> None:
         for stmt in tree.body:

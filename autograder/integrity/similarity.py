@@ -16,7 +16,9 @@ from __future__ import annotations
 
 import ast
 import difflib
+import io
 import re
+import tokenize
 from dataclasses import dataclass
 from itertools import combinations
 from pathlib import Path
@@ -27,10 +29,14 @@ from autograder.pipeline.intake import MAX_SUBMISSION_BYTES
 
 THRESHOLD = 0.8
 """Pairs scoring at least this are listed."""
-MAX_COMPARED_CHARS = 20_000
-"""The longest answer the report parses and compares (a lab's longest model answer is about 6,000
-characters): parsing costs hundreds of bytes per character and comparing costs up to the product of
-two answers' lengths, so a longer one is listed as not compared."""
+MAX_COMPARED_TOKENS = 5_000
+"""The most tokens of an answer the report parses and compares, comments and line breaks aside (a lab's
+longest model answer has about 1,500): parsing costs hundreds of bytes per token and comparing up to
+the product of two answers' lengths, so a longer one is listed as not compared. Comments do not
+count, so that a copy padded with them is still compared (an adversarial review found that a cap on
+characters let it through)."""
+MAX_READ_CHARS = 1_000_000
+"""The most characters of an answer the report reads at all (to count its tokens)."""
 TEXT_STUB = "YOUR ANSWER HERE"
 
 
@@ -119,6 +125,19 @@ def normalise_code(code: str, keep: set[str] = frozenset()) -> str | None:
         return None
 
 
+def _token_count(source: str, cell_type: str) -> int:
+    """The tokens of an answer that parsing and comparing cost: Python's tokens but comments and line
+    breaks for code (the regular expression's words and symbols where it does not tokenize), words
+    and symbols for text."""
+    if cell_type == "code":
+        skipped = {tokenize.COMMENT, tokenize.NL, tokenize.NEWLINE, tokenize.INDENT, tokenize.DEDENT, tokenize.ENDMARKER}
+        try:
+            return sum(token.type not in skipped for token in tokenize.generate_tokens(io.StringIO(source).readline))
+        except (tokenize.TokenError, SyntaxError):
+            pass
+    return len(tokens(source))
+
+
 def normalise_text(text: str) -> str:
     """A written answer as lower-case words and symbols, one space apart."""
     return " ".join(tokens(text.lower()))
@@ -204,9 +223,11 @@ def read_answers(folder: Path, labs: list[Lab]) -> tuple[dict[tuple[str, str], d
                 not_compared.append(f"{path}: not a readable notebook ({type(error).__name__})")
                 continue
             for blank, source, cell_type in found:
-                if len(source) > MAX_COMPARED_CHARS:
-                    not_compared.append(f"{path}: the answer to {blank} holds {len(source):,} characters, more than "
-                                        f"the {MAX_COMPARED_CHARS:,} the report compares")
+                if len(source) > MAX_READ_CHARS or (size := _token_count(source, cell_type)) > MAX_COMPARED_TOKENS:
+                    held = (f"{len(source):,} characters" if len(source) > MAX_READ_CHARS
+                            else f"{size:,} tokens besides its comments")
+                    not_compared.append(f"{path}: the answer to {blank} holds {held}, more than the report compares "
+                                        f"({MAX_COMPARED_TOKENS:,} tokens of at most {MAX_READ_CHARS:,} characters)")
                     continue
                 answer = normalise(source, cell_type, blank)
                 if answer is None:
