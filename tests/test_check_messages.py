@@ -154,7 +154,8 @@ VISIBLE_MESSAGES = {
     "train-kf": {"nees/root": ("take no square root", None)},
     "castaway-bob": {"joseph_covariance/right-not-transposed": ("symmetric by construction", None),
                      "run_rank4/flow-at-fix": ("not at the last fix", None),
-                     "run_rank4/position-noise": ("drives Bob's own velocity w, not his position", None)},
+                     "run_rank4/position-noise": ("drives Bob's own velocity w, not his position", None),
+                     "run_rank2/restarts": ("from the previous estimate and covariance", "expected 1 but got 0")},
     "nonlinear-filters": {
         # the check of P_yy comes before the check of the mean, which a P_yy without R makes wrong as well
         "sigma_point_update/no-R": ("Did you add R to P_yy", None),
