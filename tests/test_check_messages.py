@@ -164,6 +164,9 @@ VISIBLE_MESSAGES = {
         # yes/no checks say in words what is wrong, not "expected 1 but got 0"
         "ekf_update/bearing-not-wrapped": ("moves the target by more than 30 m", "expected 1 but got 0"),
         "bootstrap_pf_step/noise-before-f": ("the variance of x_new - f(x)", "expected 1 but got 0"),
+        # the angle's hint points at the cause without the line of code that fixes it
+        "ekf_update/angle-index-hard-coded": ("whose indices are listed in angles", "wrap_angle(innovation["),
+        "ekf_update/wraps-every-component": ("a range difference of 10 m is not an angle", "wrap_angle(innovation["),
     },
     "reentry-srekf": {
         # the check of S_R comes first, on a case whose residual is zero and whose S is diagonal
@@ -178,7 +181,8 @@ another (None: no such phrase). The fairness reviews found the square root's hin
 a square root leaves alone; a Joseph form without its right transpose told only the size of P^ - P^.T; a P_yy
 without R told to check the innovation's sign; yes/no checks that said "expected 1 but got 0"; a stacked R or S_R.T
 told of the residual's sign or of the blocks' sizes. The science review found a Joseph form with np.eye(2) whose hint
-never showed (with n = 1 a matrix product raises first, and its explanation pointed at the transposes)."""
+never showed (with n = 1 a matrix product raises first, and its explanation pointed at the transposes), and an
+angle's hint that gave the line of code that wraps it."""
 
 
 @pytest.mark.parametrize("lab", [Lab(lab_id) for lab_id in sorted(VISIBLE_MESSAGES)], ids=sorted(VISIBLE_MESSAGES))
