@@ -168,8 +168,10 @@ _UNIT_SPELLINGS = {
 _SPELLING_TO_UNIT = {spelling: unit for unit, spellings in _UNIT_SPELLINGS.items() for spelling in spellings}
 _UNIT_TOKEN = re.compile(
     "(?P<unit>" + "|".join(sorted((f"(?i:{w})" if len(w) > 2 else w for w in _SPELLING_TO_UNIT), key=len, reverse=True))
-    + r")(?:\s*\^\s*\(?(?P<power>[+-]?\d+)\)?|(?P<digits>\d+))?(?![\w^])"
+    + r")(?:\s*\^\s*\(?(?P<power>[+-]?\d+)\)?(?![\d^])|(?P<digits>\d+)(?![\w^])|(?![\w^]))"
 )
+"""A unit and its power. After a power ("m^2", "m²") the next unit may follow at once ("m²kg⁻¹"), as it is plain
+where one ends; a bare unit or digits ("m", "m2") must end the word ("ms" is not metres times seconds)."""
 _SUPERSCRIPTS = str.maketrans("⁰¹²³⁴⁵⁶⁷⁸⁹⁻⁺", "0123456789-+")
 
 
@@ -184,6 +186,7 @@ def _plain_label(text: str) -> str:
     text = re.sub(r"\\[,;:! ]|~|\\quad", " ", text)
     text = text.replace("{", "").replace("}", "").replace("\\", "")
     text = re.sub(r"[⁻⁺]?[⁰¹²³⁴⁵⁶⁷⁸⁹]+", lambda m: "^" + m.group(0).translate(_SUPERSCRIPTS), text)
+    text = re.sub(r"(?<=[A-Za-z0-9)])\.(?=\s*[A-Za-z(])", " ", text)  # a dot as the product, "m^2.kg^-1"; not 2.5
     text = re.sub(r"(?i)\bsquare\s+(\w+)", r"\1^2", text)
     text = re.sub(r"(?i)(\w+)\s+squared\b", r"\1^2", text)
     return re.sub(r"(?i)\s+per\s+", " / ", text)
@@ -246,8 +249,8 @@ def label_has_unit(label: str, unit: str) -> bool:
 
     The unit may be written in brackets ("Time [s]", "c (m²/kg)"), after "in" ("time in seconds"), after
     a comma ("time, s"), or ISO's way after a slash ("time $t$ / s", "c / (m^2/kg)"); in symbols or
-    words (s, sec, seconds; m^2/kg, m$^2$ kg$^{-1}$, square metres per kilogram). Something other than
-    the unit must name the quantity.
+    words (s, sec, seconds; m^2/kg, m$^2$ kg$^{-1}$, m^2.kg^-1, m²kg⁻¹, square metres per kilogram).
+    Something other than the unit must name the quantity.
     """
     want = parse_unit(unit)
     text = _plain_label(label)

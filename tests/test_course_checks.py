@@ -88,15 +88,17 @@ LABELS_WITH_UNIT = {
     "m^2/kg": ["c [m^2/kg]", "c (m²/kg)", "c [m$^2$/kg]", "$c$ / m$^2$ kg$^{-1}$", "ballistic coefficient c (m^2 kg^-1)",
                "c [m2/kg]", "c in m^2 per kg", "c [m**2/kg]", "ballistic coefficient [square metres per kilogram]",
                "c [m² kg⁻¹]", "c / (m^2/kg)", r"c [$\mathrm{m}^2/\mathrm{kg}$]", r"c [$\frac{m^2}{kg}$]",
-               "c [m^2 / kg]", "Ballistic coefficient, m^2/kg"],
-    "kg/(m s^2)": ["beta [kg/(m s^2)]", r"$\beta$ [kg/(m s$^2$)]", "beta (kg m^-1 s^-2)", "beta / kg m⁻¹ s⁻²"],
+               "c [m^2 / kg]", "Ballistic coefficient, m^2/kg", "c [m^2.kg^-1]", "c [m²kg⁻¹]", "c [m².kg⁻¹]",
+               "c [m²·kg⁻¹]"],
+    "kg/(m s^2)": ["beta [kg/(m s^2)]", r"$\beta$ [kg/(m s$^2$)]", "beta (kg m^-1 s^-2)", "beta / kg m⁻¹ s⁻²",
+                   "beta [kg.m^-1.s^-2]", "beta [kg m⁻¹s⁻²]"],
     "kg/m^2": ["areal density [kg/m^2]", "areal density [kg m$^{-2}$]", "areal density (kg/m²)"],
 }
 LABELS_WITHOUT_UNIT = {
     "s": ["", "Time", "Time [m]", "Time (min)", "Time [ms]", "Time index", "Time [-]", "seconds", "[s]",
           "Time (samples)", "Times", "time step k"],
     "m^2/kg": ["", "c", "c [kg/m^2]", "c [kg m$^{-2}$]", "c [m/kg]", "Ballistic coefficient", "c [-]", "c [m^2]",
-               "c [1/kg]", "c [s]"],
+               "c [1/kg]", "c [s]", "c [m^2.kg]", "c [m²kg]", "c [m.kg^-1]", "c [2.5 m^2/kg]"],
     "kg/(m s^2)": ["beta", "beta [kg/(m s)]", "beta [kg m s^-2]"],
     "kg/m^2": ["areal density [m^2/kg]", "areal density [kg m$^{2}$]"],
 }
@@ -119,5 +121,6 @@ def test_an_axis_label_without_its_unit_fails_and_says_what_to_write(unit, label
 def test_units_parse_to_their_base_units():
     assert parse_unit("m^2/kg") == parse_unit("m^2 kg^-1") == parse_unit("(m^2)/(kg)") == {"m": 2, "kg": -1}
     assert parse_unit("kg/(m s^2)") == parse_unit("kg m^-1 s^-2") == {"kg": 1, "m": -1, "s": -2}
+    assert parse_unit("m^2kg^-1") == parse_unit("kg^-1m^2") == {"m": 2, "kg": -1} and parse_unit("m2kg") is None
     assert parse_unit("seconds") == {"s": 1} and parse_unit("m/m") == {}
     assert parse_unit("min") is None and parse_unit("ms") is None and parse_unit("") is None

@@ -10,7 +10,9 @@ case for fail them, and their messages read as sentences.
 from __future__ import annotations
 
 import contextlib
+import hashlib
 import io
+import linecache
 from collections.abc import Iterable
 
 from autograder import cells
@@ -22,10 +24,15 @@ class SolvedNotebookFails(AssertionError):
 
 
 def run_cell(code: str, namespace: dict) -> BaseException | None:
-    """Run a cell's code (IPython magics left out) in ``namespace``: the exception it raised, or None."""
-    lines = [line for line in code.splitlines() if not line.lstrip().startswith("%")]
+    """Run a cell's code (IPython magics left out) in ``namespace``: the exception it raised, or None.
+
+    The code is registered with linecache under a name of its own, as IPython registers a cell, so that a
+    traceback, and the explanation of ``course.checks`` made from it, quotes its lines as a student reads them."""
+    source = "\n".join(line for line in code.splitlines() if not line.lstrip().startswith("%"))
+    name = f"<cell {hashlib.sha1(source.encode()).hexdigest()[:12]}>"
+    linecache.cache[name] = (len(source), None, [line + "\n" for line in source.splitlines()], name)
     try:
-        exec(compile("\n".join(lines), "<cell>", "exec"), namespace)
+        exec(compile(source, name, "exec"), namespace)
     except Exception as error:  # noqa: BLE001 (the failure is what the caller reads)
         return error
     return None

@@ -107,7 +107,7 @@ MISTAKES = (
             "Q = np.diag([0.0, 0.0, sigma_F**2, sigma_F**2])", "Q = sigma_F**2 * np.eye(4)",
             hint="Your run_rank4 behaves as if Q put process noise on the position too (sigma_F^2 I_4): the random force "
                  "drives Bob's own velocity w only, so Q = diag(0, 0, sigma_F^2, sigma_F^2). Its effect on the track "
-                 "is small, which is why it shows only in the last digits."),
+                 "is small, but the position variances show it."),
     Mistake("run_rank4", "handout-Q", "takes the handout's slip Q = sigma_F I_4",
             "Q = np.diag([0.0, 0.0, sigma_F**2, sigma_F**2])", "Q = sigma_F * np.eye(4)",
             hint="Your run_rank4 behaves as if it took the handout's slip Q = sigma_F I: only the velocity takes process noise, with variance sigma_F^2."),
