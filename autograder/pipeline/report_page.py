@@ -21,7 +21,8 @@ STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 60rem; margin: 2rem auto; padding: 0 1rem; color: #222; }
 h1 { font-size: 1.5rem; } h2 { font-size: 1.2rem; margin-top: 2rem; } h3 { font-size: 1rem; margin: 1.2rem 0 0.3rem; }
 table { border-collapse: collapse; margin: 0.3rem 0; } td, th { padding: 0.15rem 0.6rem; text-align: left; vertical-align: top; }
-th { border-bottom: 1px solid #999; } td.n { text-align: right; font-variant-numeric: tabular-nums; }
+th { border-bottom: 1px solid #999; } td:first-child { min-width: 13rem; }
+td.n { text-align: right; min-width: 3rem; font-variant-numeric: tabular-nums; }
 td.hint { color: #444; font-size: 0.9rem; max-width: 36rem; overflow-wrap: anywhere; }
 .bar { display: inline-block; height: 0.8rem; background: #3a7bbf; vertical-align: middle; }
 img { max-width: 100%; } p.note { color: #555; font-size: 0.9rem; }
