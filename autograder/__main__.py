@@ -51,6 +51,12 @@ def build_parser() -> argparse.ArgumentParser:
                                  "yet or their autograded notebooks and feedback pages are not in WORKDIR")
     export.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")
     export.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
+    report = commands.add_parser("report", help="write the class report of each graded lab into WORKDIR/report/: "
+                                 "an HTML page of counts (scores, each blank's full marks, catalogued mistakes, other "
+                                 "losses and unwritten blanks; flagged, late and faulted submissions; written answers "
+                                 "waiting for a hand grade), its figure (PNG), the counts (CSV) and the students behind "
+                                 "each count (<lab>-students.csv), read from the gradebook as export reads it")
+    report.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")
     audit = commands.add_parser("audit", help="list the graded test cells whose score came from the student's kernel "
                                 "rather than from the grader's verdict (possible with versions before the verdicts; "
                                 "README: Versions that graded wrongly), so that exactly those submissions are regraded")
@@ -162,6 +168,18 @@ def main(argv: list[str] | None = None) -> int:
         print(f"Exported the grades of {len(rows)} submissions to {out}.")
         if missing:
             print(incomplete(missing, out), file=sys.stderr)
+            return 1
+    elif args.command == "report":
+        from autograder.pipeline.class_report import write_report
+        from autograder.pipeline.export import course_rows
+
+        workdir = args.workdir.resolve()
+        rows, missing = course_rows(workdir)
+        for page in write_report(workdir, rows):
+            print(f"Class report: {page}")
+        if missing:
+            print(f"The report leaves out {len(missing)} submissions of the gradebook, not graded yet or not gathered "
+                  "into this course folder:\n  " + "\n  ".join(missing), file=sys.stderr)
             return 1
     elif args.command == "audit":
         from autograder.pipeline.audit import run_audit

@@ -32,8 +32,9 @@ diagnosed. A plot blank is compared by what its Axes show (the data of its lines
 regions, and whether it has a legend), not by colours or labels. Results that cannot be compared
 give no diagnosis.
 
-The diagnosis never changes a score: it edits the message of the exception the test raised, and
-re-raises it. It gives up silently when it runs out of time (``BUDGET_S``, and ``CELL_SHARE`` of the
+The diagnosis never changes a score: it edits the message of the exception the test raised, names
+the mistake's slug in the exception's ``MISTAKE_ATTRIBUTE`` (which the grader records as data beside
+the verdict, autograder/pipeline/verdicts.py: the class report counts it), and re-raises it. It gives up silently when it runs out of time (``BUDGET_S``, and ``CELL_SHARE`` of the
 grading cell's time limit for the test and the diagnosis together), or on any error of its own. A
 diagnosis that runs out of time is checked only between calls: one call of the reference or of a
 mistake can overrun it. The cost falls on failing submissions (the reference's and the mistakes'
@@ -77,6 +78,8 @@ a failure with a message into a stopped cell."""
 
 LEAD = "Diagnosis: on every hidden case, your {blank} gives the same results as a common mistake."
 """The sentence before the mistake's hint in the message."""
+MISTAKE_ATTRIBUTE = "kit_diagnosed_mistake"
+"""The attribute of a failed check's exception that holds the diagnosed mistake's slug."""
 
 
 class _OutOfTime(Exception):
@@ -105,10 +108,17 @@ def diagnosed(check: Callable) -> Callable:
             mistake = _diagnosis(check, calls, _budget(time.monotonic() - start))
             if mistake is not None:
                 add_to_message(error, f"{LEAD.format(blank=blank)} {mistake.hint}")
+                setattr(error, MISTAKE_ATTRIBUTE, mistake.slug)
             raise
 
     diagnosing_check.diagnosed_blank = blank
     return diagnosing_check
+
+
+def diagnosed_mistake(error: BaseException) -> str | None:
+    """The slug of the catalogued mistake that ``diagnosed`` found behind the failure ``error``, or None."""
+    slug = getattr(error, MISTAKE_ATTRIBUTE, None)
+    return slug if isinstance(slug, str) else None
 
 
 def _blank(check: Callable) -> str:

@@ -126,6 +126,7 @@ class GradingExecute(Execute):
         """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""
         self._output = OutputBudget(self.max_output_bytes, self.max_notebook_output_bytes)
         self.resources[verdicts.RESOURCES_KEY] = {}
+        verdicts.forget_diagnoses(self.nb)
         notes: list[str] = []
         deadline = time.monotonic() + self.notebook_timeout
         failed: set[int] = set()
@@ -209,12 +210,13 @@ class GradingExecute(Execute):
         try:
             peer, why_not = compare.connect(listener, deadline, lambda: self._replied(msg_id))
             printed = room = 0
+            mistake = None
             if peer is None:
                 outputs = [compare.error_output("AssertionError", why_not)]
             else:
                 try:
                     room = self._output.room(index)
-                    outputs, printed = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
+                    outputs, printed, mistake = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
                                                           deadline, self._memory_bytes())
                 except compare.KernelStopped:
                     if not self._finished_alive(msg_id):
@@ -234,6 +236,8 @@ class GradingExecute(Execute):
             self._output.count(cell, index, printed, min(printed, room))  # after them: its note ends the cell
         if failures:
             self._fail(cell, f"{failures[0].ename}: {failures[0].evalue}")
+            if mistake is not None:
+                verdicts.record_diagnosis(cell, mistake)
         else:
             verdicts.record(self.resources, cells.grade_id(cell), passed=True)
         self._wait_served(msg_id)

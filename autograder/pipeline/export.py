@@ -40,23 +40,36 @@ def not_gathered(workdir: Path, by_lab: dict[str, list[str]]) -> list[str]:
     return lines
 
 
-def export_grades(gradebook: Gradebook, workdir: Path, dest: Path, labs: Sequence[str] = (),
-                  students: Sequence[str] = ()) -> tuple[list[grades.GradeRow], list[str]]:
-    """Write ``dest`` (grades.csv) with every submission in ``gradebook`` of the course ``workdir``
-    (only of ``labs`` and ``students``, when given) that is graded and gathered there. Returns the
-    rows, and the submissions left out (``not_gathered``)."""
+def gradebook_rows(gradebook: Gradebook, workdir: Path, labs: Sequence[str] = (),
+                   students: Sequence[str] = ()) -> tuple[list[grades.GradeRow], list[str]]:
+    """The rows of every submission in ``gradebook`` of the course ``workdir`` (only of ``labs`` and
+    ``students``, when given) that is graded and gathered there, and the submissions left out
+    (``not_gathered``): what ``export`` and ``report`` read."""
     by_lab = {a.name: sorted(s.student_id for s in a.submissions if not students or s.student_id in students)
               for a in gradebook.assignments if (ROOT / "source" / a.name).is_dir() and (not labs or a.name in labs)}
     everyone = sorted({student for students_of_lab in by_lab.values() for student in students_of_lab})
     rows = grades.read_grades(workdir, [Lab(lab_id) for lab_id in sorted(by_lab)], everyone) if everyone else []
-    grades.write_grades(rows, dest)
     return rows, not_gathered(workdir, by_lab)
+
+
+def export_grades(gradebook: Gradebook, workdir: Path, dest: Path, labs: Sequence[str] = (),
+                  students: Sequence[str] = ()) -> tuple[list[grades.GradeRow], list[str]]:
+    """Write ``dest`` (grades.csv) with ``gradebook_rows``. Returns the rows, and the submissions left out."""
+    rows, missing = gradebook_rows(gradebook, workdir, labs, students)
+    grades.write_grades(rows, dest)
+    return rows, missing
 
 
 def incomplete(missing: list[str], dest: Path) -> str:
     """What an export with submissions left out says."""
     return (f"{dest} lacks {len(missing)} submissions of the gradebook, not graded yet or not gathered into this "
             "course folder (rerun their shard, or copy its autograded/ and feedback/ here):\n  " + "\n  ".join(missing))
+
+
+def course_rows(workdir: Path) -> tuple[list[grades.GradeRow], list[str]]:
+    """``gradebook_rows`` of every submission in the gradebook of the course ``workdir``."""
+    with Gradebook(gradebook_url(workdir)) as gradebook:
+        return gradebook_rows(gradebook, workdir)
 
 
 def export_course(workdir: Path, out: Path | None = None) -> tuple[list[grades.GradeRow], list[str]]:

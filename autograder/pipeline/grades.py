@@ -14,9 +14,10 @@ from nbgrader.coursedir import CourseDirectory
 from autograder import cells, csv_cells
 from autograder.integrity.flag import FLAG
 from autograder.labs import ROOT, Lab
-from autograder.pipeline import versions
+from autograder.pipeline import verdicts, versions
 from autograder.pipeline.nbgrader_apps import course_config
 from autograder.pipeline.restore import grader_notes
+from course.checks import NOT_WRITTEN
 
 
 def all_graded_labs(workdir: Path) -> list[Lab]:
@@ -45,6 +46,11 @@ class GradeRow:
     """What the grader changed before grading (the grader's note in the feedback)."""
     reasons: dict[str, str] = field(default_factory=dict)
     """Why each autograded cell short of full marks lost them: its error, or its stderr output."""
+    diagnosed: dict[str, str] = field(default_factory=dict)
+    """Test cell -> slug of the catalogued mistake its failing hidden test was diagnosed as, for each
+    cell short of full marks whose failure was diagnosed (recorded by the grader, verdicts.DIAGNOSIS_KEY)."""
+    not_written: frozenset[str] = frozenset()
+    """The test cells whose blank still holds the stub it was released with (never written)."""
 
     @property
     def total(self) -> float:
@@ -89,7 +95,8 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
                     if grade.cell.cell_type == "code":
                         auto.add(grade.name)
                 order = [c.name for c in gb.find_notebook(lab.id, lab.id).grade_cells]
-                notes, reasons = _notes_and_reasons(autograded)
+                notes, reasons, diagnosed, not_written = _read_autograded(autograded)
+                lost = {c for c in order if (cells[c] or 0.0) < maxima[c]}
                 rows.append(
                     GradeRow(
                         student,
@@ -99,7 +106,9 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
                         frozenset(auto),
                         submission.late_submission_penalty or 0.0,
                         notes,
-                        {c: reasons[c] for c in order if c in reasons and (cells[c] or 0.0) < maxima[c]},
+                        {c: reasons[c] for c in order if c in reasons and c in lost},
+                        {c: diagnosed[c] for c in order if c in diagnosed and c in lost},
+                        frozenset(not_written & auto),
                     )
                 )
     return rows
@@ -108,9 +117,11 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
 ANSI = re.compile(r"\x1b\[[0-9;]*m")
 
 
-def _notes_and_reasons(autograded: Path) -> tuple[tuple[str, ...], dict[str, str]]:
-    """The grader's notes of an autograded notebook, and for each graded cell its first error: the
-    grader's reason for a failing verdict, the only error a test cell holds (autograder/pipeline/verdicts.py)."""
+def _read_autograded(autograded: Path) -> tuple[tuple[str, ...], dict[str, str], dict[str, str], set[str]]:
+    """What an autograded notebook says beside the gradebook: the grader's notes; for each graded
+    cell its first error (the grader's reason for a failing verdict, the only error a test cell
+    holds, autograder/pipeline/verdicts.py); test cell -> diagnosed mistake (``verdicts.diagnoses``);
+    and the test cells of the blanks that still hold their stub."""
     nb = nbformat.read(autograded, as_version=4)
     reasons = {}
     for cell in nb.cells:
@@ -119,7 +130,8 @@ def _notes_and_reasons(autograded: Path) -> tuple[tuple[str, ...], dict[str, str
         errors = [o for o in cell.outputs if o.output_type == "error"]
         if errors:
             reasons[cells.grade_id(cell)] = ANSI.sub("", f"{errors[0].ename}: {errors[0].evalue}")
-    return tuple(grader_notes(nb)), reasons
+    not_written = {f"test_{cells.grade_id(c)}" for c in nb.cells if cells.is_code_answer(c) and NOT_WRITTEN in c.source}
+    return tuple(grader_notes(nb)), reasons, verdicts.diagnoses(nb), not_written
 
 
 def write_grades(rows: list[GradeRow], path: Path) -> None:

@@ -1,7 +1,7 @@
 """Grading a class: ``python -m autograder grade``. Refuses to start unless this process can import
 the hidden tests, sets up the course folder and the gradebook, takes the submissions in (a shard's
 only, with ``--shard``), autogrades them with nbgrader one per process at a time, writes feedback,
-grades.csv and the summary table.
+grades.csv, the summary table and the class report (autograder/pipeline/class_report.py).
 """
 
 from __future__ import annotations
@@ -17,7 +17,7 @@ from tqdm import tqdm
 from autograder import cells, default_jobs
 from autograder.kernel import sandbox
 from autograder.labs import ROOT, Lab
-from autograder.pipeline import compare, late, shards
+from autograder.pipeline import class_report, compare, late, shards
 from autograder.pipeline.grades import GradeRow, all_graded_labs, read_grades, write_grades
 from autograder.pipeline.intake import class_list, import_submissions, not_student_ids
 from autograder.pipeline.nbgrader_apps import course_config, feedback_page, generate_release, gradebook_url, run_app
@@ -110,7 +110,8 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     into a PostgreSQL gradebook (else it raises shards.NotShared).
     Writes feedback HTML to ``workdir/feedback/`` and the grades of every graded submission in the
     course (a shard's: its own) to ``out_csv`` (default ``workdir/grades.csv``, a shard's
-    ``workdir/grades-shard-K-of-N.csv``), prints the table, and returns the rows.
+    ``workdir/grades-shard-K-of-N.csv``), prints the table, writes the class report (not for a shard:
+    ``report`` after ``export``), and returns the rows.
     """
     if shard is not None:
         shards.require_server(gradebook_url(workdir))
@@ -154,7 +155,11 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     if rejected:
         print(f"Not graded: {count(len(rejected), 'folder')} not named by a student id (listed above).")
     print(f"Grades: {out_csv}. Feedback: {workdir / 'feedback'}.")
-    if shard is not None:
+    if shard is None:
+        for page in class_report.write_report(workdir, rows):
+            print(f"Class report: {page}")
+    else:
         print(f"When every shard is done: `python -m autograder export --workdir {workdir}` writes the class's "
-              "grades.csv and lists any submission not graded yet.")
+              "grades.csv and lists any submission not graded yet, and `python -m autograder report --workdir "
+              f"{workdir}` the class report.")
     return rows

@@ -17,6 +17,12 @@ kernel can put in a graded cell would then be part of the score. Here it is not,
   or stderr becomes stdout text. The only error in a test cell is then the grader's own, so
   nbgrader's own reading of the cell (``determine_grade``, in any tool that still reads it) gives
   the same score as the verdict.
+- When a failing check's diagnosis names a catalogued mistake (autograder/hidden_tests/diagnosis.py),
+  ``record_diagnosis`` writes its slug into the test cell's metadata (``DIAGNOSIS_KEY``) in the
+  grader's process, and ``forget_diagnoses`` first removes any such key the submission brought: the
+  autograded notebook then holds the diagnosis as data, beside the grader's notes, which survives
+  sharding (it travels with autograded/) and is replaced when the submission is regraded. The kernel
+  sends outputs only, never a cell's metadata, so nothing it emits decides a diagnosis.
 """
 
 from __future__ import annotations
@@ -53,6 +59,27 @@ def record(resources: dict, grade_id: str, passed: bool, why: str = "") -> None:
 def verdict(resources: dict, grade_id: str) -> Verdict | None:
     """The recorded verdict on the test cell ``grade_id``, or None if the grader recorded none."""
     return resources.get(RESOURCES_KEY, {}).get(grade_id)
+
+
+DIAGNOSIS_KEY = "autograder_diagnosis"
+"""The key of a test cell's metadata, in the autograded notebook, that holds the diagnosed mistake's slug."""
+
+
+def forget_diagnoses(nb: NotebookNode) -> None:
+    """Remove every diagnosis from ``nb``'s cells: only the grader writes them, while it grades."""
+    for cell in nb.cells:
+        cell.metadata.pop(DIAGNOSIS_KEY, None)
+
+
+def record_diagnosis(cell: NotebookNode, slug: str) -> None:
+    """Record in the test cell ``cell`` that its hidden test failed as the catalogued mistake ``slug``."""
+    cell.metadata[DIAGNOSIS_KEY] = slug
+
+
+def diagnoses(nb: NotebookNode) -> dict[str, str]:
+    """Test cell id -> the slug of the catalogued mistake diagnosed there, in an autograded notebook."""
+    return {cells.grade_id(c): c.metadata[DIAGNOSIS_KEY] for c in nb.cells
+            if cells.is_autograded_test(c) and isinstance(c.metadata.get(DIAGNOSIS_KEY), str)}
 
 
 def display_only(output: NotebookNode) -> NotebookNode:

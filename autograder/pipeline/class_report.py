@@ -1,0 +1,179 @@
+"""What a class got wrong, lab by lab: the counts of ``python -m autograder report``, and its files.
+
+Each autograded test cell of each graded submission has one outcome: full marks; lost to a
+catalogued mistake (the diagnosis the grader recorded as data while grading, ``GradeRow.diagnosed``,
+never read back out of a message); lost another way (grouped by the name of the error that failed
+it); or not written (its blank still holds the released stub). Per lab, the report also counts the
+submissions flagged for review, late, and faulted (a grader's note other than a flag: a stopped
+cell, a dead kernel, restored cells), and the written answers still waiting for a hand grade.
+
+``write_report`` writes into ``COURSE/report/``, per lab: ``<lab>.html`` (counts only, for a
+lecture: report_page.py), ``<lab>.png`` (report_figure.py), ``<lab>.csv`` (the counts) and
+``<lab>-students.csv`` (the students behind each count, for the instructor).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from pathlib import Path
+
+from autograder import csv_cells
+from autograder.catalogues.mistakes import Mistake, catalogue
+from autograder.integrity.flag import FLAG
+from autograder.labs import Lab
+from autograder.pipeline import report_figure, report_page
+from autograder.pipeline.grades import GradeRow
+
+FULL, MISTAKE, OTHER, NOT_WRITTEN = "full marks", "catalogued mistake", "lost another way", "not written"
+"""The outcomes of one test cell of one submission."""
+SUBMITTED, FLAGGED, LATE, FAULTED, WAITING, SCORE = (
+    "graded", "flagged", "late", "faulted", "waiting for a hand grade", "autograded score")
+"""The lab's other counts, as the CSVs name them."""
+
+
+@dataclass(frozen=True)
+class BlankCounts:
+    """The students of each outcome of one test cell (``test_<blank>``)."""
+
+    cell: str
+    full: tuple[str, ...]
+    mistakes: dict[str, tuple[str, ...]]
+    """Mistake slug -> students, most common first."""
+    other: dict[str, tuple[str, ...]]
+    """The failing error's name -> students, most common first."""
+    not_written: tuple[str, ...]
+
+    @property
+    def blank(self) -> str:
+        return self.cell.removeprefix("test_")
+
+    @property
+    def other_students(self) -> tuple[str, ...]:
+        return tuple(sorted(s for students in self.other.values() for s in students))
+
+
+@dataclass(frozen=True)
+class LabCounts:
+    """What one lab's graded submissions add up to."""
+
+    lab: str
+    scores: dict[str, float]
+    """Student -> autograded score (points, before any late penalty)."""
+    auto_max: float
+    blanks: tuple[BlankCounts, ...]
+    flagged: tuple[str, ...]
+    late: tuple[str, ...]
+    faulted: tuple[str, ...]
+    waiting: dict[str, tuple[str, ...]]
+    """Written answer cell -> students whose hand grade is missing."""
+    mistakes: dict[tuple[str, str], Mistake]
+    """(blank, slug) -> the catalogued mistake."""
+
+    @property
+    def students(self) -> tuple[str, ...]:
+        return tuple(sorted(self.scores))
+
+    def score_bins(self) -> list[tuple[str, tuple[str, ...]]]:
+        """The distribution of autograded scores: (score, its students), one bin per whole point from
+        0 to the maximum (ten bins of equal width past 20 points)."""
+        top = self.auto_max
+        if top <= 20:
+            labels, index = [f"{k}" for k in range(int(round(top)) + 1)], round
+        else:
+            width = top / 10
+            labels = [f"{k * width:g} to {(k + 1) * width:g}" for k in range(10)]
+            index = lambda score: min(int(score // width), 9)  # noqa: E731
+        bins: list[list[str]] = [[] for _ in labels]
+        for student, score in sorted(self.scores.items()):
+            bins[index(score)].append(student)
+        return [(label, tuple(students)) for label, students in zip(labels, bins)]
+
+
+def _by_size(groups: dict[str, list[str]]) -> dict[str, tuple[str, ...]]:
+    """Groups of students, the largest first (ties by name), each sorted."""
+    return {key: tuple(sorted(students)) for key, students in sorted(groups.items(), key=lambda kv: (-len(kv[1]), kv[0]))}
+
+
+def outcome(row: GradeRow, cell: str, mistakes: dict[tuple[str, str], Mistake]) -> tuple[str, str]:
+    """The outcome of the test cell ``cell`` in ``row``, and its detail: the mistake's slug, or the
+    failing error's name (a slug the lab does not catalogue counts as lost another way)."""
+    if (row.cells[cell] or 0.0) >= row.max_cells[cell]:
+        return FULL, ""
+    if cell in row.not_written:
+        return NOT_WRITTEN, ""
+    slug = row.diagnosed.get(cell)
+    if slug is not None and (cell.removeprefix("test_"), slug) in mistakes:
+        return MISTAKE, slug
+    return OTHER, row.reasons.get(cell, "no reason recorded").partition(":")[0].strip()
+
+
+def count_lab(lab: Lab, rows: list[GradeRow]) -> LabCounts:
+    """The counts of ``lab`` from its graded ``rows`` (GradeRows of other labs are left out)."""
+    rows = sorted((r for r in rows if r.lab == lab.id), key=lambda r: r.student)
+    mistakes = {(m.blank, m.slug): m for m in catalogue(lab)}
+    tests = [c for c in (rows[0].cells if rows else {}) if c in rows[0].autograded]
+    blanks = []
+    for cell in tests:
+        groups: dict[tuple[str, str], list[str]] = {}
+        for row in rows:
+            groups.setdefault(outcome(row, cell, mistakes), []).append(row.student)
+        of = lambda kind: _by_size({detail: s for (k, detail), s in groups.items() if k == kind})  # noqa: E731
+        blanks.append(BlankCounts(cell, tuple(sorted(groups.get((FULL, ""), []))), of(MISTAKE), of(OTHER),
+                                  tuple(sorted(groups.get((NOT_WRITTEN, ""), [])))))
+    written = [c for c in (rows[0].cells if rows else {}) if c not in rows[0].autograded]
+    return LabCounts(
+        lab.id,
+        {row.student: row.auto_score for row in rows},
+        rows[0].auto_max if rows else 0.0,
+        tuple(blanks),
+        tuple(row.student for row in rows if row.flags),
+        tuple(row.student for row in rows if row.late_penalty > 0),
+        tuple(row.student for row in rows if any(not note.startswith(FLAG) for note in row.notes)),
+        {cell: tuple(row.student for row in rows if row.cells.get(cell) is None) for cell in written},
+        mistakes,
+    )
+
+
+def entries(counts: LabCounts) -> list[tuple[str, str, str, tuple[str, ...]]]:
+    """Every count of the lab as (cell, what, detail, students): the rows of both CSVs."""
+    found: list[tuple[str, str, str, tuple[str, ...]]] = [("", SUBMITTED, "", counts.students)]
+    found += [("", SCORE, label, students) for label, students in counts.score_bins()]
+    for blank in counts.blanks:
+        found.append((blank.cell, FULL, "", blank.full))
+        found += [(blank.cell, MISTAKE, slug, students) for slug, students in blank.mistakes.items()]
+        found += [(blank.cell, OTHER, name, students) for name, students in blank.other.items()]
+        found.append((blank.cell, NOT_WRITTEN, "", blank.not_written))
+    found += [("", FLAGGED, "", counts.flagged), ("", LATE, "", counts.late), ("", FAULTED, "", counts.faulted)]
+    found += [(cell, WAITING, "", students) for cell, students in counts.waiting.items()]
+    return found
+
+
+def write_csvs(counts: LabCounts, folder: Path) -> tuple[Path, Path]:
+    """``folder/<lab>.csv`` (one row per count) and ``folder/<lab>-students.csv`` (one row per
+    student behind a count), through csv_cells, which neutralises formulas."""
+    counts_path, students_path = folder / f"{counts.lab}.csv", folder / f"{counts.lab}-students.csv"
+    with open(counts_path, "w", newline="") as handle:
+        writer = csv_cells.writer(handle)
+        writer.writerow(["lab", "cell", "what", "detail", "count"])
+        for cell, what, detail, students in entries(counts):
+            writer.writerow([counts.lab, cell, what, detail, len(students)])
+    with open(students_path, "w", newline="") as handle:
+        writer = csv_cells.writer(handle)
+        writer.writerow(["lab", "cell", "what", "detail", "student"])
+        for cell, what, detail, students in entries(counts):
+            for student in students:
+                writer.writerow([counts.lab, cell, what, detail, student])
+    return counts_path, students_path
+
+
+def write_report(workdir: Path, rows: list[GradeRow]) -> list[Path]:
+    """Write the class report of every lab in ``rows`` into ``workdir/report/``; the HTML pages."""
+    folder = workdir / "report"
+    folder.mkdir(parents=True, exist_ok=True)
+    pages = []
+    for lab_id in sorted({row.lab for row in rows}):
+        counts = count_lab(Lab(lab_id), rows)
+        write_csvs(counts, folder)
+        figure = report_figure.draw(counts, folder / f"{lab_id}.png")
+        pages.append(report_page.write(counts, figure, folder / f"{lab_id}.html"))
+    return pages

@@ -1,0 +1,149 @@
+"""The class report (autograder/pipeline/class_report.py): every count equals the number the
+synthetic class was built with; the diagnosis is the grader's data, which a submission cannot
+forge and a regrade replaces; the page is self-contained, runs no script and shows a submission's
+text as text."""
+
+import csv
+import re
+import shutil
+from datetime import timedelta
+
+import nbformat
+import pytest
+
+from autograder import cells
+from autograder.catalogues import cheats, faults, submissions
+from autograder.catalogues.mistakes import catalogue
+from autograder.catalogues.synthetic_class import cheat_outcome
+from autograder.labs import get_lab
+from autograder.pipeline import class_report, grading, late, verdicts
+from autograder.pipeline.grades import GradeRow
+from over_labs import about
+
+LAB = get_lab("train-kf")
+MISTAKES = {"no-Q": 3, "innovation-sign": 2}
+"""Catalogued mistake -> how many students make it."""
+CHEAT, FAULT = cheats.get("import-reference"), faults.get("kernel-dies")
+pytestmark = about(LAB)
+
+
+def mistake(slug: str):
+    [found] = [m for m in catalogue(LAB) if m.slug == slug]
+    return found
+
+
+def write_class(folder) -> dict:
+    """blank, 2 solved, each of MISTAKES as often as it says, one cheat, one fault in the first blank,
+    and one solved notebook submitted two days late: what the report must count."""
+    submissions.write(cells.read(LAB.release_notebook), folder, "blank", LAB)
+    for k in (1, 2):
+        submissions.write(submissions.solved(LAB), folder, f"solved-{k}", LAB)
+    for slug, times in MISTAKES.items():
+        for k in range(times):
+            nb = submissions.with_mistake(LAB, mistake(slug))
+            if slug == "no-Q" and k == 0:  # a diagnosis the submission forges is not the grader's
+                [test] = [c for c in nb.cells if cells.is_autograded_test(c) and cells.grade_id(c) == "test_nees"]
+                test.metadata[verdicts.DIAGNOSIS_KEY] = "root"
+            submissions.write(nb, folder, f"{slug}-{k}", LAB)
+    submissions.write(CHEAT.notebook(LAB), folder, CHEAT.name, LAB)
+    first = LAB.blanks()[0]
+    fault = faults.write_fault(FAULT, LAB, first, folder)
+    path = submissions.write(submissions.solved(LAB), folder, "late", LAB)
+    due = late.read_due_dates(late.DUE_DATES)[LAB.id]
+    (path.parent / "timestamp.txt").write_text((due + timedelta(days=2)).isoformat())
+    return {"first": first, "fault": fault, "gamed": cheat_outcome(LAB, CHEAT).zero}
+
+
+def read(path) -> list[dict]:
+    with open(path, newline="") as handle:
+        return list(csv.DictReader(handle))
+
+
+def counted(folder) -> dict[tuple[str, str, str], int]:
+    """(cell, what, detail) -> count, from the report's CSV."""
+    return {(r["cell"], r["what"], r["detail"]): int(r["count"]) for r in read(folder / f"{LAB.id}.csv")}
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    root = tmp_path_factory.mktemp("class-report")
+    built = write_class(root / "class")
+    rows = grading.grade(root / "class", root / "course", jobs=2)
+    return root, built, rows
+
+
+def test_every_count_is_the_number_the_class_was_built_with(graded):
+    root, built, rows = graded
+    found = counted(root / "course" / "report")
+    students = len(rows)
+    assert students == 2 + sum(MISTAKES.values()) + 4 and found["", class_report.SUBMITTED, ""] == students
+    tests = [c for c in rows[0].cells if c in rows[0].autograded]
+    gamed = set(tests if built["gamed"] is None else built["gamed"])
+    for cell in tests:
+        blank = cell.removeprefix("test_")
+        wrong = {m: n for m, n in MISTAKES.items() if mistake(m).blank == blank}
+        other = (cell == f"test_{built['first']}") + (cell in gamed)
+        assert found[cell, class_report.NOT_WRITTEN, ""] == 1, cell
+        assert found[cell, class_report.FULL, ""] == students - 1 - sum(wrong.values()) - other, cell
+        assert {d: n for (c, what, d), n in found.items() if c == cell and what == class_report.MISTAKE} == wrong, cell
+        assert sum(n for (c, what, _), n in found.items() if c == cell and what == class_report.OTHER) == other, cell
+    assert found["", class_report.FLAGGED, ""] == 1 and found["", class_report.LATE, ""] == 1
+    assert found["", class_report.FAULTED, ""] == 1
+    scores = sum(n for (c, what, _), n in found.items() if what == class_report.SCORE)
+    assert scores == students
+    # nbgrader scores an unchanged written answer 0 itself; every other written answer waits for a hand grade
+    waiting = {c: n for (c, what, _), n in found.items() if what == class_report.WAITING}
+    assert waiting and set(waiting.values()) == {students - 1}
+
+
+def test_the_students_file_names_the_students_behind_each_count(graded):
+    root, built, _ = graded
+    by_count: dict[tuple[str, str, str], set[str]] = {}
+    for r in read(root / "course" / "report" / f"{LAB.id}-students.csv"):
+        by_count.setdefault((r["cell"], r["what"], r["detail"]), set()).add(r["student"])
+    assert by_count["test_predict", class_report.MISTAKE, "no-Q"] == {"no-Q-0", "no-Q-1", "no-Q-2"}
+    assert by_count["test_kupdate", class_report.MISTAKE, "innovation-sign"] == {"innovation-sign-0", "innovation-sign-1"}
+    assert by_count["", class_report.FLAGGED, ""] == {CHEAT.name}
+    assert by_count["", class_report.FAULTED, ""] == {built["fault"]}
+    assert by_count["", class_report.LATE, ""] == {"late"}
+
+
+def test_the_diagnosis_is_the_graders_data(graded):
+    """Recorded beside the verdict for exactly the diagnosed cells; the one a submission brought is gone."""
+    _, _, rows = graded
+    diagnosed = {row.student: row.diagnosed for row in rows if row.diagnosed}
+    assert diagnosed == {**{f"no-Q-{k}": {"test_predict": "no-Q"} for k in range(3)},
+                         **{f"innovation-sign-{k}": {"test_kupdate": "innovation-sign"} for k in range(2)}}
+
+
+def test_the_page_is_self_contained_and_runs_no_script(graded):
+    root, _, _ = graded
+    page = (root / "course" / "report" / f"{LAB.id}.html").read_text()
+    assert 'src="data:image/png;base64,' in page and mistake("no-Q").hint in page
+    text = re.sub(r'"data:image/png;base64,[A-Za-z0-9+/=]*"', "", page)
+    assert "<script" not in text.lower() and not re.search(r"(https?:)?//[a-z0-9]", text, re.I)
+    assert (root / "course" / "report" / f"{LAB.id}.png").read_bytes().startswith(b"\x89PNG")
+    assert "no-Q-0" not in page  # counts only: no student is named
+
+
+def test_regrading_one_student_replaces_their_diagnosis(graded, tmp_path):
+    root, _, _ = graded
+    regrade = tmp_path / "regrade"
+    submissions.write(submissions.solved(LAB), regrade, "no-Q-0", LAB)
+    grading.grade(regrade, root / "course", jobs=1)
+    found = counted(root / "course" / "report")
+    assert found["test_predict", class_report.MISTAKE, "no-Q"] == MISTAKES["no-Q"] - 1
+
+
+def test_a_submissions_text_is_escaped_on_the_page_and_neutralised_in_the_csv(tmp_path):
+    """Without grading: a row whose failing error's name is markup, and a student id that is a formula."""
+    hostile = "<img src=x onerror=alert(1)>"
+    cell = f"test_{LAB.blanks()[0]}"
+    row = GradeRow("=HYPERLINK(1)", LAB.id, {cell: 0.0}, {cell: 1.0}, frozenset({cell}),
+                   reasons={cell: f"{hostile}: boom"})
+    [page] = class_report.write_report(tmp_path, [row])
+    text = page.read_text()
+    assert hostile not in text and "&lt;img src=x onerror=alert(1)&gt;" in text
+    students = (tmp_path / "report" / f"{LAB.id}-students.csv").read_text()
+    assert "'=HYPERLINK(1)" in students and "\n=" not in students.replace("\r\n", "\n")
+    shutil.rmtree(tmp_path / "report")
