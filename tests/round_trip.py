@@ -142,6 +142,8 @@ def test_regrading_gives_every_cell_again(graded, request, tmp_path) -> None:
 
     def field(row: GradeRow, name: str):
         value = getattr(row, name)
+        if name == "diagnosed":  # recorded with the diagnosis sentence, and dropped with it
+            return None
         return {cell: DIAGNOSIS.sub("", reason) for cell, reason in value.items()} if name == "reasons" else value
 
     assert [] == [(key, name, field(first[key], name), field(again[key], name)) for key in first
