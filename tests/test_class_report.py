@@ -87,6 +87,8 @@ def test_every_count_is_the_number_the_class_was_built_with(graded):
         assert found[cell, class_report.FULL, ""] == students - 1 - sum(wrong.values()) - other, cell
         assert {d: n for (c, what, d), n in found.items() if c == cell and what == class_report.MISTAKE} == wrong, cell
         assert sum(n for (c, what, _), n in found.items() if c == cell and what == class_report.OTHER) == other, cell
+        # the cheat's blanks: lost in a flagged submission, said so rather than by the zeroed cell's error
+        assert found.get((cell, class_report.OTHER, class_report.FLAGGED_DETAIL), 0) == (cell in gamed), cell
     assert found["", class_report.FLAGGED, ""] == 1 and found["", class_report.LATE, ""] == 1
     assert found["", class_report.FAULTED, ""] == 1
     scores = sum(n for (c, what, _), n in found.items() if what == class_report.SCORE)

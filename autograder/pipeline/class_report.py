@@ -25,6 +25,8 @@ from autograder.pipeline import report_figure, report_page
 from autograder.pipeline.grades import GradeRow
 
 FULL, MISTAKE, OTHER, NOT_WRITTEN = "full marks", "catalogued mistake", "lost another way", "not written"
+FLAGGED_DETAIL = "in a submission flagged for review"
+"""The detail of a blank lost in a flagged submission that no catalogued mistake explains."""
 """The outcomes of one test cell of one submission."""
 SUBMITTED, FLAGGED, LATE, FAULTED, WAITING, SCORE = (
     "graded", "flagged", "late", "faulted", "waiting for a hand grade", "autograded score")
@@ -104,6 +106,8 @@ def outcome(row: GradeRow, cell: str, mistakes: dict[tuple[str, str], Mistake]) 
     slug = row.diagnosed.get(cell)
     if slug is not None and (cell.removeprefix("test_"), slug) in mistakes:
         return MISTAKE, slug
+    if row.flags:  # the scan's flag zeroes the blanks a finding games: the error then says nothing of the cause
+        return OTHER, FLAGGED_DETAIL
     return OTHER, row.reasons.get(cell, "no reason recorded").partition(":")[0].strip()
 
 
