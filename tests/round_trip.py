@@ -66,7 +66,7 @@ def graded(request, tmp_path_factory) -> tuple[dict[tuple[str, str], GradeRow], 
     graded two at a time as `demo` does: (student, lab) -> GradeRow, and the course folder."""
     folder = tmp_path_factory.mktemp("round-trip")
     class_dir, workdir = folder / "class", folder / "course"
-    submissions.write_grouped_class(chosen(request.config, request.module.HALF), class_dir)
+    submissions.write_class(chosen(request.config, request.module.HALF), class_dir, grouped=True)
     rows = grading.grade(class_dir, workdir, jobs=2)
     return {(row.student, row.lab): row for row in rows}, workdir
 

@@ -65,32 +65,21 @@ def write(nb: NotebookNode, folder: Path, student: str, lab: Lab) -> Path:
     return path
 
 
-def write_class(labs: list[Lab], folder: Path) -> list[str]:
+def write_class(labs: list[Lab], folder: Path, grouped: bool = False) -> list[str]:
     """Write a demo class as ``folder/<student>/<lab>/<lab>.ipynb`` and return the student ids.
 
     Student ``blank`` submits every release notebook unchanged, ``solved`` every model answer,
-    and each catalogued mistake is a student of its own who submits one lab.
+    and each catalogued mistake is a student of its own who submits one lab; with ``grouped``, each
+    group of ``mistake_groups`` is (every mistake graded, in a third as many submissions).
     """
     if folder.exists():
         shutil.rmtree(folder)
-    submissions: list[tuple[str, Lab, NotebookNode]] = []
+    students = set()
     for lab in labs:
-        submissions.append((BLANK, lab, cells.read(lab.release_notebook)))
-        submissions.append((SOLVED, lab, solved(lab)))
-        submissions += [(m.student_id(lab), lab, with_mistake(lab, m)) for m in catalogue(lab)]
-    for student, lab, nb in submissions:
-        write(nb, folder, student, lab)
-    return sorted({student for student, _, _ in submissions})
-
-
-def write_grouped_class(labs: list[Lab], folder: Path) -> None:
-    """Write ``blank`` and ``solved`` as ``write_class`` does, and each group of ``mistake_groups`` as a
-    student of its own who submits one lab: every catalogued mistake graded, in a third as many
-    submissions as one per mistake."""
-    if folder.exists():
-        shutil.rmtree(folder)
-    for lab in labs:
-        write(cells.read(lab.release_notebook), folder, BLANK, lab)
-        write(solved(lab), folder, SOLVED, lab)
-        for student, mistakes in mistake_groups(lab).items():
-            write(with_mistakes(lab, mistakes), folder, student, lab)
+        wrong = mistake_groups(lab).items() if grouped else [(m.student_id(lab), [m]) for m in catalogue(lab)]
+        submissions = [(BLANK, cells.read(lab.release_notebook)), (SOLVED, solved(lab))]
+        submissions += [(student, with_mistakes(lab, mistakes)) for student, mistakes in wrong]
+        for student, nb in submissions:
+            write(nb, folder, student, lab)
+            students.add(student)
+    return sorted(students)

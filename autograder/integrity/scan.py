@@ -99,9 +99,23 @@ def _source_notebook(path: str, mtime_ns: int) -> NotebookNode:
     return cells.read(Path(path))
 
 
-def _top(tree: ast.Module, node: ast.AST) -> ast.stmt | None:
-    """The top-level statement of ``tree`` that holds ``node``."""
-    return next((stmt for stmt in tree.body if any(inner is node for inner in ast.walk(stmt))), None)
+def _namespace_use(name: str, call: ast.Call, parent: ast.AST) -> tuple[str, str] | None:
+    """(kind, what) for the call ``name()`` of a namespace (globals, vars, locals) inside ``parent``,
+    or None where only its names are used (Scan._namespace_uses)."""
+    if isinstance(parent, ast.Subscript) and parent.value is call:
+        key = parent.slice.value if isinstance(parent.slice, ast.Constant) else None
+        if isinstance(parent.ctx, (ast.Store, ast.Del)) or (isinstance(key, str) and not key.startswith("_")):
+            return None
+        return "reference", f"reads {key!r} from {name}()" if isinstance(key, str) else f"reads from {name}() by a computed name"
+    if isinstance(parent, ast.Attribute) and parent.value is call:
+        if parent.attr == "keys":
+            return None
+        return "shared" if parent.attr in NAMESPACE_WRITES else "reference", f"uses {name}().{parent.attr}"
+    if ((isinstance(parent, ast.Call) and isinstance(parent.func, ast.Name) and parent.func.id in NAMESPACE_NAME_USES)
+            or (isinstance(parent, ast.Compare) and call in parent.comparators)
+            or (isinstance(parent, (ast.For, ast.comprehension)) and parent.iter is call)):
+        return None
+    return "reference", f"takes {name}() as a whole"
 
 
 def _too_large(cell: str, size: int) -> Finding:
@@ -269,32 +283,17 @@ class Scan:
         ``__builtins__`` (exec, open, __import__), which no plain name reaches. Allowed: ``len``,
         ``sorted`` and the like, ``in``, iteration, ``.keys()``, and a key that is a constant name
         without leading underscores. (Writes by subscript are the store rules'.)"""
-        parents = {child: node for node in ast.walk(tree) for child in ast.iter_child_nodes(node)}
-        for node in ast.walk(tree):
-            if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in NAMESPACE_CALLS
-                    and node.func.id not in self.defined and not (node.func.id == "vars" and node.args)):
-                continue
-            parent, name = parents.get(node), node.func.id
-            if isinstance(parent, ast.Subscript) and parent.value is node:
-                key = parent.slice.value if isinstance(parent.slice, ast.Constant) else None
-                if isinstance(parent.ctx, (ast.Store, ast.Del)) or (isinstance(key, str) and not key.startswith("_")):
+        for stmt in tree.body:
+            parents = {child: node for node in ast.walk(stmt) for child in ast.iter_child_nodes(node)}
+            for node, parent in parents.items():
+                if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in NAMESPACE_CALLS
+                        and node.func.id not in self.defined and not (node.func.id == "vars" and node.args)):
                     continue
-                what = f"reads {key!r} from {name}()" if isinstance(key, str) else f"reads from {name}() by a computed name"
-            elif isinstance(parent, ast.Attribute) and parent.value is node:
-                if parent.attr == "keys":
-                    continue
-                kind = "shared" if parent.attr in NAMESPACE_WRITES else "reference"
-                self.hits.append(Hit(label, node, kind, f"uses {name}().{parent.attr}, which reaches the values of the "
-                                      "notebook's namespace, __builtins__ among them", _top(tree, node), None))
-                continue
-            elif ((isinstance(parent, ast.Call) and isinstance(parent.func, ast.Name) and parent.func.id in NAMESPACE_NAME_USES)
-                  or (isinstance(parent, ast.Compare) and node in parent.comparators)
-                  or (isinstance(parent, (ast.For, ast.comprehension)) and parent.iter is node)):
-                continue
-            else:
-                what = f"takes {name}() as a whole"
-            self.hits.append(Hit(label, node, "reference", f"{what}, which reaches the values of the notebook's "
-                                  "namespace, __builtins__ among them", _top(tree, node), None))
+                found = _namespace_use(node.func.id, node, parent)
+                if found is not None:
+                    kind, what = found
+                    self.hits.append(Hit(label, node, kind, f"{what}, which reaches the values of the notebook's "
+                                          "namespace, __builtins__ among them", stmt, None))
 
     def _rebinds_helpers(self, label: str, tree: ast.Module) -> None:
         for stmt in tree.body:

@@ -119,9 +119,7 @@ def normalise_code(code: str, keep: set[str] = frozenset()) -> str | None:
             if isinstance(getattr(node, "body", None), list) and not node.body:
                 node.body = [ast.Pass()]  # its only statements were imports or docstrings
         return ast.unparse(ast.fix_missing_locations(tree))
-    except (SyntaxError, ValueError):  # not Python, or a null byte
-        return None
-    except (RecursionError, MemoryError):  # nested deeper than parsing or unparsing can follow
+    except (SyntaxError, ValueError, RecursionError, MemoryError):  # not Python, a null byte, or nested too deep
         return None
 
 

@@ -25,9 +25,9 @@ from autograder.pipeline import report_figure, report_page
 from autograder.pipeline.grades import GradeRow
 
 FULL, MISTAKE, OTHER, NOT_WRITTEN = "full marks", "catalogued mistake", "lost another way", "not written"
+"""The outcomes of one test cell of one submission."""
 FLAGGED_DETAIL = "in a submission flagged for review"
 """The detail of a blank lost in a flagged submission that no catalogued mistake explains."""
-"""The outcomes of one test cell of one submission."""
 SUBMITTED, FLAGGED, LATE, FAULTED, WAITING, SCORE = (
     "graded", "flagged", "late", "faulted", "waiting for a hand grade", "autograded score")
 """The lab's other counts, as the CSVs name them."""
@@ -115,7 +115,8 @@ def count_lab(lab: Lab, rows: list[GradeRow]) -> LabCounts:
     """The counts of ``lab`` from its graded ``rows`` (GradeRows of other labs are left out)."""
     rows = sorted((r for r in rows if r.lab == lab.id), key=lambda r: r.student)
     mistakes = {(m.blank, m.slug): m for m in catalogue(lab)}
-    tests = [c for c in (rows[0].cells if rows else {}) if c in rows[0].autograded]
+    first = rows[0] if rows else None
+    tests = [c for c in first.cells if c in first.autograded] if first else []
     blanks = []
     for cell in tests:
         groups: dict[tuple[str, str], list[str]] = {}
@@ -124,11 +125,11 @@ def count_lab(lab: Lab, rows: list[GradeRow]) -> LabCounts:
         of = lambda kind: _by_size({detail: s for (k, detail), s in groups.items() if k == kind})  # noqa: E731
         blanks.append(BlankCounts(cell, tuple(sorted(groups.get((FULL, ""), []))), of(MISTAKE), of(OTHER),
                                   tuple(sorted(groups.get((NOT_WRITTEN, ""), [])))))
-    written = [c for c in (rows[0].cells if rows else {}) if c not in rows[0].autograded]
+    written = [c for c in first.cells if c not in first.autograded] if first else []
     return LabCounts(
         lab.id,
         {row.student: row.auto_score for row in rows},
-        rows[0].auto_max if rows else 0.0,
+        first.auto_max if first else 0.0,
         tuple(blanks),
         tuple(row.student for row in rows if row.flags),
         tuple(row.student for row in rows if row.late_penalty > 0),
@@ -156,15 +157,16 @@ def write_csvs(counts: LabCounts, folder: Path) -> tuple[Path, Path]:
     """``folder/<lab>.csv`` (one row per count) and ``folder/<lab>-students.csv`` (one row per
     student behind a count), through csv_cells, which neutralises formulas."""
     counts_path, students_path = folder / f"{counts.lab}.csv", folder / f"{counts.lab}-students.csv"
+    found = entries(counts)
     with open(counts_path, "w", newline="") as handle:
         writer = csv_cells.writer(handle)
         writer.writerow(["lab", "cell", "what", "detail", "count"])
-        for cell, what, detail, students in entries(counts):
+        for cell, what, detail, students in found:
             writer.writerow([counts.lab, cell, what, detail, len(students)])
     with open(students_path, "w", newline="") as handle:
         writer = csv_cells.writer(handle)
         writer.writerow(["lab", "cell", "what", "detail", "student"])
-        for cell, what, detail, students in entries(counts):
+        for cell, what, detail, students in found:
             for student in students:
                 writer.writerow([counts.lab, cell, what, detail, student])
     return counts_path, students_path
