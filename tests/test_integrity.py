@@ -167,7 +167,14 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     "for key, value in globals().items():\n    pass": [None],
     "globals().update(np=None)": [None],
     "globals().setdefault('np', None)": [None],
-    # a computed attribute name, on any object: print's __self__ is the builtins module
+    # honest habits that a fairness review found costing every blank, in 9ce2242: a value by a public
+    # name, a function's own locals, and the student's own object walked by name (review, no cost)
+    "print(globals().get('x_f'))": [],
+    "def show():\n    x = 1\n    for name, value in locals().items():\n        print(name, value)\n": [],
+    "class Result:\n    pass\nresult = Result()\nfor name in ['rmse', 'nees']:\n    print(getattr(result, name, None))": [()],
+    "globals().get('__builtins__')": [None],
+    "locals().items()": [None],
+    # a computed attribute name on a module, a call's result or a builtin: print's __self__ is the builtins module
     "name = '__se' + 'lf__'\ngetattr(print, name)": [None],
     "setattr(np, 'file'.join('__'), 'x')": [None],
     "def check_close(*args, **kwargs):\n    pass\n": [()],

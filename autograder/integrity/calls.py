@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import ast
+import builtins
 import copy
 
 from autograder.integrity.rules import (
@@ -35,6 +36,10 @@ from autograder.integrity.syntax import (
     strip_magic_options,
 )
 from autograder.integrity.walker import Context, Walker
+
+
+BUILTIN_NAMES = frozenset(dir(builtins))
+"""The builtins' names: an attribute of one, by a computed name, can be the builtins module itself."""
 
 
 class CallRules(Walker):
@@ -124,10 +129,15 @@ class CallRules(Walker):
             path = self.module_of(target)
             if path is not None:
                 self.check_path(f"{path}.{attr}", node, context, store=store)
-        else:  # on any object: print's __self__ is the builtins module, a function's __globals__ its module's namespace
+        elif self.module_of(target) is not None or isinstance(target, ast.Call) or (
+                isinstance(target, ast.Name) and target.id in BUILTIN_NAMES and not self.shadowed(target.id, context)):
+            # a module, a call's result, or a builtin (print.__self__ is the builtins module)
             kind = "shared" if store else "reference"
             self.hit(node, kind, f"uses {name} with a computed attribute name on {self.module_of(target) or 'an object'}",
                      context)
+        else:  # the student's own object, as in getattr(result, name) over a list of names: for review, no cost
+            self.hit(node, "none", f"uses {name} with a computed attribute name on the notebook's own object "
+                                   f"{ast.unparse(target)[:40]}: look at which attributes it reaches", context)
 
     def file_path_seen(self, arg: ast.AST, node: ast.AST, context: Context) -> None:
         folded = fold(arg)

@@ -99,16 +99,25 @@ def _source_notebook(path: str, mtime_ns: int) -> NotebookNode:
     return cells.read(Path(path))
 
 
-def _namespace_use(name: str, call: ast.Call, parent: ast.AST) -> tuple[str, str] | None:
-    """(kind, what) for the call ``name()`` of a namespace (globals, vars, locals) inside ``parent``,
-    or None where only its names are used (Scan._namespace_uses)."""
+def _public_name(node: ast.AST) -> bool:
+    """Whether ``node`` is a constant name without a leading underscore (not ``__builtins__``)."""
+    return isinstance(node, ast.Constant) and isinstance(node.value, str) and not node.value.startswith("_")
+
+
+def _namespace_use(name: str, call: ast.Call, parents: dict[ast.AST, ast.AST]) -> tuple[str, str] | None:
+    """(kind, what) for the call ``name()`` of a namespace (globals, vars, locals), whose syntax tree's
+    parents are ``parents``, or None where only its names, or a value by a public name, are used
+    (Scan._namespace_uses)."""
+    parent = parents.get(call)
     if isinstance(parent, ast.Subscript) and parent.value is call:
         key = parent.slice.value if isinstance(parent.slice, ast.Constant) else None
-        if isinstance(parent.ctx, (ast.Store, ast.Del)) or (isinstance(key, str) and not key.startswith("_")):
+        if isinstance(parent.ctx, (ast.Store, ast.Del)) or _public_name(parent.slice):
             return None
         return "reference", f"reads {key!r} from {name}()" if isinstance(key, str) else f"reads from {name}() by a computed name"
     if isinstance(parent, ast.Attribute) and parent.value is call:
-        if parent.attr == "keys":
+        getter = parents.get(parent)
+        if parent.attr == "keys" or (parent.attr == "get" and isinstance(getter, ast.Call) and getter.func is parent
+                                     and getter.args and _public_name(getter.args[0])):
             return None
         return "shared" if parent.attr in NAMESPACE_WRITES else "reference", f"uses {name}().{parent.attr}"
     if ((isinstance(parent, ast.Call) and isinstance(parent.func, ast.Name) and parent.func.id in NAMESPACE_NAME_USES)
@@ -285,11 +294,15 @@ class Scan:
         without leading underscores. (Writes by subscript are the store rules'.)"""
         for stmt in tree.body:
             parents = {child: node for node in ast.walk(stmt) for child in ast.iter_child_nodes(node)}
-            for node, parent in parents.items():
+            # inside a function, locals() and vars() hold that function's variables only, no __builtins__
+            in_functions = {inner for scope in ast.walk(stmt) if isinstance(scope, (ast.FunctionDef, ast.AsyncFunctionDef,
+                                                                                   ast.Lambda)) for inner in ast.walk(scope)}
+            for node in parents:
                 if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in NAMESPACE_CALLS
-                        and node.func.id not in self.defined and not (node.func.id == "vars" and node.args)):
+                        and node.func.id not in self.defined and not (node.func.id == "vars" and node.args)
+                        and not (node.func.id in ("locals", "vars") and node in in_functions)):
                     continue
-                found = _namespace_use(node.func.id, node, parent)
+                found = _namespace_use(node.func.id, node, parents)
                 if found is not None:
                     kind, what = found
                     self.hits.append(Hit(label, node, kind, f"{what}, which reaches the values of the notebook's "
