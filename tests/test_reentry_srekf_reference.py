@@ -483,13 +483,17 @@ def test_joseph_form_and_float32_square_root_agree_with_the_update_when_well_con
     assert_cov_close(S64.T @ S64, S_s.T @ S_s, rtol=1e-12)
 
 
-@random_draws(false_fail=0.0, fixed_seed=True, why="checks monte_carlo_falls' seeding exactly: fall k draws from "
-              "default_rng(k), its initial error after its noise; three falls cost 5 s, so not rerun on 21 seeds")
+@random_draws(false_fail=0.0, fixed_seed=True, why="checks simulate_falls' seeding exactly: fall k draws from "
+              "default_rng(k), its initial error after its noise; three falls cost 2 s, so not rerun on 21 seeds")
 def test_monte_carlo_draws_each_initial_error_from_the_prior_and_averages_the_nees() -> None:
-    falls = starship.monte_carlo_falls(range(3), ref.ballistic_dynamics, ref.ballistic_jacobian, ref.radar_predict,
-                                       ref.radar_jacobian, ref.sqrt_time_update, ref.sqrt_measurement_update)
+    simulated = ref.simulated_falls(range(3))
+    falls = starship.filter_falls(simulated, ref.ballistic_dynamics, ref.ballistic_jacobian, ref.radar_predict,
+                                  ref.radar_jacobian, ref.sqrt_time_update, ref.sqrt_measurement_update)
     assert falls.nees.shape == (3, starship.N_ROWS) and falls.mu.shape == falls.truth.shape == (3, starship.N_ROWS, 3)
     np.testing.assert_array_equal(falls.truth[:, 0], np.tile(starship.X0_TRUE, (3, 1)))
+    # each fall is filtered from its own initial mean, on its own ranges
+    first = ref.run_reference(simulated.fall(2), simulated.mu0[2])
+    np.testing.assert_array_equal(falls.mu[2], first.mu)
     # each fall's initial error is its own: X0_TRUE - mu0 = S0^T e with e drawn after the fall's noise
     whitened = np.linalg.solve(starship.S0.T, (starship.X0_TRUE - falls.mu0).T).T
     assert len({tuple(np.round(w, 12)) for w in whitened}) == 3
@@ -564,11 +568,26 @@ def test_filter_is_consistent_with_the_truth(data, result) -> None:
 # Data and report
 # ---------------------------------------------------------------------------------------------
 def test_shipped_data_rebuilds_bit_for_bit(tmp_path: Path) -> None:
-    rebuilt, float32_results = ref.write_data(tmp_path)
+    rebuilt, float32_results, falls = ref.write_data(tmp_path)
     assert rebuilt.name == starship.DATA_FILE.name
     assert rebuilt.read_bytes() == starship.DATA_FILE.read_bytes()
     assert float32_results.name == starship.FLOAT32_SQUARE_ROOT_FILE.name
     assert float32_results.read_bytes() == starship.FLOAT32_SQUARE_ROOT_FILE.read_bytes()
+    assert falls.name == starship.FALLS_FILE.name
+    assert falls.read_bytes() == starship.FALLS_FILE.read_bytes(), "the shipped falls differ from a rebuild"
+
+
+def test_the_shipped_falls_are_the_notebooks_seeds_and_the_shipped_fall_is_simulated_alike() -> None:
+    """The falls of part 9: 40, from reference.FALL_SEEDS, each starting at X0_TRUE, with mu0 drawn after
+    the fall's noise; simulated as the shipped fall of part 1 is (the same simulator, from its own seed)."""
+    falls = starship.load_falls()
+    assert falls.truth.shape == (40, starship.N_ROWS, 3) and falls.mu0.shape == (40, 3)
+    np.testing.assert_allclose(falls.t, starship.load().t, rtol=0, atol=1e-9)
+    np.testing.assert_array_equal(falls.truth[:, 0], np.tile(starship.X0_TRUE, (40, 1)))
+    again = ref.simulated_falls([ref.DATA_SEED])
+    shipped = starship.load()
+    np.testing.assert_allclose(again.truth[0], shipped.truth, rtol=1e-9)
+    np.testing.assert_allclose(again.range_meas[0], shipped.range_meas, rtol=1e-9)
 
 
 def test_shipped_float32_square_root_results_are_a_float32_qr_of_the_lab_prior() -> None:

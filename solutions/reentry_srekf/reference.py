@@ -23,6 +23,7 @@ from scipy.linalg import block_diag, solve_triangular
 
 from course import starship
 from course.starship import G, L, M, P0, R, RADAR_R1, RADAR_R2, SIGMA_RANGE, SQRT_Q, T0
+from solutions.shipped_npz import write_npz
 
 Vector = NDArray[np.float64]
 Matrix = NDArray[np.float64]
@@ -193,11 +194,11 @@ def plot_ballistic_coefficient(
 # =============================================================================================
 # Reference filter, truth simulator and data build
 # =============================================================================================
-def run_reference(data: starship.ReentryData) -> starship.FilterResult:
-    """The course framework run with the reference blanks."""
+def run_reference(data: starship.ReentryData, mu0: Vector = starship.MU0) -> starship.FilterResult:
+    """The course framework run with the reference blanks, from the initial mean ``mu0`` (3,)."""
     return starship.run_square_root_ekf(
         data, ballistic_dynamics, ballistic_jacobian, radar_predict, radar_jacobian, sqrt_time_update,
-        sqrt_measurement_update,
+        sqrt_measurement_update, mu0=mu0,
     )
 
 
@@ -236,6 +237,15 @@ def float32_square_root_text() -> str:
     )
 
 
+FALL_SEEDS: range = range(7100, 7140)
+"""Seeds of the 40 shipped simulated falls (``course/data/starship_falls.npz``), one per fall."""
+
+
+def simulated_falls(seeds: Sequence[int] = FALL_SEEDS) -> starship.SimulatedFalls:
+    """The falls of :func:`course.starship.simulate_falls` with the reference model, one per seed."""
+    return starship.simulate_falls(seeds, ballistic_dynamics, radar_predict)
+
+
 def data_text(seed: int = DATA_SEED) -> str:
     """The shipped data file's text, built from ``seed``."""
     t, truth, range_true, range_meas = simulate_reentry(np.random.default_rng(seed))
@@ -243,14 +253,16 @@ def data_text(seed: int = DATA_SEED) -> str:
 
 
 def write_data(directory: str | Path, seed: int = DATA_SEED) -> list[Path]:
-    """Build the shipped data files (``starship_reentry.csv`` from ``seed``, and the float32
-    square-root results of part 8) into ``directory``."""
+    """Build the shipped data files (``starship_reentry.csv`` from ``seed``, the float32
+    square-root results of part 8, and the simulated falls of part 9) into ``directory``."""
     path = Path(directory) / starship.DATA_FILE.name
     path.parent.mkdir(parents=True, exist_ok=True)
     path.write_bytes(data_text(seed).encode("ascii"))
     float32_path = Path(directory) / starship.FLOAT32_SQUARE_ROOT_FILE.name
     float32_path.write_bytes(float32_square_root_text().encode("ascii"))
-    return [path, float32_path]
+    falls, falls_path = simulated_falls(), Path(directory) / starship.FALLS_FILE.name
+    write_npz(falls_path, {name: getattr(falls, name) for name in starship.FALL_ARRAYS})
+    return [path, float32_path, falls_path]
 
 
 def main(argv: Sequence[str] | None = None) -> None:
