@@ -57,3 +57,25 @@ def test_a_missing_or_extra_row_is_reported(book):
     assert csv_disagreements({}, book) == ["('s1', 'lab'): in the gradebook, not in grades.csv"]
     extra = {("s1", "lab"): RIGHT, ("s2", "lab"): RIGHT | {"student": "s2"}}
     assert csv_disagreements(extra, book) == ["('s2', 'lab'): in grades.csv, not in the gradebook"]
+
+
+def test_a_new_gradebook_gets_the_revision_that_nbgrader_asks_alembic_for(tmp_path):
+    """autograder/pipeline/nbgrader_apps.py reads the revision in-process; nbgrader runs the `alembic heads`
+    command for it. Both must write the same revision into a new gradebook."""
+    import os
+    import subprocess
+    import sys
+
+    from nbgrader.api import Gradebook
+    from nbgrader.dbutil import _temp_alembic_ini
+
+    from autograder.pipeline.nbgrader_apps import gradebook_schema_version
+
+    with _temp_alembic_ini(f"sqlite:///{tmp_path / 'unused.db'}") as ini:
+        heads = subprocess.run([os.path.join(os.path.dirname(sys.executable), "alembic"), "-c", ini, "heads"],
+                               capture_output=True, text=True, check=True).stdout
+    assert heads.split()[0] == gradebook_schema_version()
+    with Gradebook(f"sqlite:///{tmp_path / 'gradebook.db'}"):
+        pass
+    with sqlite3.connect(tmp_path / "gradebook.db") as connection:
+        assert connection.execute("SELECT version_num FROM alembic_version").fetchall() == [(heads.split()[0],)]
