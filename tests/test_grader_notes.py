@@ -41,3 +41,32 @@ def test_a_note_inside_a_submission_is_the_students_own_cell(tmp_path):
     imported = cells.read(tmp_path / "course" / "submitted" / "s001" / LAB.id / LAB.notebook_name)
     assert grader_notes(imported) == [f"It was submitted as my copy.ipynb and graded as {LAB.notebook_name}."]
     assert imported.cells[1].source == forged.source and NOTES_KEY not in imported.cells[1].metadata
+
+
+def _failing(nb, grade_id: str, ename: str, evalue: str) -> None:
+    [cell] = [c for c in nb.cells if cells.meta(c).get("grade_id") == grade_id]
+    cell.outputs = [nbformat.v4.new_output("error", ename=ename, evalue=evalue, traceback=[])]
+
+
+def test_a_failing_set_up_or_answer_cell_leads_the_notes_when_a_test_after_it_fails():
+    """autograder/pipeline/execute.first_cause (issue 32: a failing set-up cell read as a NameError in every
+    test cell). The answer-cell case is graded end to end by the fault catalogue's answer-cell-error."""
+    from autograder.pipeline.execute import first_cause
+
+    nb = submissions.solved(LAB)
+    assert first_cause(nb) == []
+    _failing(nb, "setup", "ModuleNotFoundError", "No module named 'course.train'\nmore")
+    assert first_cause(nb) == [], "no test cell failed after it: nothing to explain"
+    _failing(nb, "test_kupdate", "NameError", "name 'validate' is not defined")
+    [note] = first_cause(nb)
+    assert note.startswith("The set-up cell failed when the grader ran it (ModuleNotFoundError: No module named "
+                           "'course.train').") and "more" not in note
+    nb = submissions.solved(LAB)
+    _failing(nb, "test_kupdate", "NameError", "name 'kupdate' is not defined")
+    _failing(nb, "kupdate", "NotWrittenYet", "This cell needs ...")
+    assert first_cause(nb) == [], "a blank not written yet is not a failure of its cell"
+    _failing(nb, "kupdate", "ZeroDivisionError", "division by zero")
+    [note] = first_cause(nb)
+    assert note.startswith("Your cell kupdate failed when the grader ran it (ZeroDivisionError: division by zero)")
+    _failing(nb, "run_filter", "TypeError", "later")
+    assert first_cause(nb) == [note], "the first failing cell is the cause named"

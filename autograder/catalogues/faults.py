@@ -61,6 +61,14 @@ def _with_code_in_blank(lab: Lab, blank: str, code: str) -> tuple[str, bytes]:
     return _file(lab, nb)
 
 
+def _line_before_blank(lab: Lab, blank: str) -> tuple[str, bytes]:
+    """The solved notebook with a stray line that fails at the top of ``blank``'s cell, before its def."""
+    nb = submissions.solved(lab)
+    [cell] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == blank]
+    cell.source = f"print(leftover_value)  # a line left over from an experiment\n{cell.source}"
+    return _file(lab, nb)
+
+
 def _solved_bytes(lab: Lab) -> bytes:
     return nbformat.writes(submissions.solved(lab)).encode()
 
@@ -149,6 +157,9 @@ FAULTS = (
     Fault("memory-hog", "a blank that asks for 50 GB of memory",
           lambda lab, blank: _with_code_in_blank(lab, blank, "import numpy\n_ = numpy.ones(50 * 2**30 // 8)"),
           "blank", "MemoryError"),
+    Fault("answer-cell-error", "a stray line at the top of a blank's cell that fails (a NameError) before the "
+          "cell defines the blank, so that the blank is never defined", _line_before_blank, "blank",
+          "failed when the grader ran it (NameError: name 'leftover_value' is not defined)"),
     Fault("numpy-warning", "a blank that is right but emits a NumPy warning",
           lambda lab, blank: _with_code_in_blank(lab, blank, "import numpy\n_ = numpy.log(-1.0)"),
           "blank", "gave the warning RuntimeWarning"),

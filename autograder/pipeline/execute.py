@@ -182,7 +182,7 @@ class GradingExecute(Execute):
                 self._restart_and_replay(index, failed, deadline)
         notes += self._output.notes(lambda i: _name(self.nb.cells[i], i))
         _whole_execution_counts(self.nb)
-        add_grader_notes(self.nb, notes)
+        add_grader_notes(self.nb, first_cause(self.nb) + notes)
         self.set_widgets_metadata()
         return self.nb, self.resources
 
@@ -381,6 +381,42 @@ def _warn_once_if_not_sandboxed(log) -> None:
 def _name(cell: NotebookNode, index: int) -> str:
     """How a note names a cell: its nbgrader id, or its position."""
     return cells.grade_id(cell) if "grade_id" in cells.meta(cell) else str(index + 1)
+
+
+SETUP = "setup"
+"""The grade_id of every lab's set-up cell."""
+NOT_A_CAUSE = {"NotWrittenYet", TIMEOUT_ERROR, KERNEL_DIED, NOT_RUN}
+"""Errors that are no cell's own failure, or that have a note of their own: a blank still unwritten, and
+the grader's stops."""
+
+
+def first_cause(nb: NotebookNode) -> list[str]:
+    """A note that leads with the first set-up or answer cell that failed when it ran, if a test cell
+    after it failed too: the set-up cell's imports, or the functions an answer cell defines after its
+    failing line, are then missing from every cell below, which fail with errors (often a NameError)
+    that do not say why. Empty if there is no such cell.
+
+    It reads the error the kernel reported, so a submission can make this note say what it likes;
+    it is only a message (the score is the grader's verdict: autograder/pipeline/verdicts.py), and
+    it is shown as text (``add_grader_notes`` escapes it)."""
+    code = [c for c in nb.cells if c.cell_type == "code"]
+    for at, cell in enumerate(code):
+        setup = cells.meta(cell).get("grade_id") == SETUP
+        if not setup and not cells.is_code_answer(cell):
+            continue
+        errors = [o for o in cell.outputs if o.get("output_type") == "error" and o.get("ename") not in NOT_A_CAUSE]
+        later = [c for c in code[at + 1:] if cells.is_autograded_test(c) and any(o.get("output_type") == "error" for o in c.outputs)]
+        if not errors or not later:
+            continue
+        message = str(errors[0].get("evalue", "")).strip().splitlines()
+        error = f"{errors[0].get('ename')}: {message[0][:200] if message else ''}".rstrip(": ")
+        if setup:
+            return [f"The set-up cell failed when the grader ran it ({error}). Every cell after it needs what it "
+                    "imports, so the errors below may all come from this one."]
+        return [f"Your cell {cells.grade_id(cell)} failed when the grader ran it ({error}), so what it defines after "
+                "the failing line was never defined: the cells below that use it fail because of this error. "
+                "Fix it first."]
+    return []
 
 
 def _cut_error(content: dict) -> dict:
