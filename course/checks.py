@@ -343,7 +343,7 @@ def listed(names: list[str]) -> str:
     return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
 
 
-def _wrap(text: str, first_line_taken: int = 0) -> str:
+def wrap(text: str, first_line_taken: int = 0) -> str:
     """``text`` wrapped to LINE_WIDTH, paragraph by paragraph (the first line shares its width with a prefix)."""
     paragraphs = []
     for i, paragraph in enumerate(text.split("\n")):
@@ -401,7 +401,7 @@ def validate(function: Callable) -> None:
     else:
         message = (f"{name} has not passed its visible checks since you last defined it: run the check "
                    f"cell below {name} and fix what its message says.")
-    raise NotPassingYet(_wrap(message, len("NotPassingYet: ")))
+    raise NotPassingYet(wrap(message, len("NotPassingYet: ")))
 
 
 # What an exception raised inside a student's function usually means: its type, a pattern its message matches
@@ -433,6 +433,9 @@ _MEANINGS: list[tuple[str, str, str]] = [
     ("ValueError", "inhomogeneous|input arrays must have the same shape", "An array was built from pieces of "
      "different shapes, such as an array beside a plain number: give every piece the same shape "
      "(np.zeros_like(x), np.full_like(x, value)) and join them with np.stack."),
+    ("ValueError", "concatenation axis must match", "The blocks you join (np.block, np.concatenate, np.vstack) "
+     "do not line up: the blocks side by side need the same number of rows, and the blocks one above the "
+     "other the same number of columns. Compare the shape of each block."),
     ("ValueError", "probabilities contain nan", "The probabilities you drew with contain NaN. That usually means "
      "every weight underflowed to 0 and normalising divided 0 by 0: work with log-weights and subtract the "
      "largest before you exponentiate."),
@@ -489,6 +492,10 @@ def _describe(value: Any, room: int = LINE_WIDTH) -> str:
     return type(value).__name__
 
 
+CHECK_HINT = "What the check says for this case:"
+"""What introduces, in the message of a crash, the hint that the check cell gives for the call that crashed."""
+
+
 def _in_cell(frame: Any) -> bool:
     """Whether ``frame`` runs a notebook cell's own code (not a function defined in it)."""
     return frame.f_code.co_name == "<module>" and frame.f_globals.get("__name__") == "__main__"
@@ -502,7 +509,7 @@ def _assigned(statement: ast.stmt) -> set[str]:
 
 def _hints_in(statement: ast.stmt, namespace: dict, about: set[str] | None = None) -> list[str]:
     """The hints (a ``hint`` argument written as text) of the check helpers that ``statement`` calls; with
-    ``about``, only of the calls that check one of those names."""
+    ``about``, only of the check_array calls on one of those names (what the results should look like)."""
     found = []
     for call in (node for node in ast.walk(statement) if isinstance(node, ast.Call)):
         helper = namespace.get(call.func.id) if isinstance(call.func, ast.Name) else None
@@ -512,7 +519,8 @@ def _hints_in(statement: ast.stmt, namespace: dict, about: set[str] | None = Non
             parameters = []
         if "hint" not in parameters:
             continue
-        if about is not None and not about & {n.id for a in call.args for n in ast.walk(a) if isinstance(n, ast.Name)}:
+        if about is not None and (helper is not check_array or not about & {
+                n.id for a in call.args for n in ast.walk(a) if isinstance(n, ast.Name)}):
             continue
         position = parameters.index("hint")
         given = call.args[position] if position < len(call.args) else next(
@@ -548,12 +556,15 @@ def check_hints(cell: Any, line: int) -> list[str]:
     if comment:
         return [comment]
     hints = _hints_in(at, cell.f_globals)
+    if hints:
+        return list(dict.fromkeys(hints))
     names = _assigned(at)
     for later in statements[statements.index(at) + 1:]:
-        if hints or not names:
+        if not names:
             break
-        hints = _hints_in(later, cell.f_globals, names)
-        names -= _assigned(later)
+        hints += _hints_in(later, cell.f_globals, names)
+        # a name checked and assigned again from itself (m = check_array(m, ...)) is still the call's result
+        names -= _assigned(later) - {n.id for n in ast.walk(later) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
     return list(dict.fromkeys(hints))
 
 
@@ -594,11 +605,11 @@ def explain(error: BaseException, tb: Any, blanks: list[str]) -> str | None:
     # a sentence of the meaning that the check's hint says too is said once, in the hint
     meaning = " ".join(s for s in re.split(r"(?<=\.) ", _meaning(error)) if s not in hints)
     return "\n".join([
-        _wrap(f"{type(error).__name__} in your {name}: {error}"),
-        _wrap(f"It was raised {at}{during}. {name} got these inputs:"),
+        wrap(f"{type(error).__name__} in your {name}: {error}"),
+        wrap(f"It was raised {at}{during}. {name} got these inputs:"),
         inputs,
-        _wrap(meaning),
-        *([_wrap(f"The check's hint for this case: {hints}")] if hints else []),
+        wrap(meaning),
+        *([wrap(f"{CHECK_HINT} {hints}")] if hints else []),
     ])
 
 
@@ -625,6 +636,8 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     # the blanks this cell uses: those it requires and, in a blank's check cell, the blanks that blank calls
     others = [n for n in dict.fromkeys(required + (_calls(checked) if checked else [])) if n != checked]
     message = explain(value, tb, ([checked] if checked else []) + others)
+    if message is None and isinstance(value, AssertionError) and not isinstance(value, NotPassingYet):
+        message = wrap(f"{etype.__name__}: {value}")  # a check that fails: its message, wrapped for Validate
     said = message or f"{etype.__name__}: {value}"
     calls, inside = _calls_through(tb, others)
     raised_in = calls[inside[-1]][0].f_code.co_name if inside else None
@@ -635,7 +648,7 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     else:
         blamed = _not_passing(others)
     if blamed:
-        blame = _wrap(_blame(blamed, checked, raised_in is not None))
+        blame = wrap(_blame(blamed, checked, raised_in is not None))
         # the certain cause first; a possible one after what this cell's own error says
         message = said = f"{blame}\n\n{said}" if raised_in else f"{said}\n\n{blame}"
     if checked is not None and not isinstance(value, NotWrittenYet):
