@@ -312,10 +312,12 @@ def passed(name: str) -> None:
 # In a student's kernel (JupyterLab, or nbgrader's Validate) importing this module installs two
 # IPython hooks: one notes which cell is running (a blank's visible checks end with
 # passed("<name>")), and one rewrites an exception that escapes a cell, so that it says which
-# call of your function raised it, with which inputs, and what such an error usually means; and,
-# when the cell checks a blank that calls other blanks that do not pass their own checks yet, it
-# says so first. In nbgrader's autograder (NBGRADER_EXECUTION=autograde) nothing is installed and
-# ``validate`` does nothing: points come only from the hidden tests.
+# call of your function raised it, with which inputs, what such an error usually means and what
+# the check says for that call; and, when another blank that the cell uses may be the cause, it
+# says so once. In nbgrader's autograder (NBGRADER_EXECUTION=autograde) ``validate`` does nothing
+# (points come only from the grader), and only the visible check cells' errors are rewritten, for
+# the feedback page: their inputs are the notebook's own, while another cell's error could come
+# from a hidden case, whose inputs a message must not show.
 # ---------------------------------------------------------------------------------------------
 
 GRADING = "autograde"
@@ -633,6 +635,9 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     visible checks (then it and this cell's own error are both said, once each). A message that already says
     which blank fails (NotWrittenYet, NotPassingYet) is shown as it is."""
     checked, required = _cell["checks"], list(_cell["uses"])
+    if checked is None and _grading():
+        shell.showtraceback((etype, value, tb), running_compiled_code=True)
+        return []
     # the blanks this cell uses: those it requires and, in a blank's check cell, the blanks that blank calls
     others = [n for n in dict.fromkeys(required + (_calls(checked) if checked else [])) if n != checked]
     message = explain(value, tb, ([checked] if checked else []) + others)
@@ -694,8 +699,6 @@ def _hooks_installed() -> bool:
 
 
 def _install() -> None:
-    if _grading():
-        return
     shell = _shell()
     if shell is None or getattr(shell, "_course_checks_installed", False):
         return

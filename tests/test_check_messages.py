@@ -234,3 +234,31 @@ def test_the_visible_checks_fail_the_mistakes_they_were_given_a_case_for(lab: La
     verdicts = visible_verdicts(lab, [(f"{m.blank}/{m.slug}", m.blank, m.apply(model[m.blank])) for m in listed])
     passed_wrongly = [key for key, error in verdicts.items() if error is None]
     assert not passed_wrongly, f"these mistakes pass the visible checks of {lab.id}: {passed_wrongly}"
+
+
+def test_while_grading_only_a_check_cells_crash_is_explained_and_validate_does_nothing(tmp_path, monkeypatch):
+    """nbgrader's autograder (NBGRADER_EXECUTION=autograde): the feedback page explains a crash in a visible check
+    cell, whose inputs are the notebook's own, with the check's hint; a crash in any other cell, which could come
+    from a hidden case, keeps IPython's own message; validate() lets every blank through."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    from course.checks import GRADING
+
+    monkeypatch.setenv("NBGRADER_EXECUTION", GRADING)
+    cells_source = [
+        "%xmode Minimal\nimport numpy as np\nfrom course.checks import check_array, passed, require, validate",
+        "def grow(B):\n    return np.eye(2) @ B",
+        'require(grow)\ncheck_array(grow(np.eye(3)), "grow(I3)", (3, 3), "Size the identity from B.")\npassed("grow")',
+        "grow(np.eye(3))",
+        "validate(grow)",
+    ]
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
+    NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
+                   resources={"metadata": {"path": str(tmp_path)}}).execute()
+    errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
+    text = [" ".join(re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(e.traceback)).split()) if e else "" for e in errors]
+    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 4], text
+    assert text[2].startswith("ValueError in your grow: matmul") and "Size the identity from B." in text[2], text[2]
+    assert "B = array of shape (3, 3)" in text[2]
+    assert "in your grow" not in text[3] and "B = array" not in text[3], text[3]
