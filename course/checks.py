@@ -325,8 +325,9 @@ GRADING = "autograde"
 
 _passed: dict[str, Callable] = {}
 """Blank name -> the function object that last passed its visible checks."""
-_failed: dict[str, tuple[Callable, str]] = {}
-"""Blank name -> the function that last failed its visible checks, and what they said."""
+_failed: dict[str, tuple[Callable, str, bool]] = {}
+"""Blank name -> the function that last failed its visible checks, what they said, and whether it failed by
+raising an error of its own (a crash) rather than by a wrong result."""
 _cell: dict[str, Any] = {"checks": None, "uses": []}
 """The running cell: the blank whose checks it runs (or None), and the blanks it requires."""
 
@@ -365,6 +366,12 @@ def _passes(name: str) -> bool:
     """Whether the blank ``name``, as it is defined now, passed its visible checks."""
     function = _current(name)
     return function is not None and _passed.get(name) is function
+
+
+def _crashed(name: str) -> bool:
+    """Whether the blank ``name``, as it is defined now, failed its visible checks by raising an error itself."""
+    failed = _failed.get(name)
+    return failed is not None and failed[0] is _current(name) and failed[2]
 
 
 def _not_passing(names: list[str]) -> list[str]:
@@ -631,16 +638,17 @@ def _before_cell(info: Any) -> None:
 def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_offset: int | None = None) -> list[str]:
     """IPython's handler for an exception that escapes a cell: the default traceback, or a better message.
 
-    Another blank is blamed only when it may be the cause: the error was raised inside it, or it fails its own
-    visible checks (then it and this cell's own error are both said, once each). A message that already says
-    which blank fails (NotWrittenYet, NotPassingYet) is shown as it is."""
+    Another blank is blamed only when it may be the cause: the error was raised inside it (then it comes first),
+    or it fails its own visible checks with a wrong result, not a crash (then this cell's own error comes first,
+    and the other blank once after it). A message that already says which blank fails (NotWrittenYet,
+    NotPassingYet) is shown as it is."""
     checked, required = _cell["checks"], list(_cell["uses"])
     if checked is None and _grading():
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []
     # the blanks this cell uses: those it requires and, in a blank's check cell, the blanks that blank calls
     others = [n for n in dict.fromkeys(required + (_calls(checked) if checked else [])) if n != checked]
-    message = explain(value, tb, ([checked] if checked else []) + others)
+    message = explained = explain(value, tb, ([checked] if checked else []) + others)
     if message is None and isinstance(value, AssertionError) and not isinstance(value, NotPassingYet):
         message = wrap(f"{etype.__name__}: {value}")  # a check that fails: its message, wrapped for Validate
     said = message or f"{etype.__name__}: {value}"
@@ -651,14 +659,15 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     elif raised_in is not None:
         blamed = _not_passing([raised_in])  # raised inside another blank: it alone, if it fails its own checks
     else:
-        blamed = _not_passing(others)
+        # a blank whose own check saw it crash did not crash here: only a wrong result of it could be the cause
+        blamed = [n for n in _not_passing(others) if not _crashed(n)]
     if blamed:
         blame = wrap(_blame(blamed, checked, raised_in is not None))
         # the certain cause first; a possible one after what this cell's own error says
         message = said = f"{blame}\n\n{said}" if raised_in else f"{said}\n\n{blame}"
     if checked is not None and not isinstance(value, NotWrittenYet):
         _passed.pop(checked, None)
-        _failed[checked] = (_current(checked), said)
+        _failed[checked] = (_current(checked), said, explained is not None and raised_in is None)
     if message is None:
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []

@@ -90,7 +90,8 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
     """A student's kernel. A sign error in gain raises LinAlgError inside it; its check says which call raised it,
     with the inputs and the likely cause. The check of update, which calls gain, blames gain first, as the error
     was raised inside it; Validate's validate() says that once. twice fails for its own reason (a shape error in
-    its own line) while scale, which it uses, fails its check: both are said, twice's own error first. An error
+    its own line) while scale, which it uses, fails its check with a wrong result: both are said, twice's own error
+    first; a blank that failed its check by crashing, and did not crash here, is not blamed. An error
     inside a blank that passes its checks blames nobody else, and a cell that is not a check says what raised,
     then once that a blank it uses fails its checks. An error outside any blank keeps IPython's own traceback."""
     import nbformat
@@ -114,13 +115,17 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
         "def halves(x):\n    return half(x)",
         'require(halves)\ncheck_close(halves(np.ones(3)), [0.5, 0.5, 0.5], "halves(ones(3))")\npassed("halves")',
         "require(scale)\nscale(np.ones(2)) @ np.ones(3)",
+        "def speeds(x):\n    return np.array([x[0], 0.0])",
+        'require(speeds)\ncheck_close(speeds(np.ones((2, 3))), np.zeros((2, 3)), "speeds of 3")\npassed("speeds")',
+        "def start(x0):\n    return speeds(x0) + 1.0",
+        'require(start)\ncheck_close(start(np.zeros(2)), [0.0, 0.0], "start(0)", "Start at x0.")\npassed("start")',
     ]
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
     NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
                    resources={"metadata": {"path": str(tmp_path)}}).execute()
     errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
     text = [" ".join(re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(e.traceback)).split()) if e else "" for e in errors]
-    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14], text
+    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19], text
     assert text[2].startswith("LinAlgError in your gain: Singular matrix"), text[2]
     assert "`K = gain(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))` of this cell" in text[2]
     assert "B = array of shape (2, 2), [[4., 0.], [0., 9.]]" in text[2]
@@ -144,6 +149,10 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
     assert text[16].startswith("ValueError: matmul") and text[16].endswith(
         "This may come from your scale, which this cell uses: it does not pass its own visible checks yet. Make "
         "it pass them first (its check cell says what is wrong), then run this cell again."), text[16]
+    # speeds crashed in its own check (a ragged array for a matrix input) and did not raise here: start fails for its
+    # own reason, and speeds is not blamed
+    assert text[18].startswith("ValueError in your speeds:"), text[18]
+    assert text[20] == "AssertionError: start(0) is not right: expected [0. 0.] but got [1. 1.]. Start at x0.", text[20]
     # said once: no message holds another's, and no sentence is said twice
     for said in text:
         sentences = re.split(r"(?<=\.) ", said)
