@@ -585,11 +585,12 @@ def _calls_through(tb: Any, blanks: list[str]) -> tuple[list[tuple[Any, Any]], l
                    if frame.f_code.co_name in blanks and frame.f_globals.get("__name__") == "__main__"]
 
 
-def explain(error: BaseException, tb: Any, blanks: list[str]) -> str | None:
+def explain(error: BaseException, tb: Any, blanks: list[str], here: str = "this cell") -> str | None:
     """A message for an exception raised inside one of ``blanks``; None if none of them raised it.
 
     It names the blank, the line of it that raised, the call (and its inputs) that led there, what such an
-    error usually means and, in a check cell, the check's own hint for that call."""
+    error usually means and, in a check cell, the check's own hint for that call. ``here`` names the cell that
+    made the call, as the reader of the message knows it."""
     if isinstance(error, (AssertionError, NotWrittenYet)):
         return None
     calls, inside = _calls_through(tb, blanks)
@@ -607,7 +608,7 @@ def explain(error: BaseException, tb: Any, blanks: list[str]) -> str | None:
     during = ""
     if caller:
         frame = calls[inside[0] - 1][0]
-        place = "this cell" if _in_cell(frame) else f"{frame.f_code.co_name} ({frame.f_globals.get('__name__')})"
+        place = here if _in_cell(frame) else f"{frame.f_code.co_name} ({frame.f_globals.get('__name__')})"
         during = f", during the line `{caller}` of {place}"
     cell = next(((frame, entry) for frame, entry in calls[:inside[0]] if _in_cell(frame)), None)
     hints = " ".join(check_hints(cell[0], cell[1].lineno) if cell is not None else [])
@@ -648,10 +649,6 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
         return []
     # the blanks this cell uses: those it requires and, in a blank's check cell, the blanks that blank calls
     others = [n for n in dict.fromkeys(required + (_calls(checked) if checked else [])) if n != checked]
-    message = explained = explain(value, tb, ([checked] if checked else []) + others)
-    if message is None and isinstance(value, AssertionError) and not isinstance(value, NotPassingYet):
-        message = wrap(f"{etype.__name__}: {value}")  # a check that fails: its message, wrapped for Validate
-    said = message or f"{etype.__name__}: {value}"
     calls, inside = _calls_through(tb, others)
     raised_in = calls[inside[-1]][0].f_code.co_name if inside else None
     if isinstance(value, (NotWrittenYet, NotPassingYet)):
@@ -661,13 +658,25 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     else:
         # a blank whose own check saw it crash did not crash here: only a wrong result of it could be the cause
         blamed = [n for n in _not_passing(others) if not _crashed(n)]
-    if blamed:
-        blame = wrap(_blame(blamed, checked, raised_in is not None))
+
+    def composed(here: str) -> str | None:
+        """The message, for a reader who knows the cell that raised it as ``here``."""
+        message = explain(value, tb, ([checked] if checked else []) + others, here)
+        if message is None and isinstance(value, AssertionError) and not isinstance(value, NotPassingYet):
+            message = wrap(f"{etype.__name__}: {value}")  # a check that fails: its message, wrapped for Validate
+        if not blamed:
+            return message
+        said = message or f"{etype.__name__}: {value}"
+        blame = wrap(_blame(blamed, checked, raised_in is not None, here))
         # the certain cause first; a possible one after what this cell's own error says
-        message = said = f"{blame}\n\n{said}" if raised_in else f"{said}\n\n{blame}"
+        return f"{blame}\n\n{said}" if raised_in else f"{said}\n\n{blame}"
+
+    message = composed("this cell")
     if checked is not None and not isinstance(value, NotWrittenYet):
         _passed.pop(checked, None)
-        _failed[checked] = (_current(checked), said, explained is not None and raised_in is None)
+        crashed = raised_in is None and explain(value, tb, [checked]) is not None
+        # validate() quotes it under the graded cell, where "this cell" would be the wrong one
+        _failed[checked] = (_current(checked), composed("the check cell") or f"{etype.__name__}: {value}", crashed)
     if message is None:
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []
@@ -676,7 +685,7 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     return stb
 
 
-def _blame(blamed: list[str], checked: str | None, raised_inside: bool) -> str:
+def _blame(blamed: list[str], checked: str | None, raised_inside: bool, here: str) -> str:
     """The sentence that blames other blanks that fail their own visible checks: as the cause (the error was
     raised inside one), or as a possible cause beside what this cell says."""
     w = _upstream(blamed)
@@ -686,7 +695,7 @@ def _blame(blamed: list[str], checked: str | None, raised_inside: bool) -> str:
         user = f"which {checked} uses" if checked else "which this cell uses"
         subject = f"This may come from {w['your']}, {user}: {w['it']} {w['does']} not pass {w['its']} own visible checks yet"
     return (f"{subject}. Make {w['it']} pass them first ({w['its']} check {w['cell']} {'says' if len(blamed) == 1 else 'say'} "
-            f"what is wrong), then run this cell again.")
+            f"what is wrong), then run {here} again.")
 
 
 def _calls(name: str) -> list[str]:

@@ -136,6 +136,8 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
     assert errors[5].ename == "NotPassingYet" and text[5].startswith(
         "NotPassingYet: update does not pass its visible checks yet. Its check cell says: The error was raised "
         "inside your gain"), text[5]
+    # quoted under the graded cell, the message names the check cell, not "this cell"
+    assert "then run the check cell again" in text[5] and "of the check cell" in text[5] and "this cell" not in text[5]
     assert "gain does not pass its visible checks yet. Its check cell says: LinAlgError in your gain" in text[6]
     assert errors[7].ename == "ZeroDivisionError" and "in your" not in text[7]
     # twice's own error first, then scale, once
