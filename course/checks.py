@@ -511,6 +511,7 @@ def _in_cell(frame: Any) -> bool:
 
 
 def _assigned(statement: ast.stmt) -> set[str]:
+    """The names that an assignment statement binds (none for another statement)."""
     targets = statement.targets if isinstance(statement, ast.Assign) else [getattr(statement, "target", None)]
     return {node.id for target in targets if target is not None for node in ast.walk(target)
             if isinstance(node, ast.Name)}
@@ -540,16 +541,18 @@ def _hints_in(statement: ast.stmt, namespace: dict, about: set[str] | None = Non
 
 
 def _tokens(lines: list[str]) -> list[tokenize.TokenInfo]:
+    """The tokens of a cell's lines, or none if they do not tokenize."""
     try:
         return list(tokenize.generate_tokens(iter(lines).__next__))
     except (tokenize.TokenError, SyntaxError):
         return []
 
 
-def check_hints(cell: Any, line: int) -> list[str]:
+def _check_hints(cell: Any, line: int) -> list[str]:
     """What a check cell says to do about the call of a blank at ``line`` of the cell that ``cell`` (a
     frame) runs: a comment on that line, else the hints of the checks in the statement that makes the
-    call, else those of the first later check of what that statement assigned.
+    call, else those of the later shape checks (check_array) of what that statement assigned, until it
+    is assigned again: a check of the values says what a wrong value means, not what a crash does.
 
     A check cell thus keeps its hints in one place, its checks, and a crash shows them too."""
     lines = linecache.getlines(cell.f_code.co_filename, cell.f_globals)
@@ -573,7 +576,8 @@ def check_hints(cell: Any, line: int) -> list[str]:
             break
         hints += _hints_in(later, cell.f_globals, names)
         # a name checked and assigned again from itself (m = check_array(m, ...)) is still the call's result
-        names -= _assigned(later) - {n.id for n in ast.walk(later) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+        read = {n.id for n in ast.walk(later) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+        names -= _assigned(later) - read
     return list(dict.fromkeys(hints))
 
 
@@ -611,7 +615,7 @@ def explain(error: BaseException, tb: Any, blanks: list[str], here: str = "this 
         place = here if _in_cell(frame) else f"{frame.f_code.co_name} ({frame.f_globals.get('__name__')})"
         during = f", during the line `{caller}` of {place}"
     cell = next(((frame, entry) for frame, entry in calls[:inside[0]] if _in_cell(frame)), None)
-    hints = " ".join(check_hints(cell[0], cell[1].lineno) if cell is not None else [])
+    hints = " ".join(_check_hints(cell[0], cell[1].lineno) if cell is not None else [])
     # a sentence of the meaning that the check's hint says too is said once, in the hint
     meaning = " ".join(s for s in re.split(r"(?<=\.) ", _meaning(error)) if s not in hints)
     return "\n".join([
@@ -689,13 +693,14 @@ def _blame(blamed: list[str], checked: str | None, raised_inside: bool, here: st
     """The sentence that blames other blanks that fail their own visible checks: as the cause (the error was
     raised inside one), or as a possible cause beside what this cell says."""
     w = _upstream(blamed)
+    failing = f"{w['does']} not pass {w['its']} own visible checks yet"
     if raised_inside:
-        subject = f"The error was raised inside {w['your']}, which {w['does']} not pass {w['its']} own visible checks yet"
+        subject = f"The error was raised inside {w['your']}, which {failing}"
     else:
-        user = f"which {checked} uses" if checked else "which this cell uses"
-        subject = f"This may come from {w['your']}, {user}: {w['it']} {w['does']} not pass {w['its']} own visible checks yet"
-    return (f"{subject}. Make {w['it']} pass them first ({w['its']} check {w['cell']} {'says' if len(blamed) == 1 else 'say'} "
-            f"what is wrong), then run {here} again.")
+        subject = f"This may come from {w['your']}, which {checked or 'this cell'} uses: {w['it']} {failing}"
+    says = "says" if len(blamed) == 1 else "say"
+    return (f"{subject}. Make {w['it']} pass them first ({w['its']} check {w['cell']} {says} what is wrong), "
+            f"then run {here} again.")
 
 
 def _calls(name: str) -> list[str]:
