@@ -7,10 +7,14 @@ compute a blank's answer.
 
 from __future__ import annotations
 
+import ast
+import inspect
+import linecache
 import os
 import re
 import sys
 import textwrap
+import tokenize
 import traceback
 from typing import Any, Callable
 
@@ -49,7 +53,7 @@ def check_array(value: Any, name: str, shape: tuple[int, ...], hint: str = "") -
             f"{name} should be one array of shape {shape}, but it is a tuple of {len(value)} items. "
             f"{hint}".strip()
         )
-    array = np.asarray(value, dtype=float)
+    array = _as_array(value, name, f"one array of shape {shape}", hint)
     if array.shape != shape:
         raise AssertionError(
             f"{name} should have shape {shape}, but it has shape {array.shape}. {hint}".strip()
@@ -57,6 +61,19 @@ def check_array(value: Any, name: str, shape: tuple[int, ...], hint: str = "") -
     if not np.all(np.isfinite(array)):
         raise AssertionError(f"{name} contains NaN or infinite entries: {array}. {hint}".strip())
     return array
+
+
+def _as_array(value: Any, name: str, wanted: str, hint: str) -> np.ndarray:
+    """``value`` as an array of floats, or an AssertionError that says what it is instead (None, a dict, a
+    list of arrays of different shapes...)."""
+    if value is None:
+        raise AssertionError(f"{name} should be {wanted}, but it is None: does the function end with a return? "
+                             f"{hint}".strip())
+    try:
+        return np.asarray(value, dtype=float)
+    except (TypeError, ValueError):
+        raise AssertionError(f"{name} should be {wanted}, but it is a {type(value).__name__} that is not an array "
+                             f"of numbers. {hint}".strip()) from None
 
 
 def check_pair(value: Any, name: str, first: str, second: str) -> tuple[Any, Any]:
@@ -84,8 +101,8 @@ def check_close(
     With ``show_expected=False`` the message gives only the size of the error, not the
     expected numbers.
     """
-    actual = np.asarray(actual, dtype=float)
     expected = np.asarray(expected, dtype=float)
+    actual = _as_array(actual, name, f"an array of shape {expected.shape}", hint)
     if actual.shape != expected.shape:
         raise AssertionError(
             f"{name} should have shape {expected.shape}, but it has shape {actual.shape}. {hint}".strip()
@@ -295,10 +312,12 @@ def passed(name: str) -> None:
 # In a student's kernel (JupyterLab, or nbgrader's Validate) importing this module installs two
 # IPython hooks: one notes which cell is running (a blank's visible checks end with
 # passed("<name>")), and one rewrites an exception that escapes a cell, so that it says which
-# call of your function raised it, with which inputs, and what such an error usually means; and,
-# when the cell checks a blank that calls other blanks that do not pass their own checks yet, it
-# says so first. In nbgrader's autograder (NBGRADER_EXECUTION=autograde) nothing is installed and
-# ``validate`` does nothing: points come only from the hidden tests.
+# call of your function raised it, with which inputs, what such an error usually means and what
+# the check says for that call; and, when another blank that the cell uses may be the cause, it
+# says so once. In nbgrader's autograder (NBGRADER_EXECUTION=autograde) ``validate`` does nothing
+# (points come only from the grader), and only the visible check cells' errors are rewritten, for
+# the feedback page: their inputs are the notebook's own, while another cell's error could come
+# from a hidden case, whose inputs a message must not show.
 # ---------------------------------------------------------------------------------------------
 
 GRADING = "autograde"
@@ -306,8 +325,9 @@ GRADING = "autograde"
 
 _passed: dict[str, Callable] = {}
 """Blank name -> the function object that last passed its visible checks."""
-_failed: dict[str, tuple[Callable, str]] = {}
-"""Blank name -> the function that last failed its visible checks, and what they said."""
+_failed: dict[str, tuple[Callable, str, bool]] = {}
+"""Blank name -> the function that last failed its visible checks, what they said, and whether it failed by
+raising an error of its own (a crash) rather than by a wrong result."""
 _cell: dict[str, Any] = {"checks": None, "uses": []}
 """The running cell: the blank whose checks it runs (or None), and the blanks it requires."""
 
@@ -326,7 +346,7 @@ def listed(names: list[str]) -> str:
     return names[0] if len(names) == 1 else ", ".join(names[:-1]) + " and " + names[-1]
 
 
-def _wrap(text: str, first_line_taken: int = 0) -> str:
+def wrap(text: str, first_line_taken: int = 0) -> str:
     """``text`` wrapped to LINE_WIDTH, paragraph by paragraph (the first line shares its width with a prefix)."""
     paragraphs = []
     for i, paragraph in enumerate(text.split("\n")):
@@ -346,6 +366,12 @@ def _passes(name: str) -> bool:
     """Whether the blank ``name``, as it is defined now, passed its visible checks."""
     function = _current(name)
     return function is not None and _passed.get(name) is function
+
+
+def _crashed(name: str) -> bool:
+    """Whether the blank ``name``, as it is defined now, failed its visible checks by raising an error itself."""
+    failed = _failed.get(name)
+    return failed is not None and failed[0] is _current(name) and failed[2]
 
 
 def _not_passing(names: list[str]) -> list[str]:
@@ -380,14 +406,15 @@ def validate(function: Callable) -> None:
         return
     failed = _failed.get(name)
     if failed is not None and failed[0] is function:
-        message = f"{name} does not pass its visible checks yet. {failed[1]}"
+        message = f"{name} does not pass its visible checks yet. Its check cell says:\n{failed[1]}"
     else:
         message = (f"{name} has not passed its visible checks since you last defined it: run the check "
                    f"cell below {name} and fix what its message says.")
-    raise NotPassingYet(_wrap(message, len("NotPassingYet: ")))
+    raise NotPassingYet(wrap(message, len("NotPassingYet: ")))
 
 
-# What an exception raised inside a student's function usually means, by type and message.
+# What an exception raised inside a student's function usually means: its type, a pattern its message matches
+# (lower case), and a sentence. The first entry that matches gives the sentence.
 _MEANINGS: list[tuple[str, str, str]] = [
     ("LinAlgError", "singular", "A matrix that you solve with or invert is singular. In a filter that usually means "
      "a sign error or a missing term: a sum such as H B H^T + R or B^-1 + H^T R^-1 H that lost a term, "
@@ -395,17 +422,38 @@ _MEANINGS: list[tuple[str, str, str]] = [
     ("LinAlgError", "positive definite", "A Cholesky factorisation got a matrix that is not symmetric positive "
      "definite. That usually means a sign error or a missing term in a covariance, or a covariance that is "
      "not symmetric (compute it as A @ B @ A.T, or symmetrise it)."),
+    ("LinAlgError", "must be square", "A matrix that you solve with, invert or factorise is not square: check "
+     "its shape and your transposes."),
+    ("LinAlgError", "at least two-dimensional", "A linear-algebra routine got a 1-D array where it needs a "
+     "matrix: give it shape (n, n), for example [[v]] for a single variance."),
     ("LinAlgError", "", "A linear-algebra routine failed on the matrix it was given: check that the matrix is the "
      "one the equation names, square and well conditioned (a sign error or a missing term can break it)."),
+    ("ValueError", r"^solve\w*:.*core dimension", "np.linalg.solve(A, b) got shapes that do not fit: A must be "
+     "(m, m) and b must have m rows, (m,) or (m, k). Check your transposes. With NumPy 2 a stack of vectors, "
+     "shape (T, m), is read as one matrix, not as T vectors: solve with b[..., None] and take [..., 0] of "
+     "the result."),
     ("ValueError", "matmul", "Two arrays in a matrix product (@) have shapes that do not fit. Check the "
      "transposes, the order of the factors, and whether a vector should have shape (n,) or (n, 1)."),
     ("ValueError", "broadcast", "Two arrays have shapes that cannot be combined element by element. Compare "
-     "the shapes of the inputs below with the ones your code builds, and check whether you meant a matrix "
+     "the shapes of the inputs above with the ones your code builds, and check whether you meant a matrix "
      "product (@) rather than *."),
     ("ValueError", "aligned", "Two arrays in a product have shapes that do not fit. Check the transposes and "
      "the order of the factors."),
-    ("ValueError", "", "A function got a value it cannot work with: compare the shapes and values below "
-     "with what the function expects."),
+    ("ValueError", "inhomogeneous|input arrays must have the same shape", "An array was built from pieces of "
+     "different shapes, such as an array beside a plain number: give every piece the same shape "
+     "(np.zeros_like(x), np.full_like(x, value)) and join them with np.stack."),
+    ("ValueError", "concatenation axis must match", "The blocks you join (np.block, np.concatenate, np.vstack) "
+     "do not line up: the blocks side by side need the same number of rows, and the blocks one above the "
+     "other the same number of columns. Compare the shape of each block."),
+    ("ValueError", "probabilities contain nan", "The probabilities you drew with contain NaN. That usually means "
+     "every weight underflowed to 0 and normalising divided 0 by 0: work with log-weights and subtract the "
+     "largest before you exponentiate."),
+    ("ValueError", "probabilities are not non-negative", "Some of the probabilities you drew with are negative: "
+     "a weight is never negative. Check the signs in your weights, or your log-weights before np.exp."),
+    ("ValueError", "probabilities do not sum to 1", "The probabilities you drew with do not sum to 1: normalise "
+     "the weights (w / np.sum(w)) after their last change and before you draw with them."),
+    ("ValueError", "", "A function got a value it cannot work with: compare the shapes and values of the "
+     "inputs above with what the function expects."),
     ("IndexError", "", "An index is out of range. Check the range of your loop, and which axis holds time "
      "and which holds the state."),
     ("TypeError", "", "A function got arguments it does not accept, or a value of the wrong type. Check "
@@ -426,19 +474,21 @@ _MEANINGS: list[tuple[str, str, str]] = [
 
 def _meaning(error: BaseException) -> str:
     kind, text = type(error).__name__, str(error).lower()
-    for name, fragment, meaning in _MEANINGS:
-        if kind == name and fragment in text:
+    for name, pattern, meaning in _MEANINGS:
+        if kind == name and re.search(pattern, text):
             return meaning
     return "Read the error above and look at the line of your function that raised it."
 
 
-def _describe(value: Any) -> str:
-    """A short description of an argument: shape and, when small, the values."""
+def _describe(value: Any, room: int = LINE_WIDTH) -> str:
+    """A short description of an argument: shape and, when small and they fit in ``room`` columns, the values."""
     if isinstance(value, np.ndarray):
+        shape = f"array of shape {value.shape}"
         if value.size <= 9 and value.dtype.kind in "biuf":
             values = np.array2string(value, precision=4, suppress_small=True, separator=", ").replace("\n", "")
-            return f"array of shape {value.shape}, {' '.join(values.split())}"
-        return f"array of shape {value.shape}"
+            described = f"{shape}, {' '.join(values.split())}"
+            return described if len(described) <= room else shape
+        return shape
     if isinstance(value, (int, float, np.integer, np.floating, bool, str)) or value is None:
         text = repr(value)
         return text if len(text) <= 40 else text[:37] + "..."
@@ -451,13 +501,103 @@ def _describe(value: Any) -> str:
     return type(value).__name__
 
 
-def explain(error: BaseException, tb: Any, blanks: list[str]) -> str | None:
-    """A message for an exception raised inside one of ``blanks``; None if none of them raised it."""
+CHECK_HINT = "What the check says for this case:"
+"""What introduces, in the message of a crash, the hint that the check cell gives for the call that crashed."""
+
+
+def _in_cell(frame: Any) -> bool:
+    """Whether ``frame`` runs a notebook cell's own code (not a function defined in it)."""
+    return frame.f_code.co_name == "<module>" and frame.f_globals.get("__name__") == "__main__"
+
+
+def _assigned(statement: ast.stmt) -> set[str]:
+    """The names that an assignment statement binds (none for another statement)."""
+    targets = statement.targets if isinstance(statement, ast.Assign) else [getattr(statement, "target", None)]
+    return {node.id for target in targets if target is not None for node in ast.walk(target)
+            if isinstance(node, ast.Name)}
+
+
+def _hints_in(statement: ast.stmt, namespace: dict, about: set[str] | None = None) -> list[str]:
+    """The hints (a ``hint`` argument written as text) of the check helpers that ``statement`` calls; with
+    ``about``, only of the check_array calls on one of those names (what the results should look like)."""
+    found = []
+    for call in (node for node in ast.walk(statement) if isinstance(node, ast.Call)):
+        helper = namespace.get(call.func.id) if isinstance(call.func, ast.Name) else None
+        try:
+            parameters = list(inspect.signature(helper).parameters) if callable(helper) else []
+        except (TypeError, ValueError):
+            parameters = []
+        if "hint" not in parameters:
+            continue
+        if about is not None and (helper is not check_array or not about & {
+                n.id for a in call.args for n in ast.walk(a) if isinstance(n, ast.Name)}):
+            continue
+        position = parameters.index("hint")
+        given = call.args[position] if position < len(call.args) else next(
+            (k.value for k in call.keywords if k.arg == "hint"), None)
+        if isinstance(given, ast.Constant) and isinstance(given.value, str) and given.value:
+            found.append(given.value)
+    return found
+
+
+def _tokens(lines: list[str]) -> list[tokenize.TokenInfo]:
+    """The tokens of a cell's lines, or none if they do not tokenize."""
+    try:
+        return list(tokenize.generate_tokens(iter(lines).__next__))
+    except (tokenize.TokenError, SyntaxError):
+        return []
+
+
+def _check_hints(cell: Any, line: int) -> list[str]:
+    """What a check cell says to do about the call of a blank at ``line`` of the cell that ``cell`` (a
+    frame) runs: a comment on that line, else the hints of the checks in the statement that makes the
+    call, else those of the later shape checks (check_array) of what that statement assigned, until it
+    is assigned again: a check of the values says what a wrong value means, not what a crash does.
+
+    A check cell thus keeps its hints in one place, its checks, and a crash shows them too."""
+    lines = linecache.getlines(cell.f_code.co_filename, cell.f_globals)
+    try:
+        statements = ast.parse("".join(lines)).body
+    except SyntaxError:
+        return []
+    at = next((s for s in statements if s.lineno <= line <= (s.end_lineno or s.lineno)), None)
+    if at is None:
+        return []
+    comment = next((token.string.lstrip("# ") for token in _tokens(lines)
+                    if token.type == tokenize.COMMENT and token.start[0] == line), "")
+    if comment:
+        return [comment]
+    hints = _hints_in(at, cell.f_globals)
+    if hints:
+        return list(dict.fromkeys(hints))
+    names = _assigned(at)
+    for later in statements[statements.index(at) + 1:]:
+        if not names:
+            break
+        hints += _hints_in(later, cell.f_globals, names)
+        # a name checked and assigned again from itself (m = check_array(m, ...)) is still the call's result
+        read = {n.id for n in ast.walk(later) if isinstance(n, ast.Name) and isinstance(n.ctx, ast.Load)}
+        names -= _assigned(later) - read
+    return list(dict.fromkeys(hints))
+
+
+def _calls_through(tb: Any, blanks: list[str]) -> tuple[list[tuple[Any, Any]], list[int]]:
+    """The calls a traceback passed through (each frame with its entry), and the indices of those that run
+    one of ``blanks`` (functions defined in the notebook)."""
+    calls = list(zip((frame for frame, _ in traceback.walk_tb(tb)), traceback.extract_tb(tb)))
+    return calls, [i for i, (frame, _) in enumerate(calls)
+                   if frame.f_code.co_name in blanks and frame.f_globals.get("__name__") == "__main__"]
+
+
+def explain(error: BaseException, tb: Any, blanks: list[str], here: str = "this cell") -> str | None:
+    """A message for an exception raised inside one of ``blanks``; None if none of them raised it.
+
+    It names the blank, the line of it that raised, the call (and its inputs) that led there, what such an
+    error usually means and, in a check cell, the check's own hint for that call. ``here`` names the cell that
+    made the call, as the reader of the message knows it."""
     if isinstance(error, (AssertionError, NotWrittenYet)):
         return None
-    calls = list(zip((frame for frame, _ in traceback.walk_tb(tb)), traceback.extract_tb(tb)))
-    inside = [i for i, (frame, _) in enumerate(calls)
-              if frame.f_code.co_name in blanks and frame.f_globals.get("__name__") == "__main__"]
+    calls, inside = _calls_through(tb, blanks)
     if not inside:
         return None
     outer, inner = calls[inside[0]][0], calls[inside[-1]][0]
@@ -465,20 +605,25 @@ def explain(error: BaseException, tb: Any, blanks: list[str]) -> str | None:
     raising = (calls[inside[-1]][1].line or "").strip()
     code = outer.f_code
     arguments = code.co_varnames[: code.co_argcount + code.co_kwonlyargcount]
-    inputs = "\n".join(f"  {name} = {_describe(outer.f_locals.get(name))}" for name in arguments)
+    inputs = "\n".join(f"  {name} = {_describe(outer.f_locals.get(name), LINE_WIDTH - len(name) - 5)}"
+                       for name in arguments)
     name = code.co_name
     at = f"at the line `{raising}` of {inner.f_code.co_name}" if raising else f"in {inner.f_code.co_name}"
     during = ""
     if caller:
         frame = calls[inside[0] - 1][0]
-        place = ("this cell" if frame.f_code.co_name == "<module>" and frame.f_globals.get("__name__") == "__main__"
-                 else f"{frame.f_code.co_name} ({frame.f_globals.get('__name__')})")
+        place = here if _in_cell(frame) else f"{frame.f_code.co_name} ({frame.f_globals.get('__name__')})"
         during = f", during the line `{caller}` of {place}"
+    cell = next(((frame, entry) for frame, entry in calls[:inside[0]] if _in_cell(frame)), None)
+    hints = " ".join(_check_hints(cell[0], cell[1].lineno) if cell is not None else [])
+    # a sentence of the meaning that the check's hint says too is said once, in the hint
+    meaning = " ".join(s for s in re.split(r"(?<=\.) ", _meaning(error)) if s not in hints)
     return "\n".join([
-        _wrap(f"{type(error).__name__} in your {name}: {error}"),
-        _wrap(f"It was raised {at}{during}. {name} got these inputs:"),
+        wrap(f"{type(error).__name__} in your {name}: {error}"),
+        wrap(f"It was raised {at}{during}. {name} got these inputs:"),
         inputs,
-        _wrap(_meaning(error)),
+        wrap(meaning),
+        *([wrap(f"{CHECK_HINT} {hints}")] if hints else []),
     ])
 
 
@@ -496,32 +641,66 @@ def _before_cell(info: Any) -> None:
 
 
 def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_offset: int | None = None) -> list[str]:
-    """IPython's handler for an exception that escapes a cell: the default traceback, or a better message."""
+    """IPython's handler for an exception that escapes a cell: the default traceback, or a better message.
+
+    Another blank is blamed only when it may be the cause: the error was raised inside it (then it comes first),
+    or it fails its own visible checks with a wrong result, not a crash (then this cell's own error comes first,
+    and the other blank once after it). A message that already says which blank fails (NotWrittenYet,
+    NotPassingYet) is shown as it is."""
     checked, required = _cell["checks"], list(_cell["uses"])
+    if checked is None and _grading():
+        shell.showtraceback((etype, value, tb), running_compiled_code=True)
+        return []
     # the blanks this cell uses: those it requires and, in a blank's check cell, the blanks that blank calls
-    called = _calls(checked) if checked else []
-    message = explain(value, tb, list(dict.fromkeys(([checked] if checked else []) + required + called)))
-    said = message or f"{etype.__name__}: {value}"
-    # NotPassingYet already names the blank that fails and what its check said: wrapping it would say it twice
-    upstream = ([] if isinstance(value, (NotWrittenYet, NotPassingYet))
-                else _not_passing([n for n in required + called if n != checked]))
-    if upstream:
-        w = _upstream(upstream)
-        message = _wrap(f"This {'check' if checked else 'cell'} uses {w['your']}, which {w['does']} not pass "
-                        f"{w['its']} visible checks yet; fix {w['that']} first, run {w['its']} check {w['cell']}, "
-                        f"then run this cell again.") + f"\n\n(The {f'check of {checked}' if checked else 'cell'} said:\n{said})"
+    others = [n for n in dict.fromkeys(required + (_calls(checked) if checked else [])) if n != checked]
+    calls, inside = _calls_through(tb, others)
+    raised_in = calls[inside[-1]][0].f_code.co_name if inside else None
+    if isinstance(value, (NotWrittenYet, NotPassingYet)):
+        blamed = []
+    elif raised_in is not None:
+        blamed = _not_passing([raised_in])  # raised inside another blank: it alone, if it fails its own checks
+    else:
+        # a blank whose own check saw it crash did not crash here: only a wrong result of it could be the cause
+        blamed = [n for n in _not_passing(others) if not _crashed(n)]
+
+    def composed(here: str) -> str | None:
+        """The message, for a reader who knows the cell that raised it as ``here``."""
+        message = explain(value, tb, ([checked] if checked else []) + others, here)
+        if message is None and isinstance(value, AssertionError) and not isinstance(value, NotPassingYet):
+            message = wrap(f"{etype.__name__}: {value}")  # a check that fails: its message, wrapped for Validate
+        if not blamed:
+            return message
+        said = message or f"{etype.__name__}: {value}"
+        blame = wrap(_blame(blamed, checked, raised_in is not None, here))
+        # the certain cause first; a possible one after what this cell's own error says
+        return f"{blame}\n\n{said}" if raised_in else f"{said}\n\n{blame}"
+
+    message = composed("this cell")
     if checked is not None and not isinstance(value, NotWrittenYet):
         _passed.pop(checked, None)
-        # both causes, as either may be the one: the blank it uses, then what its own check said
-        _failed[checked] = (_current(checked), f"Its check uses {w['your']}, which {w['does']} not pass {w['its']} own "
-                            f"visible checks yet: fix {w['that']} first. Its check cell also says:\n{said}" if upstream
-                            else f"Its check cell says:\n{said}")
+        crashed = raised_in is None and explain(value, tb, [checked]) is not None
+        # validate() quotes it under the graded cell, where "this cell" would be the wrong one
+        _failed[checked] = (_current(checked), composed("the check cell") or f"{etype.__name__}: {value}", crashed)
     if message is None:
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []
     stb = message.splitlines()
     shell._showtraceback(etype, value, stb)
     return stb
+
+
+def _blame(blamed: list[str], checked: str | None, raised_inside: bool, here: str) -> str:
+    """The sentence that blames other blanks that fail their own visible checks: as the cause (the error was
+    raised inside one), or as a possible cause beside what this cell says."""
+    w = _upstream(blamed)
+    failing = f"{w['does']} not pass {w['its']} own visible checks yet"
+    if raised_inside:
+        subject = f"The error was raised inside {w['your']}, which {failing}"
+    else:
+        subject = f"This may come from {w['your']}, which {checked or 'this cell'} uses: {w['it']} {failing}"
+    says = "says" if len(blamed) == 1 else "say"
+    return (f"{subject}. Make {w['it']} pass them first ({w['its']} check {w['cell']} {says} what is wrong), "
+            f"then run {here} again.")
 
 
 def _calls(name: str) -> list[str]:
@@ -543,8 +722,6 @@ def _hooks_installed() -> bool:
 
 
 def _install() -> None:
-    if _grading():
-        return
     shell = _shell()
     if shell is None or getattr(shell, "_course_checks_installed", False):
         return

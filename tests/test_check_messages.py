@@ -86,10 +86,14 @@ def test_an_exception_inside_a_blank_names_the_call_its_inputs_and_a_likely_caus
         assert explain(error, error.__traceback__, ["gain_information_form"]) is None
 
 
-def test_in_a_kernel_a_check_explains_the_error_and_blames_the_blank_that_fails_its_own_checks(tmp_path):
-    """A student's kernel: a sign error in one blank raises LinAlgError inside it; its check says which
-    call raised it, with the inputs and the likely cause; the check of a blank that calls it blames it;
-    Validate's validate() names both; an error outside any blank keeps IPython's own traceback."""
+def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_and_says_each_thing_once(tmp_path):
+    """A student's kernel. A sign error in gain raises LinAlgError inside it; its check says which call raised it,
+    with the inputs and the likely cause. The check of update, which calls gain, blames gain first, as the error
+    was raised inside it; Validate's validate() says that once. twice fails for its own reason (a shape error in
+    its own line) while scale, which it uses, fails its check with a wrong result: both are said, twice's own error
+    first; a blank that failed its check by crashing, and did not crash here, is not blamed. An error
+    inside a blank that passes its checks blames nobody else, and a cell that is not a check says what raised,
+    then once that a blank it uses fails its checks. An error outside any blank keeps IPython's own traceback."""
     import nbformat
     from nbclient import NotebookClient
 
@@ -102,28 +106,59 @@ def test_in_a_kernel_a_check_explains_the_error_and_blames_the_blank_that_fails_
         "validate(update)",
         "validate(gain)",
         "1 / 0",
+        'def scale(x):\n    return 3 * x',
+        'require(scale)\ncheck_close(scale(1.0), 2.0, "scale(1)", "Multiply by 2.")\npassed("scale")',
+        "def twice(x):\n    return np.eye(2) @ scale(x)",
+        'require(twice)\ncheck_close(twice(np.ones(3)), [2.0, 2.0, 2.0], "twice(ones(3))")\npassed("twice")',
+        'def half(x):\n    return np.eye(2) @ x / 2',
+        'require(half)\ncheck_close(half(np.ones(2)), [0.5, 0.5], "half(ones(2))")\npassed("half")',
+        "def halves(x):\n    return half(x)",
+        'require(halves)\ncheck_close(halves(np.ones(3)), [0.5, 0.5, 0.5], "halves(ones(3))")\npassed("halves")',
+        "require(scale)\nscale(np.ones(2)) @ np.ones(3)",
+        "def speeds(x):\n    return np.array([x[0], 0.0])",
+        'require(speeds)\ncheck_close(speeds(np.ones((2, 3))), np.zeros((2, 3)), "speeds of 3")\npassed("speeds")',
+        "def start(x0):\n    return speeds(x0) + 1.0",
+        'require(start)\ncheck_close(start(np.zeros(2)), [0.0, 0.0], "start(0)", "Start at x0.")\npassed("start")',
     ]
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
     NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
                    resources={"metadata": {"path": str(tmp_path)}}).execute()
     errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
-    text = ["\n".join(e.traceback) if e else "" for e in errors]
-    assert errors[0] is None and errors[1] is None and errors[3] is None
-    check_gain = " ".join(text[2].split())
-    assert check_gain.startswith("LinAlgError in your gain: Singular matrix"), check_gain
-    assert "`K = gain(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))` of this cell" in check_gain
-    assert "B = array of shape (2, 2), [[4., 0.], [0., 9.]]" in check_gain
-    assert "sign error or a missing term" in check_gain
-    check_update = " ".join(text[4].split())
-    assert check_update.startswith("This check uses your gain, which does not pass its visible checks yet; fix that first"), check_update
-    assert "(The check of update said: LinAlgError in your update: Singular matrix" in check_update
-    assert errors[5].ename == "NotPassingYet" and "update does not pass its visible checks yet. Its check uses your gain" in " ".join(text[5].split())
-    # update may fail for its own reason too: Validate says what its check said as well
-    assert "Its check cell also says: LinAlgError in your update" in " ".join(text[5].split()), text[5]
-    assert "gain does not pass its visible checks yet. Its check cell says: LinAlgError in your gain" in " ".join(text[6].split())
-    # said once: no "This cell uses your update, which does not pass ... (The cell said: update does not pass ...)"
-    assert all(t.count("does not pass its visible checks yet") == 1 and "This cell uses" not in t for t in text[5:7]), text[5:7]
+    text = [" ".join(re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(e.traceback)).split()) if e else "" for e in errors]
+    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19], text
+    assert text[2].startswith("LinAlgError in your gain: Singular matrix"), text[2]
+    assert "`K = gain(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))` of this cell" in text[2]
+    assert "B = array of shape (2, 2), [[4., 0.], [0., 9.]]" in text[2]
+    assert "sign error or a missing term" in text[2]
+    assert text[4].startswith("The error was raised inside your gain, which does not pass its own visible checks "
+                              "yet. Make it pass them first"), text[4]
+    assert "LinAlgError in your update: Singular matrix It was raised at the line" in text[4], text[4]
+    assert errors[5].ename == "NotPassingYet" and text[5].startswith(
+        "NotPassingYet: update does not pass its visible checks yet. Its check cell says: The error was raised "
+        "inside your gain"), text[5]
+    # quoted under the graded cell, the message names the check cell, not "this cell"
+    assert "then run the check cell again" in text[5] and "of the check cell" in text[5] and "this cell" not in text[5]
+    assert "gain does not pass its visible checks yet. Its check cell says: LinAlgError in your gain" in text[6]
     assert errors[7].ename == "ZeroDivisionError" and "in your" not in text[7]
+    # twice's own error first, then scale, once
+    assert text[11].startswith("ValueError in your twice: matmul"), text[11]
+    assert text[11].endswith("This may come from your scale, which twice uses: it does not pass its own visible "
+                             "checks yet. Make it pass them first (its check cell says what is wrong), then run "
+                             "this cell again."), text[11]
+    # raised inside half, which passes its checks: halves alone is named
+    assert text[15].startswith("ValueError in your halves: matmul") and "does not pass" not in text[15], text[15]
+    assert "at the line `return np.eye(2) @ x / 2` of half" in text[15], text[15]
+    assert text[16].startswith("ValueError: matmul") and text[16].endswith(
+        "This may come from your scale, which this cell uses: it does not pass its own visible checks yet. Make "
+        "it pass them first (its check cell says what is wrong), then run this cell again."), text[16]
+    # speeds crashed in its own check (a ragged array for a matrix input) and did not raise here: start fails for its
+    # own reason, and speeds is not blamed
+    assert text[18].startswith("ValueError in your speeds:"), text[18]
+    assert text[20] == "AssertionError: start(0) is not right: expected [0. 0.] but got [1. 1.]. Start at x0.", text[20]
+    # said once: no message holds another's, and no sentence is said twice
+    for said in text:
+        sentences = re.split(r"(?<=\.) ", said)
+        assert "said:" not in said and "(The" not in said and len(sentences) == len(set(sentences)), said
 
 
 VISIBLY_FAILED = {
@@ -210,3 +245,31 @@ def test_the_visible_checks_fail_the_mistakes_they_were_given_a_case_for(lab: La
     verdicts = visible_verdicts(lab, [(f"{m.blank}/{m.slug}", m.blank, m.apply(model[m.blank])) for m in listed])
     passed_wrongly = [key for key, error in verdicts.items() if error is None]
     assert not passed_wrongly, f"these mistakes pass the visible checks of {lab.id}: {passed_wrongly}"
+
+
+def test_while_grading_only_a_check_cells_crash_is_explained_and_validate_does_nothing(tmp_path, monkeypatch):
+    """nbgrader's autograder (NBGRADER_EXECUTION=autograde): the feedback page explains a crash in a visible check
+    cell, whose inputs are the notebook's own, with the check's hint; a crash in any other cell, which could come
+    from a hidden case, keeps IPython's own message; validate() lets every blank through."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    from course.checks import GRADING
+
+    monkeypatch.setenv("NBGRADER_EXECUTION", GRADING)
+    cells_source = [
+        "%xmode Minimal\nimport numpy as np\nfrom course.checks import check_array, passed, require, validate",
+        "def grow(B):\n    return np.eye(2) @ B",
+        'require(grow)\ncheck_array(grow(np.eye(3)), "grow(I3)", (3, 3), "Size the identity from B.")\npassed("grow")',
+        "grow(np.eye(3))",
+        "validate(grow)",
+    ]
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
+    NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
+                   resources={"metadata": {"path": str(tmp_path)}}).execute()
+    errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
+    text = [" ".join(re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(e.traceback)).split()) if e else "" for e in errors]
+    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 4], text
+    assert text[2].startswith("ValueError in your grow: matmul") and "Size the identity from B." in text[2], text[2]
+    assert "B = array of shape (3, 3)" in text[2]
+    assert "in your grow" not in text[3] and "B = array" not in text[3], text[3]

@@ -66,4 +66,5 @@ def test_validate_blames_the_blank_that_fails_its_checks_not_the_one_that_uses_i
     assert sorted(failed) == ["test_kupdate", "test_run_filter"], failed
     assert "kupdate does not pass its visible checks yet" in failed["test_kupdate"]
     assert "Check the sign of the innovation" in " ".join(failed["test_kupdate"].split())
-    assert "uses your kupdate, which does not pass its own visible checks yet" in " ".join(failed["test_run_filter"].split())
+    assert "This may come from your kupdate, which run_filter uses: it does not pass its own visible checks yet" in " ".join(
+        failed["test_run_filter"].split())

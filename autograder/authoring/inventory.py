@@ -39,8 +39,9 @@ class Inventory:
     """Claim id -> what its check verifies, for every claim the lab's text marks."""
     blank_alternatives: dict[str, int]
     """Each blank's name -> how many correct alternatives its bank holds."""
-    visible_caught: tuple[int, int]
-    """(catalogued mistakes that the visible checks fail, catalogued mistakes)."""
+    visible_caught: tuple[int, int, int]
+    """(catalogued mistakes that the visible checks fail, those of them whose message names the fix, catalogued
+    mistakes)."""
     mutation: mutants.Report
     """The mutants of the reference's blanks: killed by the hidden tests, equivalent, surviving."""
 
@@ -132,11 +133,12 @@ def print_inventory(labs: list[Lab]) -> None:
         for cid, summary in i.claims.items():
             print(textwrap.fill(f"{cid}: {summary}", 100, initial_indent="  ", subsequent_indent="      ",
                                 break_on_hyphens=False))
-        caught, mistakes = i.visible_caught
+        caught, fixed, mistakes = i.visible_caught
         m = i.mutation
         print(textwrap.fill(
             f"Right both ways: the visible checks fail {caught} of the {count(mistakes, 'catalogued mistake')} "
-            f"({caught / max(mistakes, 1):.0%}). Mutants of the reference (autograder/authoring/mutants.py): {m.mutants}, "
+            f"({caught / max(mistakes, 1):.0%}), and the message names the fix (the check's hint) for {fixed} of them "
+            f"({fixed / max(mistakes, 1):.0%} of the mistakes). Mutants of the reference (autograder/authoring/mutants.py): {m.mutants}, "
             f"of which the hidden tests kill {m.killed}, {m.equivalent} are listed as equivalent "
             f"(solutions/{i.lab.replace('-', '_')}/mutants.py) and {len(m.surviving)} survive; the message of {m.narrowed} "
             f"of the {m.killed} killed ({m.narrowed / max(m.killed, 1):.0%}) narrows the cause (the kinds of case it is "

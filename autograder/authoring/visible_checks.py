@@ -13,10 +13,12 @@ import contextlib
 import hashlib
 import io
 import linecache
+import traceback
 from collections.abc import Iterable
 
 from autograder import cells
 from autograder.labs import Lab
+from course.checks import CHECK_HINT, explain, wrap
 
 
 class SolvedNotebookFails(AssertionError):
@@ -70,11 +72,33 @@ def visible_verdicts(lab: Lab, answers: Iterable[tuple[str, str, str]]) -> dict[
     return verdicts
 
 
-def mistakes_caught(lab: Lab) -> tuple[int, int]:
-    """(how many of the lab's catalogued mistakes its visible checks fail, how many there are)."""
+def mistakes_caught(lab: Lab) -> tuple[int, int, int]:
+    """(how many of the lab's catalogued mistakes its visible checks fail, for how many of those the message
+    names the fix (``names_the_fix``), how many mistakes there are)."""
     from autograder.catalogues.mistakes import catalogue
 
     model = cells.model_answers(cells.read(lab.source_notebook))
     mistakes = catalogue(lab)
     verdicts = visible_verdicts(lab, [(m.student_id(lab), m.blank, m.apply(model[m.blank])) for m in mistakes])
-    return sum(verdicts.get(m.student_id(lab)) is not None for m in mistakes), len(mistakes)
+    failed = [(m, verdicts[m.student_id(lab)]) for m in mistakes if verdicts.get(m.student_id(lab)) is not None]
+    return len(failed), sum(names_the_fix(error, list(model)) for _, error in failed), len(mistakes)
+
+
+def visible_message(error: BaseException, blanks: list[str]) -> str:
+    """What a student reads when a check cell raises ``error``: a crash inside one of ``blanks`` (the blank
+    checked and those it calls) explained by course.checks.explain, or the check's own message, wrapped."""
+    return explain(error, error.__traceback__, blanks) or wrap(f"{type(error).__name__}: {error}")
+
+
+def names_the_fix(error: BaseException, blanks: list[str]) -> bool:
+    """Whether the message of ``error`` says what to do about it, not only what is wrong: a crash's message
+    carries the check's hint for that call, and a failed check was given a hint (a check helper without a
+    ``hint`` argument, such as check_pair, says what to do in its own words)."""
+    if not isinstance(error, AssertionError):
+        return CHECK_HINT in visible_message(error, blanks)
+    frames = [frame for frame, _ in traceback.walk_tb(error.__traceback__)]
+    raising = frames[-1] if frames else None
+    if raising is None or raising.f_globals.get("__name__") == "__main__":
+        return False  # a bare assert in a cell, or an AssertionError of the student's own
+    return bool(raising.f_locals.get("hint", True))
+
