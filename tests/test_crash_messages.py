@@ -79,13 +79,12 @@ CRASHES = {
               "    k = rng.choice(N, size=N, p=w_hat)", "normalise the weights", "ValueError"),
     ],
     "reentry-srekf": [
-        # these checks give no hint for the call that crashes: the error's usual meaning names the fix
         Crash("conditional", "R2-not-transposed", "mu[idx_a] + R2.T @ solve_triangular",
-              "mu[idx_a] + R2 @ solve_triangular", "Check the transposes", "ValueError"),
+              "mu[idx_a] + R2 @ solve_triangular", "so (31) takes R2^T", "ValueError"),
         Crash("sqrt_time_update", "S-without-the-noise-block", "np.linalg.qr(S_z @ J.T", "np.linalg.qr(S @ J.T",
-              "Check the transposes", "ValueError"),
+              "S_z = block_diag(S, S_Q)", "ValueError"),
         Crash("sqrt_measurement_update", "zero-block-n-by-n", "[S_R, np.zeros((m, n))]", "[S_R, np.zeros((n, n))]",
-              "Compare the shape of each block", "ValueError"),
+              "0 is m x n", "ValueError"),
     ],
 }
 """Per lab, answers that crash or return what is not an array, each with a phrase of its message that names the fix:
