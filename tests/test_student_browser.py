@@ -177,9 +177,10 @@ def test_a_catalogued_mistake_fails_the_visible_check_with_a_message(page: Page,
 
 def test_validate_fails_and_names_each_blank_to_fix(page: Page, jupyterlab: JupyterLab, screenshots: Path) -> None:
     """With the mistake in gain_information_form and every other blank unwritten, Validate (which
-    saves first) reports failure and names every blank (issue 14). Before that change, Validate
-    fails on the unwritten written answers only ("You did not provide a response") and names no
-    blank."""
+    saves first) reports failure and names every blank (issue 14), the code blanks first and then each
+    empty written answer by its question (issue 34). Before issue 14, Validate failed on the unwritten
+    written answers only ("You did not provide a response") and named no blank; before issue 34 the
+    written answers, which come first in the notebook, came first, each as "YOUR ANSWER HERE"."""
     write_blank_and_run(page, mistaken_answer())
     with step(page, screenshots, "05-validate-dialog"):
         page.locator(".jp-NotebookPanel-toolbar").get_by_role("button", name="Validate").click()
@@ -197,6 +198,14 @@ def test_validate_fails_and_names_each_blank_to_fix(page: Page, jupyterlab: Jupy
     assert re.search(r"fail", text, re.IGNORECASE), f"Validate's dialog does not say that it failed:\n{text}"
     unnamed = [name for name in cells.blank_names(cells.read(LAB.source_notebook)) if name not in text]
     assert not unnamed, f"Validate's dialog does not name the blanks {unnamed}:\n{text}"
+    # the code blanks first, then each empty written answer by its question (issue 34; course/validate_order.py)
+    first_written = text.find("(Your answer to this is still empty.)")
+    assert first_written > 0, f"Validate's dialog does not show the empty written answers by their question:\n{text}"
+    late = [name for name in cells.blank_names(cells.read(LAB.source_notebook)) if text.index(f"tests of {name}") > first_written]
+    assert not late, f"Validate's dialog lists the blanks {late} after a written answer:\n{text}"
+    questions = [c for c in cells.read(LAB.release_notebook).cells if c.cell_type == "markdown" and cells.meta(c).get("grade")]
+    assert text.count("(Your answer to this is still empty.)") == len(questions), text
+    assert "Derivation 1." in text and "YOUR ANSWER HERE" not in text, text
 
 
 def test_no_instructor_tool_is_shown(page: Page, screenshots: Path) -> None:

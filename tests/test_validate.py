@@ -4,13 +4,17 @@ on the solved one. It runs nbgrader's own Validator on the release notebooks."""
 
 from __future__ import annotations
 
+import re
+
 import nbformat
 from nbgrader.validator import Validator
+from traitlets.config.loader import PyFileConfigLoader
 
 from autograder import cells
 from autograder.catalogues import submissions
 from autograder.labs import Lab, get_lab
 from autograder.catalogues.mistakes import catalogue
+from autograder.release.bundle import write_jupyter_config
 from over_labs import over_labs
 
 
@@ -37,13 +41,30 @@ def _half_written(lab: Lab) -> tuple[nbformat.NotebookNode, list[str], list[str]
 
 
 @over_labs
-def test_validate_fails_on_the_blank_release_and_names_every_blank(lab, tmp_path):
+def test_validate_fails_on_the_blank_release_and_names_every_blank(lab, tmp_path, monkeypatch):
+    """With the student bundle's nbgrader configuration (course/validate_order.py, loaded as the Validate
+    button loads it), Validate lists every code blank first, in the notebook's order, then every written
+    answer, each shown by its question (issue 34: the written answers came first where they sit first,
+    and each read 'YOUR ANSWER HERE')."""
+    monkeypatch.setattr(Validator, "_preprocess", Validator._preprocess)  # put back after the test
+    write_jupyter_config(tmp_path / "jupyter_config")
+    config = PyFileConfigLoader("nbgrader_config.py", path=str(tmp_path / "jupyter_config")).load_config()
     nb = cells.read(lab.release_notebook)
     blanks = [cells.grade_id(c) for c in nb.cells if cells.is_code_answer(c)]
-    failed = _failed_code_cells(nb, tmp_path, lab.notebook_name)
-    assert sorted(failed) == sorted(f"test_{name}" for name in blanks)
-    for name in blanks:
-        assert "NotWrittenYet" in failed[f"test_{name}"] and f"{name}()" in failed[f"test_{name}"], failed[f"test_{name}"]
+    path = tmp_path / lab.notebook_name
+    nbformat.write(nb, path)
+    results = Validator(config=config).validate(str(path))
+    tests = {c.source.strip(): cells.grade_id(c) for c in nb.cells if cells.is_autograded_test(c)}
+    listed = [tests.get(f["source"], f["source"]) for f in results["failed"]]
+    assert listed[: len(blanks)] == [f"test_{name}" for name in blanks], listed
+    for name, failure in zip(blanks, results["failed"]):
+        assert "NotWrittenYet" in failure["raw_error"] and f"{name}()" in failure["raw_error"], failure["raw_error"]
+    written = [c for c in nb.cells if c.cell_type == "markdown" and cells.meta(c).get("grade")]
+    assert len(listed) == len(blanks) + len(written), listed
+    for answer in listed[len(blanks):]:
+        assert re.match(r"(Question|Derivation|Written answer)\b", answer) and answer.endswith(
+            "(Your answer to this is still empty.)"), answer
+    assert len(set(listed[len(blanks):])) == len(written), "two written answers read the same"
 
 
 @over_labs

@@ -42,6 +42,16 @@ INSTRUCTOR_SERVER_EXTENSIONS = (
 VALIDATE_SERVER_EXTENSION = "nbgrader.server_extensions.validate_assignment"
 
 
+VALIDATE_CONFIG = """\
+# Validate lists the code blanks that fail first, then the written answers, each empty one by its question
+# (course/validate_order.py). nbgrader reads this file when the Validate button or `nbgrader validate` runs.
+from course.validate_order import list_blanks_first
+
+list_blanks_first()
+"""
+"""The bundle's nbgrader configuration: Validate's order."""
+
+
 class LeakFound(RuntimeError):
     """Something that students must not see is in a tree meant for them."""
 
@@ -70,7 +80,8 @@ def student_pyproject(pyproject: str) -> str:
 
 
 def write_jupyter_config(folder: Path) -> None:
-    """Jupyter configuration that keeps Validate and turns the instructor tools off."""
+    """Jupyter configuration that keeps Validate, lists what it finds in the order to fix it, and turns the
+    instructor tools off."""
     (folder / "labconfig").mkdir(parents=True)
     (folder / "labconfig" / "page_config.json").write_text(
         json.dumps({"disabledExtensions": {plugin: True for plugin in INSTRUCTOR_LAB_PLUGINS}}, indent=2) + "\n"
@@ -79,6 +90,7 @@ def write_jupyter_config(folder: Path) -> None:
     (folder / "jupyter_server_config.json").write_text(
         json.dumps({"ServerApp": {"jpserver_extensions": extensions}}, indent=2) + "\n"
     )
+    (folder / "nbgrader_config.py").write_text(VALIDATE_CONFIG)
 
 
 def write_bundle(out: Path) -> Path:
