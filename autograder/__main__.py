@@ -46,6 +46,9 @@ def build_parser() -> argparse.ArgumentParser:
                        help="grade only the K-th of N parts of the class (split by student id), into a PostgreSQL "
                        "gradebook (GRADEBOOK_URL) that every part shares; the grades CSV defaults to "
                        "WORKDIR/grades-shard-K-of-N.csv (README: Large classes)")
+    grade.add_argument("--require-sandbox", action="store_true",
+                       help="refuse to start unless the grading kernels get the whole sandbox (both layers; README: "
+                       "The grading kernel's sandbox); the cluster recipes set it")
     export = commands.add_parser("export", help="write the grades CSV of every submission in the gradebook, without "
                                  "grading again (as nbgrader export); fails, listing them, if some are not graded "
                                  "yet or their autograded notebooks and feedback pages are not in WORKDIR")
@@ -150,14 +153,19 @@ def main(argv: list[str] | None = None) -> int:
 
         print(f"Student bundle written to {write_bundle(args.out)}; no leaks found.")
     elif args.command == "grade":
+        from autograder.pipeline.grading import SandboxIncomplete
         from autograder.pipeline.grading import grade as grade_submissions
-
         from autograder.pipeline.shards import NotShared
 
         try:
-            grade_submissions(args.submissions.resolve(), args.workdir.resolve(), args.out, args.jobs, args.shard)
-        except NotShared as error:
+            graded = grade_submissions(args.submissions.resolve(), args.workdir.resolve(), args.out, args.jobs,
+                                       args.shard, args.require_sandbox)
+        except (NotShared, SandboxIncomplete) as error:
             print(f"grade: {error}", file=sys.stderr)
+            return 1
+        if graded.problems():
+            # a scheduler (Slurm, a Kubernetes Job) then sees the task fail, and its retry grades what is missing
+            print(f"grade: not everything given was graded: {graded.problems()}.", file=sys.stderr)
             return 1
     elif args.command == "export":
         from autograder.pipeline.export import export_course, incomplete

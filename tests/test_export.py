@@ -74,3 +74,43 @@ def test_hand_grades_reach_grades_csv_through_nbgrader_export(graded):
     formgrader_gives(db_url, LAB.id, "s001", hand)
     nbgrader_export(workdir)
     assert {cell: float(read_csv(workdir / "grades.csv")[cell]) for cell in written} == hand
+
+
+def test_an_export_holds_no_row_for_a_submission_whose_grading_was_cut_short(graded, tmp_path, capsys):
+    """A submission with its gradebook rows and autograded notebook but no feedback page (a shard killed
+    while it wrote the feedback: issue 35, where grades.csv then held that student with total 0): the export
+    fails, names it, leaves its row out of grades.csv, and its counts add up to the class."""
+    import shutil
+
+    from autograder.__main__ import main
+
+    _, workdir = graded
+    cut = tmp_path / "course"
+    shutil.copytree(workdir, cut)
+    nbgrader_apps.feedback_page(cut, LAB.id, "s001").unlink()
+    assert main(["export", "--workdir", str(cut)]) == 1
+    said = capsys.readouterr()
+    assert "Exported the grades of 0 submissions" in said.out and "lacks 1 submissions" in said.err, said
+    assert "s001 train-kf: no feedback/s001/train-kf/train-kf.html" in said.err
+    with open(cut / "grades.csv") as handle:
+        assert list(csv.DictReader(handle)) == []
+
+
+def test_grade_exits_non_zero_when_it_did_not_grade_everything_and_refuses_a_partial_sandbox(tmp_path, monkeypatch, capsys):
+    """A scheduler trusts the exit status (issue 35): a folder that is not a student id is given and not graded,
+    so `grade` exits 1 and says so in one line; with --require-sandbox and a partial sandbox it grades nothing."""
+    from autograder.__main__ import main
+
+    class_dir = tmp_path / "class"
+    for student in ("s001", "=2+5"):
+        path = class_dir / student / LAB.id / LAB.notebook_name
+        path.parent.mkdir(parents=True)
+        nbformat.write(submissions.solved(LAB), path)
+    assert main(["grade", str(class_dir), "--workdir", str(tmp_path / "course"), "--jobs", "1"]) == 1
+    said = capsys.readouterr()
+    assert "grade: not everything given was graded: 1 folder not named by a student id." in said.err, said.err
+    assert "s001" in read_csv(tmp_path / "course" / "grades.csv")["student"]
+    monkeypatch.setenv("KIT_SANDBOX", "files")
+    assert main(["grade", str(class_dir), "--workdir", str(tmp_path / "strict"), "--require-sandbox"]) == 1
+    assert "grading refuses to start without the whole sandbox" in capsys.readouterr().err
+    assert not (tmp_path / "strict").exists()

@@ -26,17 +26,19 @@ from autograder.pipeline import grades
 from autograder.pipeline.nbgrader_apps import feedback_page, gradebook_url
 
 
-def not_gathered(workdir: Path, by_lab: dict[str, list[str]]) -> list[str]:
-    """For each submission of ``by_lab`` (lab id -> students) whose autograded notebook or feedback
-    page is not in the course ``workdir``, a line that says which files are missing."""
-    lines = []
+def not_gathered(workdir: Path, by_lab: dict[str, list[str]]) -> dict[tuple[str, str], str]:
+    """(student, lab id) -> a line that says which files are missing, for each submission of ``by_lab``
+    (lab id -> students) whose autograded notebook or feedback page is not in the course ``workdir``.
+    The feedback page is written last, so a submission whose grading was cut short (a killed shard)
+    is among them, whatever the gradebook already holds of it."""
+    lines = {}
     for lab_id, students in by_lab.items():
         for student in students:
             files = (workdir / "autograded" / student / lab_id / Lab(lab_id).notebook_name,
                      feedback_page(workdir, lab_id, student))
             missing = [str(path.relative_to(workdir)) for path in files if not path.exists()]
             if missing:
-                lines.append(f"{student} {lab_id}: no {' and no '.join(missing)}")
+                lines[student, lab_id] = f"{student} {lab_id}: no {' and no '.join(missing)}"
     return lines
 
 
@@ -44,12 +46,13 @@ def gradebook_rows(gradebook: Gradebook, workdir: Path, labs: Sequence[str] = ()
                    students: Sequence[str] = ()) -> tuple[list[grades.GradeRow], list[str]]:
     """The rows of every submission in ``gradebook`` of the course ``workdir`` (only of ``labs`` and
     ``students``, when given) that is graded and gathered there, and the submissions left out
-    (``not_gathered``): what ``export`` and ``report`` read."""
+    (``not_gathered``'s lines): what ``export`` and ``report`` read. No submission is in both."""
     by_lab = {a.name: sorted(s.student_id for s in a.submissions if not students or s.student_id in students)
               for a in gradebook.assignments if (ROOT / "source" / a.name).is_dir() and (not labs or a.name in labs)}
     everyone = sorted({student for students_of_lab in by_lab.values() for student in students_of_lab})
     rows = grades.read_grades(workdir, [Lab(lab_id) for lab_id in sorted(by_lab)], everyone) if everyone else []
-    return rows, not_gathered(workdir, by_lab)
+    left_out = not_gathered(workdir, by_lab)
+    return [row for row in rows if (row.student, row.lab) not in left_out], list(left_out.values())
 
 
 def export_grades(gradebook: Gradebook, workdir: Path, dest: Path, labs: Sequence[str] = (),

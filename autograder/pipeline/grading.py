@@ -99,8 +99,30 @@ def set_up(labs: list[Lab], workdir: Path, by_lab: dict[str, list[str]]) -> None
         shards.register_class(gradebook_url(workdir), config.CourseDirectory.course_id, by_lab)
 
 
+class SandboxIncomplete(RuntimeError):
+    """``grade --require-sandbox`` where the grading kernels would not get every layer of the sandbox."""
+
+
+class GradedRows(list):
+    """The rows ``grade`` wrote (a list of GradeRow), and what it was given but did not grade."""
+
+    def __init__(self, rows: list[GradeRow], not_graded: list[tuple[str, str]], skipped: list[str]) -> None:
+        super().__init__(rows)
+        self.not_graded = not_graded
+        """(student, lab) of each submission that could not be graded (nbgrader's log says why)."""
+        self.skipped = skipped
+        """The folders skipped because they are not named by a student id."""
+
+    def problems(self) -> str:
+        """One line that counts what was given and not graded, and why; empty when everything was graded."""
+        parts = ([f"{count(len(self.not_graded), 'submission')} could not be graded (see the logs named above)"]
+                 if self.not_graded else [])
+        parts += [f"{count(len(self.skipped), 'folder')} not named by a student id"] if self.skipped else []
+        return "; ".join(parts)
+
+
 def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int | None = None,
-          shard: Shard | None = None) -> list[GradeRow]:
+          shard: Shard | None = None, require_sandbox: bool = False) -> GradedRows:
     """Autograde ``submissions/<student>/<lab>/<lab>.ipynb`` in the course ``workdir``.
 
     Refuses to start unless this process can import the hidden tests and the reference, and skips
@@ -111,8 +133,12 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     Writes feedback HTML to ``workdir/feedback/`` and the grades of every graded submission in the
     course (a shard's: its own) to ``out_csv`` (default ``workdir/grades.csv``, a shard's
     ``workdir/grades-shard-K-of-N.csv``), prints the table, writes the class report (not for a shard:
-    ``report`` after ``export``), and returns the rows.
+    ``report`` after ``export``), and returns the rows, with what it did not grade. With ``require_sandbox``,
+    refuses to start (SandboxIncomplete) unless the grading kernels get every layer of the sandbox.
     """
+    if require_sandbox and not sandbox.status().complete:
+        raise SandboxIncomplete(f"{sandbox.status().summary}: grading refuses to start without the whole sandbox "
+                                "(--require-sandbox). README: The grading kernel's sandbox says what each layer needs.")
     if shard is not None:
         shards.require_server(gradebook_url(workdir))
     known = {p.parent.name for p in (ROOT / "source").glob("*/*.ipynb")}
@@ -162,4 +188,4 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
         print(f"When every shard is done: `python -m autograder export --workdir {workdir}` writes the class's "
               "grades.csv and lists any submission not graded yet, and `python -m autograder report --workdir "
               f"{workdir}` the class report.")
-    return rows
+    return GradedRows(rows, [(s, lab_id) for lab_id, students in failures.items() for s in students], rejected)
