@@ -14,7 +14,7 @@ from pathlib import Path
 from nbgrader.converters import Autograde, GenerateFeedback
 from tqdm import tqdm
 
-from autograder import cells, default_jobs
+from autograder import cells, default_jobs, private_paths
 from autograder.kernel import sandbox
 from autograder.labs import ROOT, Lab
 from autograder.pipeline import class_report, compare, late, shards
@@ -149,6 +149,9 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     for line in rejected:
         print(f"Skipped: {line}")
     check_reference_available(labs)
+    exposed = private_paths.exposed(ROOT, workdir)
+    if exposed:
+        print(private_paths.warning(exposed))
     print(sandbox_line())
     print(f"Setting up the course folder {workdir} for {count(len(labs), 'lab')} (nbgrader generate_assignment).")
     whole_class = class_list(submissions, labs)
