@@ -12,13 +12,16 @@ file is not changed, and the cells run in their own order.
 
 from __future__ import annotations
 
+import html
 import re
 from typing import Any
 
 from nbformat import NotebookNode
 
-QUESTION = re.compile(r"\*\*((?:Question|Derivation|Written answer)[^*]*)\*\*\s*(.*)", re.DOTALL)
-"""A written answer's question: its bold lead ("Question 9 (0.5 points).") and the text after it."""
+QUESTION = re.compile(r"(?:\*\*|<strong>|<b>)((?:Question|Derivation|Written answer)[^*<]*)(?:\*\*|</strong>|</b>)\s*(.*)",
+                      re.DOTALL)
+"""A written answer's question: its bold lead ("Question 9 (0.5 points).") and the text after it, in Markdown
+or, in a graded notebook whose Markdown the grader has rendered, in HTML."""
 SHOWN_CHARS = 160
 """How much of a question Validate shows for an empty answer."""
 
@@ -37,7 +40,8 @@ def question_of(nb: NotebookNode, index: int) -> str:
         found = list(QUESTION.finditer(cell.source))
         if not found:
             break
-        lead, rest = found[-1].group(1).strip(), " ".join(found[-1].group(2).split())
+        lead = html.unescape(found[-1].group(1)).strip()
+        rest = " ".join(html.unescape(re.sub(r"<[^>]*>", "", found[-1].group(2))).split())
         sentence = re.split(r"(?<=[.?])\s", rest, maxsplit=1)[0]
         text = f"{lead} {sentence}".strip()
         return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 3].rstrip() + "..."

@@ -66,9 +66,14 @@ def test_written_answers_not_graded_yet_say_so(graded):
     for cell in written(row):
         heading = panel_heading(text, cell)
         assert "not graded yet" in heading and "Score" not in heading, heading
-    toc = re.findall(r"<li>.*?</li>", text, re.S)
-    written_lines = [re.sub(r"<[^>]*>|\s+", " ", li) for li in toc if "Written response" in li]
+    toc = [" ".join(html.unescape(re.sub(r"<[^>]*>", " ", li)).split()) for li in re.findall(r"<li>.*?</li>", text, re.S)]
+    written_lines = [li for li in toc if "Written answer:" in li]
     assert len(written_lines) == len(written(row)) and all("not graded yet" in li for li in written_lines), written_lines
+    # each entry named (issue 36: a list of "Written response", "Comment" and "Test cell" said nothing)
+    assert any(li.startswith("Written answer: Derivation 1. Show that") for li in written_lines), written_lines
+    assert any(li.startswith("Test cell test_kupdate (Score: 0.0") for li in toc), toc
+    assert not any(li.startswith(("Written response", "Test cell (", "Comment")) and not li.startswith("Comment on")
+                   for li in toc), toc
     points = sum(row.max_cells[c] for c in written(row))
     assert f"written answers worth {points:.1f} points are not graded yet" in text
     assert panel_heading(text, "test_kupdate").startswith("Grade cell: test_kupdate Score: 0.0 /")

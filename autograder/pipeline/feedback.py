@@ -22,6 +22,7 @@ from nbgrader.preprocessors import GetGrades
 
 from autograder import cells
 from course.checks import listed
+from course.validate_order import question_of
 
 TEMPLATES = Path(__file__).resolve().parent / "templates"
 """The kit's nbconvert templates."""
@@ -61,8 +62,9 @@ def cross_blank_note(blank: str, others_lost: list[str]) -> str:
 
 class FeedbackGrades(GetGrades):
     """nbgrader's GetGrades, which also marks written answers not graded yet (``needs_manual_grade``),
-    totals their points (``resources['nbgrader']['ungraded_points']``), and notes at a test cell
-    with full marks whose blank's visible check failed (``kit_note``)."""
+    totals their points (``resources['nbgrader']['ungraded_points']``), notes at a test cell
+    with full marks whose blank's visible check failed (``kit_note``), and gives each written answer
+    its question (``kit_question``), which names it in the page's list of contents."""
 
     def _get_score(self, cell: NotebookNode, resources: dict) -> None:
         super()._get_score(cell, resources)
@@ -75,6 +77,10 @@ class FeedbackGrades(GetGrades):
         graded = [c for c in nb.cells if cells.meta(c).get("grade")]
         resources["nbgrader"]["ungraded_points"] = sum(
             c.metadata.nbgrader.get("points") or 0 for c in graded if c.metadata.nbgrader.get("needs_manual_grade"))
+        for index, cell in enumerate(nb.cells):
+            if cell.cell_type == "markdown" and cells.meta(cell).get("grade"):
+                # the contents list names each written answer by its question, not "Written response" each time
+                cell.metadata.nbgrader["kit_question"] = question_of(nb, index)
         tests = {cells.grade_id(c).removeprefix("test_"): c for c in graded if cells.grade_id(c).startswith("test_")}
         lost = [blank for blank, c in tests.items()
                 if (c.metadata.nbgrader.get("score") or 0) < c.metadata.nbgrader.get("points", 0)]
