@@ -33,7 +33,20 @@ class NotPassingYet(AssertionError):
 
 
 def require(*functions: Callable) -> None:
-    """Stop a cell early, with a clear message, if a blank it needs is not written yet."""
+    """Stop a cell early, with a clear message, if a blank it needs is not written yet. In a cell that
+    shows results (not a blank's check cell), say first which of the blanks it needs do not pass their
+    visible checks: what the cell prints may then be wrong, with nothing else to tell."""
+    _require_written(functions)
+    if _hooks_installed() and _cell["checks"] is None:
+        failing = _not_passing([getattr(f, "__name__", "") for f in functions])
+        if failing:
+            w = _upstream(failing)
+            print(wrap(f"Note: {w['your']} {w['does']} not pass {w['its']} visible checks yet, so what this cell "
+                        "shows may be wrong."))
+
+
+def _require_written(functions: tuple[Callable, ...]) -> None:
+    """``require`` without the note: raise NotWrittenYet if one of ``functions`` still holds its stub."""
     if _hooks_installed():
         _cell["uses"].extend(getattr(f, "__name__", "") for f in functions)
     missing = [f.__name__ for f in functions if NOT_WRITTEN in getattr(getattr(f, "__code__", None), "co_consts", ())]
@@ -81,9 +94,20 @@ def check_pair(value: Any, name: str, first: str, second: str) -> tuple[Any, Any
     if not isinstance(value, (tuple, list)) or len(value) != 2:
         raise AssertionError(
             f"{name} should return two things, ({first}, {second}), for example "
-            f"`return {first}, {second}`. It returned {type(value).__name__}."
+            f"`return {first}, {second}`. It returned {_returned(value)}."
         )
     return value[0], value[1]
+
+
+def _returned(value: Any) -> str:
+    """What a function returned, said so that the difference from what was wanted shows."""
+    if value is None:
+        return "None: does it end with a return?"
+    if isinstance(value, (tuple, list)):
+        return f"a {type(value).__name__} of {count(len(value), 'item')}"
+    if isinstance(value, np.ndarray):
+        return f"one array of shape {value.shape}, not a tuple of two"
+    return f"a {type(value).__name__}"
 
 
 def check_close(
@@ -379,9 +403,11 @@ def _not_passing(names: list[str]) -> list[str]:
 
 
 def _agreeing(n: int) -> dict[str, str]:
-    """The words that agree with ``n`` blanks: "it ... its cell ... does ... that", or "them ... their cells ... do ... those"."""
+    """The words that agree with ``n`` blanks: "it ... it ... its cell ... does ... that", or "them ... they ... their cells ...
+    do ... those"."""
     one = n == 1
-    return {"it": "it" if one else "them", "its": "its" if one else "their", "cell": "cell" if one else "cells",
+    return {"it": "it" if one else "them", "they": "it" if one else "they", "its": "its" if one else "their",
+            "cell": "cell" if one else "cells",
             "does": "does" if one else "do", "that": "that" if one else "those"}
 
 
@@ -400,7 +426,7 @@ def validate(function: Callable) -> None:
     """
     if _grading():
         return
-    require(function)
+    _require_written((function,))
     name = function.__name__
     if _passed.get(name) is function:
         return
@@ -619,7 +645,9 @@ def explain(error: BaseException, tb: Any, blanks: list[str], here: str = "this 
     # a sentence of the meaning that the check's hint says too is said once, in the hint
     meaning = " ".join(s for s in re.split(r"(?<=\.) ", _meaning(error)) if s not in hints)
     return "\n".join([
-        wrap(f"{type(error).__name__} in your {name}: {error}"),
+        # both blanks when one raised inside the other: the fault is in the callee, or in what the caller gave it
+        wrap(f"{type(error).__name__} in your {name}"
+             + (f" (raised inside your {inner.f_code.co_name})" if inner.f_code.co_name != name else "") + f": {error}"),
         wrap(f"It was raised {at}{during}. {name} got these inputs:"),
         inputs,
         wrap(meaning),
@@ -697,10 +725,10 @@ def _blame(blamed: list[str], checked: str | None, raised_inside: bool, here: st
     if raised_inside:
         subject = f"The error was raised inside {w['your']}, which {failing}"
     else:
-        subject = f"This may come from {w['your']}, which {checked or 'this cell'} uses: {w['it']} {failing}"
+        subject = f"This may come from {w['your']}, which {checked or 'this cell'} uses: {w['they']} {failing}"
     says = "says" if len(blamed) == 1 else "say"
-    return (f"{subject}. Make {w['it']} pass them first ({w['its']} check {w['cell']} {says} what is wrong), "
-            f"then run {here} again.")
+    return (f"{subject}. Make {w['it']} pass {w['its']} checks first ({w['its']} check {w['cell']} {says} what is "
+            f"wrong), then run {here} again.")
 
 
 def _calls(name: str) -> list[str]:

@@ -107,7 +107,7 @@ def test_a_crash_in_a_blank_names_the_blank_its_line_and_the_checks_hint(lab: La
         error = verdicts[f"{crash.blank}/{crash.slug}"]
         message = "" if error is None else visible_message(error, list(model))
         flat = " ".join(message.split())
-        wanted = [f"{crash.raises} in your {crash.blank}:", "It was raised at the line"] if crash.raises else []
+        wanted = [f"{crash.raises} in your {crash.blank}", "It was raised at the line"] if crash.raises else []
         wanted += [crash.says] if crash.says else []
         missing = [phrase for phrase in wanted if phrase not in flat]
         too_wide = [line for line in message.splitlines() if len(line) > LINE_WIDTH and " " in line.strip()]
