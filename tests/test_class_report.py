@@ -14,6 +14,7 @@ import pytest
 from autograder import cells
 from autograder.catalogues import cheats, faults, submissions
 from autograder.catalogues.mistakes import catalogue
+from autograder.authoring import visible_checks
 from autograder.catalogues.synthetic_class import cheat_outcome
 from autograder.labs import get_lab
 from autograder.pipeline import class_report, grading, late, verdicts
@@ -37,7 +38,11 @@ def write_class(folder) -> dict:
     and one solved notebook submitted two days late: what the report must count."""
     submissions.write(cells.read(LAB.release_notebook), folder, "blank", LAB)
     for k in (1, 2):
-        submissions.write(submissions.solved(LAB), folder, f"solved-{k}", LAB)
+        nb = submissions.solved(LAB)
+        if k == 1:  # a failed visible check the submission claims is not the grader's record
+            [check] = [c for c in nb.cells if cells.is_visible_check(c) and cells.grade_id(c) == "check_nees"]
+            check.metadata[verdicts.VISIBLE_CHECK_KEY] = True
+        submissions.write(nb, folder, f"solved-{k}", LAB)
     for slug, times in MISTAKES.items():
         for k in range(times):
             nb = submissions.with_mistake(LAB, mistake(slug))
@@ -62,6 +67,14 @@ def read(path) -> list[dict]:
 def counted(folder) -> dict[tuple[str, str, str], int]:
     """(cell, what, detail) -> count, from the report's CSV."""
     return {(r["cell"], r["what"], r["detail"]): int(r["count"]) for r in read(folder / f"{LAB.id}.csv")}
+
+
+def behind(folder) -> dict[tuple[str, str, str], set[str]]:
+    """(cell, what, detail) -> the students behind that count, from the report's students file."""
+    found: dict[tuple[str, str, str], set[str]] = {}
+    for r in read(folder / f"{LAB.id}-students.csv"):
+        found.setdefault((r["cell"], r["what"], r["detail"]), set()).add(r["student"])
+    return found
 
 
 @pytest.fixture(scope="module")
@@ -100,9 +113,7 @@ def test_every_count_is_the_number_the_class_was_built_with(graded):
 
 def test_the_students_file_names_the_students_behind_each_count(graded):
     root, built, _ = graded
-    by_count: dict[tuple[str, str, str], set[str]] = {}
-    for r in read(root / "course" / "report" / f"{LAB.id}-students.csv"):
-        by_count.setdefault((r["cell"], r["what"], r["detail"]), set()).add(r["student"])
+    by_count = behind(root / "course" / "report")
     assert by_count["test_predict", class_report.MISTAKE, "no-Q"] == {"no-Q-0", "no-Q-1", "no-Q-2"}
     assert by_count["test_kupdate", class_report.MISTAKE, "innovation-sign"] == {"innovation-sign-0", "innovation-sign-1"}
     assert by_count["", class_report.FLAGGED, ""] == {CHEAT.name}
@@ -126,6 +137,41 @@ def test_the_page_is_self_contained_and_runs_no_script(graded):
     assert "<script" not in text.lower() and not re.search(r"(https?:)?//[a-z0-9]", text, re.I)
     assert (root / "course" / "report" / f"{LAB.id}.png").read_bytes().startswith(b"\x89PNG")
     assert "no-Q-0" not in page  # counts only: no student is named
+
+
+def raising(blank: str) -> str:
+    """An answer to ``blank`` whose function raises when called."""
+    return f"def {blank}(*args, **kwargs):\n    raise RuntimeError('no answer in the grading kernel')\n"
+
+
+def test_the_submissions_with_failing_visible_checks_are_counted(graded):
+    """Per blank and per lab, as the solved notebook run here with each student's answers says
+    (autograder/authoring/visible_checks.py); the blank, solved and late submissions fail none (an
+    unwritten blank is counted as not written)."""
+    root, built, rows = graded
+    model = cells.model_answers(cells.read(LAB.source_notebook))
+    answers = {f"{slug}-{k}": {mistake(slug).blank: mistake(slug).apply(model[mistake(slug).blank])}
+               for slug, times in MISTAKES.items() for k in range(times)}
+    # in the grading kernel the cheat's import of the reference fails (the sandbox) and the fault's blank
+    # kills its kernel: for the checks, each is a function that raises when called
+    tests = [c for c in rows[0].cells if c in rows[0].autograded]
+    gamed = tests if built["gamed"] is None else built["gamed"]
+    answers[CHEAT.name] = {cell.removeprefix("test_"): raising(cell.removeprefix("test_")) for cell in gamed}
+    answers[built["fault"]] = {built["first"]: raising(built["first"])}
+    runs: dict[str, set[str]] = {}
+    failing = {student: runs.setdefault(repr(sorted(given.items())), visible_checks.failing_checks(LAB, given))
+               for student, given in answers.items()}
+    found = counted(root / "course" / "report")
+    for cell in tests:
+        assert found[cell, class_report.VISIBLE_FAILED, ""] == sum(cell.removeprefix("test_") in f for f in failing.values()), cell
+    by_count = behind(root / "course" / "report")
+    assert by_count["", class_report.VISIBLE_FAILED, ""] == {student for student, f in failing.items() if f}
+    assert found["", class_report.VISIBLE_FAILED, ""] == len(by_count["", class_report.VISIBLE_FAILED, ""]) > 0
+    page = (root / "course" / "report" / f"{LAB.id}.html").read_text()
+    assert page.count("visible checks failed") == len(tests) + 1
+    # information only: the mistakes' students lose the points of their mistake's blank alone
+    assert all(row.lost == [f"test_{mistake(row.student.rsplit('-', 1)[0]).blank}"] for row in rows
+               if row.student in answers and row.student.rsplit("-", 1)[0] in MISTAKES)
 
 
 def test_regrading_one_student_replaces_their_diagnosis(graded, tmp_path):

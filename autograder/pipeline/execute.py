@@ -181,6 +181,7 @@ class GradingExecute(Execute):
                 restarts += 1
                 self._restart_and_replay(index, failed, deadline)
         notes += self._output.notes(lambda i: _name(self.nb.cells[i], i))
+        verdicts.record_visible_checks(self.nb, NOT_RUN)
         _whole_execution_counts(self.nb)
         add_grader_notes(self.nb, notes)
         self.set_widgets_metadata()

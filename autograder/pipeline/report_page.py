@@ -46,6 +46,8 @@ def _blank_section(counts: LabCounts, blank: BlankCounts) -> str:
     rows.append(("lost another way", len(blank.other_students),
                  ", ".join(f"{name}: {len(students)}" for name, students in blank.other.items())))
     rows.append(("not written", len(blank.not_written), ""))
+    rows.append(("visible checks failed", len(blank.visible_failed),
+                 "written, and handed in with a visible check that raised an error when graded (whatever the score)"))
     return f"<h3>{escape(blank.blank)}</h3><table>{_rows(rows)}</table>"
 
 
@@ -82,7 +84,9 @@ function gave that mistake's results. Lost another way: the test failed otherwis
 <table>{_rows([("flagged for review", len(counts.flagged), "the integrity scan found something"),
                ("late", len(counts.late), "a late penalty was taken"),
                ("faulted", len(counts.faulted), "the grader noted a change or a fault: a stopped cell, a dead "
-                "kernel, restored cells, cut output")])}</table>
+                "kernel, restored cells, cut output"),
+               ("visible checks failed", len(counts.visible_failed), "handed in with a written blank whose "
+                "visible checks raised an error; not part of any score")])}</table>
 <h2>Written answers waiting for a hand grade</h2>
 {waiting}
 </body></html>
