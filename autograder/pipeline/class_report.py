@@ -2,8 +2,9 @@
 
 Each autograded test cell of each graded submission has one outcome: full marks; lost to a
 catalogued mistake (the diagnosis the grader recorded as data while grading, ``GradeRow.diagnosed``,
-never read back out of a message); lost another way (grouped by the name of the error that failed
-it); or not written (its blank still holds the released stub). Per lab, the report also counts the
+never read back out of a message); lost another way (grouped by the kind of case that alone it was
+wrong on, when the grader recorded one, ``GradeRow.wrong_only``, else by the name of the error that
+failed it); or not written (its blank still holds the released stub). Per lab, the report also counts the
 submissions flagged for review, late, and faulted (a grader's note other than a flag: a stopped
 cell, a dead kernel, restored cells), the submissions handed in with a written blank whose visible
 checks failed (per blank and in all, from the record the grader made while grading,
@@ -31,6 +32,8 @@ FULL, MISTAKE, OTHER, NOT_WRITTEN = "full marks", "catalogued mistake", "lost an
 """The outcomes of one test cell of one submission."""
 FLAGGED_DETAIL = "in a submission flagged for review"
 """The detail of a blank lost in a flagged submission that no catalogued mistake explains."""
+WRONG_ONLY = report_page.WRONG_ONLY_LEAD + " {}"
+"""The detail of a blank lost another way, wrong on one kind of case alone ("a full R")."""
 SUBMITTED, FLAGGED, LATE, FAULTED, WAITING, SCORE, VISIBLE_FAILED = (
     "graded", "flagged", "late", "faulted", "waiting for a hand grade", "autograded score", "visible checks failed")
 """The lab's other counts, as the CSVs name them."""
@@ -45,7 +48,7 @@ class BlankCounts:
     mistakes: dict[str, tuple[str, ...]]
     """Mistake slug -> students, most common first."""
     other: dict[str, tuple[str, ...]]
-    """The failing error's name -> students, most common first."""
+    """The kind of case alone wrong (WRONG_ONLY), or else the failing error's name -> students, most common first."""
     not_written: tuple[str, ...]
     visible_failed: tuple[str, ...]
     """The students who wrote the blank and handed it in with its visible checks failing (whatever its score)."""
@@ -105,7 +108,8 @@ def _by_size(groups: dict[str, list[str]]) -> dict[str, tuple[str, ...]]:
 
 def outcome(row: GradeRow, cell: str, mistakes: dict[tuple[str, str], Mistake]) -> tuple[str, str]:
     """The outcome of the test cell ``cell`` in ``row``, and its detail: the mistake's slug, or the
-    failing error's name (a slug the lab does not catalogue counts as lost another way)."""
+    kind of case that alone it was wrong on, or the failing error's name (a slug the lab does not
+    catalogue counts as lost another way)."""
     if (row.cells[cell] or 0.0) >= row.max_cells[cell]:
         return FULL, ""
     if cell in row.not_written:
@@ -115,6 +119,8 @@ def outcome(row: GradeRow, cell: str, mistakes: dict[tuple[str, str], Mistake]) 
         return MISTAKE, slug
     if row.flags:  # the scan's flag zeroes the blanks a finding games: the error then says nothing of the cause
         return OTHER, FLAGGED_DETAIL
+    if cell in row.wrong_only:
+        return OTHER, WRONG_ONLY.format(row.wrong_only[cell])
     return OTHER, row.reasons.get(cell, "no reason recorded").partition(":")[0].strip()
 
 
