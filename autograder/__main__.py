@@ -56,7 +56,8 @@ def build_parser() -> argparse.ArgumentParser:
     export.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
     report = commands.add_parser("report", help="write the class report of each graded lab into WORKDIR/report/: "
                                  "an HTML page of counts (scores, each blank's full marks, catalogued mistakes, other "
-                                 "losses and unwritten blanks; flagged, late and faulted submissions; written answers "
+                                 "losses and unwritten blanks, failing visible checks; flagged, late and faulted "
+                                 "submissions; written answers "
                                  "waiting for a hand grade), its figure (PNG), the counts (CSV) and the students behind "
                                  "each count (<lab>-students.csv), read from the gradebook as export reads it")
     report.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder (default: the course root)")

@@ -36,6 +36,17 @@ def is_autograded_test(cell: NotebookNode) -> bool:
     return bool(meta(cell).get("grade")) and not meta(cell).get("solution") and cell.cell_type == "code"
 
 
+CHECK_PREFIX = "check_"
+"""The grade id of a blank's visible check cell is this prefix and the blank's name."""
+
+
+def is_visible_check(cell: NotebookNode) -> bool:
+    """A blank's visible check cell: a locked, ungraded code cell whose grade id is ``check_<blank>``
+    (it ends with ``passed("<blank>")``)."""
+    return (cell.cell_type == "code" and not meta(cell).get("grade") and not meta(cell).get("solution")
+            and str(meta(cell).get("grade_id", "")).startswith(CHECK_PREFIX))
+
+
 def grade_id(cell: NotebookNode) -> str:
     return meta(cell)["grade_id"]
 

@@ -63,10 +63,20 @@ def start_grade(class_dir: Path, workdir: Path, db_url: str | None, log: Path, *
     return Run(process, log)
 
 
+def run_command(command: str, workdir: Path, db_url: str) -> subprocess.CompletedProcess:
+    """`python -m autograder COMMAND --workdir WORKDIR` (its exit status is not checked)."""
+    return subprocess.run([sys.executable, "-m", "autograder", command, "--workdir", str(workdir)], cwd=ROOT,
+                          env=environment(db_url), capture_output=True, text=True, timeout=300)
+
+
 def export(workdir: Path, db_url: str) -> subprocess.CompletedProcess:
     """`python -m autograder export --workdir WORKDIR` (its exit status is not checked)."""
-    return subprocess.run([sys.executable, "-m", "autograder", "export", "--workdir", str(workdir)], cwd=ROOT,
-                          env=environment(db_url), capture_output=True, text=True, timeout=300)
+    return run_command("export", workdir, db_url)
+
+
+def report(workdir: Path, db_url: str) -> subprocess.CompletedProcess:
+    """`python -m autograder report --workdir WORKDIR`, the class report after `export` (not checked either)."""
+    return run_command("report", workdir, db_url)
 
 
 def csv_rows(path: Path) -> list[list[str]]:

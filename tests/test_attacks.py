@@ -412,12 +412,12 @@ def test_the_references_cost_on_the_students_inputs_stays_out_of_the_grader(runs
 
 def test_a_check_that_crashes_or_hangs_stops_alone():
     """The child that runs a check can die or hang without taking the grader with it."""
-    crashed, printed, mistake = confined_check.run(lambda: os.kill(os.getpid(), signal.SIGKILL), None, 0)
-    assert printed == 0 and mistake is None and [o.ename for o in crashed] == ["GradingError"] and "signal 9" in crashed[0].evalue
+    crashed, printed, mistake, wrong_on = confined_check.run(lambda: os.kill(os.getpid(), signal.SIGKILL), None, 0)
+    assert printed == 0 and mistake is None and wrong_on is None and [o.ename for o in crashed] == ["GradingError"] and "signal 9" in crashed[0].evalue
     with pytest.raises(PeerTimeout):
         confined_check.run(lambda: time.sleep(60), time.monotonic() + 0.5, 0)
     outputs = [error_output("AssertionError", "wrong")]
-    assert confined_check.run(lambda: (outputs, 7, "no-Q"), None, 2**30) == (outputs, 7, "no-Q")
+    assert confined_check.run(lambda: (outputs, 7, "no-Q", "a full R"), None, 2**30) == (outputs, 7, "no-Q", "a full R")
     with pytest.raises(confined_check.CheckFailed, match="MemoryError"):
         confined_check.run(lambda: bytearray(2**31), None, 2**30)
 

@@ -13,17 +13,23 @@ import pytest
 
 from autograder import cells
 from autograder.catalogues import cheats, faults, submissions
-from autograder.catalogues.mistakes import catalogue
+from autograder.catalogues.mistakes import Mistake, catalogue
+from autograder.authoring import visible_checks
 from autograder.catalogues.synthetic_class import cheat_outcome
 from autograder.labs import get_lab
 from autograder.pipeline import class_report, grading, late, verdicts
+from autograder.hidden_tests.case_kinds import wrong_only
 from autograder.pipeline.grades import GradeRow
+from lab_code import define, hidden_tests
 from over_labs import about
 
 LAB = get_lab("train-kf")
 MISTAKES = {"no-Q": 3, "innovation-sign": 2}
 """Catalogued mistake -> how many students make it."""
 CHEAT, FAULT = cheats.get("import-reference"), faults.get("kernel-dies")
+UNCATALOGUED = Mistake("nees", "divided-by-n-squared", "divides e^T B^-1 e by n^2", "return np.sum(errors * scaled, axis=1)",
+                       "return np.sum(errors * scaled, axis=1) / errors.shape[1] ** 2")
+"""A mistake no catalogue holds, right on the hidden cases with n = 1 alone: lost another way, wrong on one kind of case."""
 pytestmark = about(LAB)
 
 
@@ -33,18 +39,26 @@ def mistake(slug: str):
 
 
 def write_class(folder) -> dict:
-    """blank, 2 solved, each of MISTAKES as often as it says, one cheat, one fault in the first blank,
-    and one solved notebook submitted two days late: what the report must count."""
+    """blank, 2 solved, each of MISTAKES as often as it says, UNCATALOGUED, one cheat, one fault in the
+    first blank, and one solved notebook submitted two days late: what the report must count."""
     submissions.write(cells.read(LAB.release_notebook), folder, "blank", LAB)
     for k in (1, 2):
-        submissions.write(submissions.solved(LAB), folder, f"solved-{k}", LAB)
+        nb = submissions.solved(LAB)
+        if k == 1:  # a failed visible check the submission claims is not the grader's record
+            [check] = [c for c in nb.cells if cells.is_visible_check(c) and cells.grade_id(c) == "check_nees"]
+            check.metadata[verdicts.VISIBLE_CHECK_KEY] = True
+        submissions.write(nb, folder, f"solved-{k}", LAB)
     for slug, times in MISTAKES.items():
         for k in range(times):
             nb = submissions.with_mistake(LAB, mistake(slug))
             if slug == "no-Q" and k == 0:  # a diagnosis the submission forges is not the grader's
                 [test] = [c for c in nb.cells if cells.is_autograded_test(c) and cells.grade_id(c) == "test_nees"]
                 test.metadata[verdicts.DIAGNOSIS_KEY] = "root"
+            if slug == "innovation-sign" and k == 1:  # nor is a kind of case alone wrong
+                [test] = [c for c in nb.cells if cells.is_autograded_test(c) and cells.grade_id(c) == "test_kupdate"]
+                test.metadata[verdicts.WRONG_ONLY_KEY] = "a full R"
             submissions.write(nb, folder, f"{slug}-{k}", LAB)
+    submissions.write(submissions.with_mistake(LAB, UNCATALOGUED), folder, "uncatalogued", LAB)
     submissions.write(CHEAT.notebook(LAB), folder, CHEAT.name, LAB)
     first = LAB.blanks()[0]
     fault = faults.write_fault(FAULT, LAB, first, folder)
@@ -64,6 +78,14 @@ def counted(folder) -> dict[tuple[str, str, str], int]:
     return {(r["cell"], r["what"], r["detail"]): int(r["count"]) for r in read(folder / f"{LAB.id}.csv")}
 
 
+def behind(folder) -> dict[tuple[str, str, str], set[str]]:
+    """(cell, what, detail) -> the students behind that count, from the report's students file."""
+    found: dict[tuple[str, str, str], set[str]] = {}
+    for r in read(folder / f"{LAB.id}-students.csv"):
+        found.setdefault((r["cell"], r["what"], r["detail"]), set()).add(r["student"])
+    return found
+
+
 @pytest.fixture(scope="module")
 def graded(tmp_path_factory):
     root = tmp_path_factory.mktemp("class-report")
@@ -76,19 +98,22 @@ def test_every_count_is_the_number_the_class_was_built_with(graded):
     root, built, rows = graded
     found = counted(root / "course" / "report")
     students = len(rows)
-    assert students == 2 + sum(MISTAKES.values()) + 4 and found["", class_report.SUBMITTED, ""] == students
+    assert students == 2 + sum(MISTAKES.values()) + 5 and found["", class_report.SUBMITTED, ""] == students
     tests = [c for c in rows[0].cells if c in rows[0].autograded]
     gamed = set(tests if built["gamed"] is None else built["gamed"])
     for cell in tests:
         blank = cell.removeprefix("test_")
         wrong = {m: n for m, n in MISTAKES.items() if mistake(m).blank == blank}
-        other = (cell == f"test_{built['first']}") + (cell in gamed)
+        other = (cell == f"test_{built['first']}") + (cell in gamed) + (cell == f"test_{UNCATALOGUED.blank}")
         assert found[cell, class_report.NOT_WRITTEN, ""] == 1, cell
         assert found[cell, class_report.FULL, ""] == students - 1 - sum(wrong.values()) - other, cell
         assert {d: n for (c, what, d), n in found.items() if c == cell and what == class_report.MISTAKE} == wrong, cell
         assert sum(n for (c, what, _), n in found.items() if c == cell and what == class_report.OTHER) == other, cell
         # the cheat's blanks: lost in a flagged submission, said so rather than by the zeroed cell's error
         assert found.get((cell, class_report.OTHER, class_report.FLAGGED_DETAIL), 0) == (cell in gamed), cell
+        # the uncatalogued mistake: by the kind of case that alone it is wrong on, as its hidden test says here
+        wrong_on = class_report.WRONG_ONLY.format(uncatalogued_wrong_on())
+        assert found.get((cell, class_report.OTHER, wrong_on), 0) == (cell == f"test_{UNCATALOGUED.blank}"), cell
     assert found["", class_report.FLAGGED, ""] == 1 and found["", class_report.LATE, ""] == 1
     assert found["", class_report.FAULTED, ""] == 1
     scores = sum(n for (c, what, _), n in found.items() if what == class_report.SCORE)
@@ -100,9 +125,7 @@ def test_every_count_is_the_number_the_class_was_built_with(graded):
 
 def test_the_students_file_names_the_students_behind_each_count(graded):
     root, built, _ = graded
-    by_count: dict[tuple[str, str, str], set[str]] = {}
-    for r in read(root / "course" / "report" / f"{LAB.id}-students.csv"):
-        by_count.setdefault((r["cell"], r["what"], r["detail"]), set()).add(r["student"])
+    by_count = behind(root / "course" / "report")
     assert by_count["test_predict", class_report.MISTAKE, "no-Q"] == {"no-Q-0", "no-Q-1", "no-Q-2"}
     assert by_count["test_kupdate", class_report.MISTAKE, "innovation-sign"] == {"innovation-sign-0", "innovation-sign-1"}
     assert by_count["", class_report.FLAGGED, ""] == {CHEAT.name}
@@ -110,12 +133,24 @@ def test_the_students_file_names_the_students_behind_each_count(graded):
     assert by_count["", class_report.LATE, ""] == {"late"}
 
 
+def uncatalogued_wrong_on() -> str:
+    """The kind of case that alone UNCATALOGUED is wrong on, from its hidden test run here."""
+    model = cells.model_answers(cells.read(LAB.source_notebook))[UNCATALOGUED.blank]
+    with pytest.raises(AssertionError) as caught:
+        getattr(hidden_tests(LAB), f"check_{UNCATALOGUED.blank}")(define(LAB, UNCATALOGUED.apply(model), UNCATALOGUED.blank))
+    assert wrong_only(caught.value) is not None
+    return wrong_only(caught.value)
+
+
 def test_the_diagnosis_is_the_graders_data(graded):
-    """Recorded beside the verdict for exactly the diagnosed cells; the one a submission brought is gone."""
+    """Recorded beside the verdict for exactly the diagnosed cells; the one a submission brought is gone.
+    So is the kind of case alone wrong, for every cell lost where the hidden test's cases split so."""
     _, _, rows = graded
     diagnosed = {row.student: row.diagnosed for row in rows if row.diagnosed}
     assert diagnosed == {**{f"no-Q-{k}": {"test_predict": "no-Q"} for k in range(3)},
                          **{f"innovation-sign-{k}": {"test_kupdate": "innovation-sign"} for k in range(2)}}
+    wrong_on = {row.student: row.wrong_only for row in rows if row.wrong_only}
+    assert wrong_on == {"uncatalogued": {f"test_{UNCATALOGUED.blank}": uncatalogued_wrong_on()}}
 
 
 def test_the_page_is_self_contained_and_runs_no_script(graded):
@@ -128,6 +163,42 @@ def test_the_page_is_self_contained_and_runs_no_script(graded):
     assert "no-Q-0" not in page  # counts only: no student is named
 
 
+def raising(blank: str) -> str:
+    """An answer to ``blank`` whose function raises when called."""
+    return f"def {blank}(*args, **kwargs):\n    raise RuntimeError('no answer in the grading kernel')\n"
+
+
+def test_the_submissions_with_failing_visible_checks_are_counted(graded):
+    """Per blank and per lab, as the solved notebook run here with each student's answers says
+    (autograder/authoring/visible_checks.py); the blank, solved and late submissions fail none (an
+    unwritten blank is counted as not written)."""
+    root, built, rows = graded
+    model = cells.model_answers(cells.read(LAB.source_notebook))
+    answers = {f"{slug}-{k}": {mistake(slug).blank: mistake(slug).apply(model[mistake(slug).blank])}
+               for slug, times in MISTAKES.items() for k in range(times)}
+    answers["uncatalogued"] = {UNCATALOGUED.blank: UNCATALOGUED.apply(model[UNCATALOGUED.blank])}
+    # in the grading kernel the cheat's import of the reference fails (the sandbox) and the fault's blank
+    # kills its kernel: for the checks, each is a function that raises when called
+    tests = [c for c in rows[0].cells if c in rows[0].autograded]
+    gamed = tests if built["gamed"] is None else built["gamed"]
+    answers[CHEAT.name] = {cell.removeprefix("test_"): raising(cell.removeprefix("test_")) for cell in gamed}
+    answers[built["fault"]] = {built["first"]: raising(built["first"])}
+    runs: dict[str, set[str]] = {}
+    failing = {student: runs.setdefault(repr(sorted(given.items())), visible_checks.failing_checks(LAB, given))
+               for student, given in answers.items()}
+    found = counted(root / "course" / "report")
+    for cell in tests:
+        assert found[cell, class_report.VISIBLE_FAILED, ""] == sum(cell.removeprefix("test_") in f for f in failing.values()), cell
+    by_count = behind(root / "course" / "report")
+    assert by_count["", class_report.VISIBLE_FAILED, ""] == {student for student, f in failing.items() if f}
+    assert found["", class_report.VISIBLE_FAILED, ""] == len(by_count["", class_report.VISIBLE_FAILED, ""]) > 0
+    page = (root / "course" / "report" / f"{LAB.id}.html").read_text()
+    assert page.count("visible checks failed") == len(tests) + 1
+    # information only: the mistakes' students lose the points of their mistake's blank alone
+    assert all(row.lost == [f"test_{mistake(row.student.rsplit('-', 1)[0]).blank}"] for row in rows
+               if row.student in answers and row.student.rsplit("-", 1)[0] in MISTAKES)
+
+
 def test_regrading_one_student_replaces_their_diagnosis(graded, tmp_path):
     root, _, _ = graded
     regrade = tmp_path / "regrade"
@@ -135,6 +206,18 @@ def test_regrading_one_student_replaces_their_diagnosis(graded, tmp_path):
     grading.grade(regrade, root / "course", jobs=1)
     found = counted(root / "course" / "report")
     assert found["test_predict", class_report.MISTAKE, "no-Q"] == MISTAKES["no-Q"] - 1
+
+
+def test_the_page_groups_losses_by_the_kind_of_case_alone_wrong(tmp_path):
+    """Without grading: two students wrong only on the cases with a full R, one by an error."""
+    cell = "test_kupdate"
+    rows = [GradeRow(f"s{k}", LAB.id, {cell: 0.0}, {cell: 2.0}, frozenset({cell}), reasons={cell: "AssertionError: x"},
+                     wrong_only={cell: "a full R"} if k < 2 else {}) for k in range(3)]
+    [page] = class_report.write_report(tmp_path, rows)
+    assert counted(tmp_path / "report")[cell, class_report.OTHER, "wrong only on the cases with a full R"] == 2
+    text = page.read_text()
+    assert '<td class="sub">wrong only on the cases with a full R</td><td class="n">2</td>' in text
+    assert '<td>lost another way</td><td class="n">3</td><td class="hint">AssertionError: 1</td>' in text
 
 
 def test_a_submissions_text_is_escaped_on_the_page_and_neutralised_in_the_csv(tmp_path):

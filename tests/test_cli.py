@@ -169,7 +169,7 @@ def test_the_demo_closes_with_a_verdict_and_where_to_look(tmp_path, monkeypatch,
     assert "Not as expected: 6 differences between the grades and the catalogues:" in out
     assert "train-kf: solved was not graded" in out
     for what in ("grades.csv", "/feedback/", "Nbgrader > Formgrader > Manual Grading", "autograder feedback --workdir",
-                 "demo --full"):
+                 "demo --full", "The class report", f"{tmp_path / 'course' / 'report' / 'train-kf.html'}\n"):
         assert what in out, what
     long = [line for line in out.splitlines() if len(line) > 100 and not line.startswith(" " * 6)
             and not (len(line.split()) == 1 and "/" in line)]

@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 from autograder import cells
-from autograder.hidden_tests import diagnosis
+from autograder.hidden_tests import case_kinds, diagnosis
 from autograder.hidden_tests.isolate import isolate
 from autograder.hidden_tests.diagnosis import LEAD, diagnose, diagnosed, mistake_function
 from autograder.catalogues.mistakes import Mistake, catalogue
@@ -203,3 +203,5 @@ def test_the_narrowing_sentence_points_at_the_cause(lab, made):
     with pytest.raises(Exception) as caught:
         getattr(hidden_tests(lab), f"check_{blank}")(wrong)
     assert NARROWED[lab.id, made] in _message(caught.value), _message(caught.value)
+    # the kind of case alone wrong, as data on the exception for the grader to record (the class report groups by it)
+    assert NARROWED[lab.id, made].endswith(f" wrong on every case with {case_kinds.wrong_only(caught.value)}.")

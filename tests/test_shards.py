@@ -10,7 +10,9 @@ benchmarks/shards.py times the same class at 20 a lab. The baseline is the class
 one `grade --jobs 1` into a fresh gradebook; its rows are checked against the catalogues. Then:
 - two shards at once, each in a course folder of its own (machines with no shared folder): the
   export fails, naming every submission whose files are not in its folder, until each shard's
-  autograded/ and feedback/ are copied there; then its grades.csv is the baseline's, row for row;
+  autograded/ and feedback/ are copied there; then its grades.csv is the baseline's, row for row, and
+  `report` from that PostgreSQL gradebook counts what the class was built with, as the baseline's
+  report (written by its `grade`) does;
 - four shards at once in one shared course folder, one of them killed (SIGKILL, with its kernels)
   part-way: the export names what the killed shard had not finished; rerun alone, the shard
   completes the class, and grades.csv is the baseline's;
@@ -23,6 +25,7 @@ from __future__ import annotations
 
 import hashlib
 import multiprocessing
+import re
 import shutil
 import subprocess
 import sys
@@ -34,10 +37,11 @@ from nbgrader.api import Gradebook
 from postgres_server import postgres_url  # noqa: F401 (a fixture: this module's own server)
 import shard_runs
 from autograder import cells
+from autograder.catalogues import faults, synthetic_class
 from autograder.__main__ import build_parser, main
 from autograder.catalogues import demo
 from autograder.labs import ROOT, get_lab
-from autograder.pipeline import grades, grading, intake
+from autograder.pipeline import class_report, grades, grading, intake
 from autograder.pipeline.nbgrader_apps import feedback_page
 from autograder.pipeline.shards import NotShared, Shard, shard_of
 
@@ -120,6 +124,72 @@ def test_two_shards_without_a_shared_folder_give_the_baseline_once_gathered(base
     whole = shard_runs.export(gathered, url)
     assert whole.returncode == 0, whole.stderr
     assert shard_runs.csv_rows(gathered / "grades.csv") == baseline_csv
+
+    reported = shard_runs.report(gathered, url)
+    assert reported.returncode == 0, reported.stderr
+    baseline = baseline_and_two_shards[0]
+    for lab in LABS:
+        outcomes = {student: o for (student, lab_id), o in klass[1].items() if lab_id == lab.id}
+        counts = shard_runs.csv_rows(gathered / "report" / f"{lab.id}.csv")
+        assert report_counts(counts) == built_counts(lab, outcomes)
+        assert sum(int(n) for _, _, what, _, n in counts[1:] if what == class_report.SCORE) == len(outcomes)
+        for name in (f"{lab.id}.csv", f"{lab.id}-students.csv"):
+            assert shard_runs.csv_rows(gathered / "report" / name) == shard_runs.csv_rows(baseline / "report" / name)
+        page, baseline_page = (without_figure(folder / "report" / f"{lab.id}.html") for folder in (gathered, baseline))
+        assert page == baseline_page and f"<p>{len(outcomes)} graded submissions." in page
+
+
+def report_counts(rows: list[list[str]]) -> dict[tuple[str, str, str], int]:
+    """(cell, what, detail) -> count, from a report's CSV (header first): the counts that are not 0,
+    without the score bins and the failing visible checks (compared with the baseline's), and with
+    the error's name of a blank lost another way, outside a flagged submission, as "an error"."""
+    found: dict[tuple[str, str, str], int] = {}
+    for _, cell, what, detail, n in rows[1:]:
+        if int(n) and what not in (class_report.SCORE, class_report.VISIBLE_FAILED):
+            key = (cell, what, "an error" if what == class_report.OTHER and detail != class_report.FLAGGED_DETAIL else detail)
+            found[key] = found.get(key, 0) + int(n)
+    return found
+
+
+def without_figure(page) -> str:
+    return re.sub(r'"data:image/png;base64,[A-Za-z0-9+/=]*"', "", page.read_text())
+
+
+def built_counts(lab, outcomes: dict[str, synthetic_class.Outcome]) -> dict[tuple[str, str, str], int]:
+    """What the class report of ``lab`` must count (its counts that are not 0, score bins left out),
+    from each submission's Outcome as the class was built: the blank leaves every blank unwritten, a
+    mistake loses its own blank to that mistake, a flagged cheat the blanks it games, a fault its blank
+    (by an error), and every other blank has full marks. A fault is counted as faulted when the grader
+    notes it: every one but a NumPy warning, which only fails its blank's test (README: Careless submissions)."""
+    source = cells.read(lab.source_notebook).cells
+    tests = [cells.grade_id(c) for c in source if cells.is_autograded_test(c)]
+    written = [cells.grade_id(c) for c in source if cells.meta(c).get("grade") and c.cell_type == "markdown"]
+    found: dict[tuple[str, str, str], int] = {("", class_report.SUBMITTED, ""): len(outcomes)}
+
+    def add(key: tuple[str, str, str]) -> None:
+        found[key] = found.get(key, 0) + 1
+
+    for outcome in outcomes.values():
+        zero = tests if outcome.zero is None else outcome.zero
+        for cell in tests:
+            if outcome.kind == "blank":
+                add((cell, class_report.NOT_WRITTEN, ""))
+            elif cell not in zero:
+                add((cell, class_report.FULL, ""))
+            elif outcome.kind == synthetic_class.MISTAKE:
+                add((cell, class_report.MISTAKE, outcome.mistake))
+            elif outcome.flagged:
+                add((cell, class_report.OTHER, class_report.FLAGGED_DETAIL))
+            else:
+                add((cell, class_report.OTHER, "an error"))
+        if outcome.kind != "blank":  # nbgrader scores a written answer left as released 0 itself
+            for cell in written:
+                add((cell, class_report.WAITING, ""))
+        if outcome.flagged:
+            add(("", class_report.FLAGGED, ""))
+        if outcome.kind == synthetic_class.FAULT and outcome.student != faults.get("numpy-warning").student_id(lab):
+            add(("", class_report.FAULTED, ""))
+    return found
 
 
 def test_four_shards_in_a_shared_folder_one_killed_and_rerun_give_the_baseline(postgres_url, klass, baseline_csv, tmp_path):

@@ -14,7 +14,7 @@ import hashlib
 import io
 import linecache
 import traceback
-from collections.abc import Iterable
+from collections.abc import Iterable, Iterator
 
 from autograder import cells
 from autograder.labs import Lab
@@ -40,36 +40,64 @@ def run_cell(code: str, namespace: dict) -> BaseException | None:
     return None
 
 
+@contextlib.contextmanager
+def _in_lab_folder(lab: Lab) -> Iterator[None]:
+    """Where a notebook's cells run here: in the lab's folder, printed text dropped, figures drawn on Agg."""
+    import matplotlib
+
+    matplotlib.use("Agg")
+    with contextlib.chdir(lab.source_notebook.parent), contextlib.redirect_stdout(io.StringIO()):
+        yield
+
+
 def visible_verdicts(lab: Lab, answers: Iterable[tuple[str, str, str]]) -> dict[str, BaseException | None]:
     """For each (key, blank, code) of ``answers``: what the blank's visible checks raised with ``code``
     in place of the model answer (None: they passed). Raises SolvedNotebookFails if a cell fails on
     the solved notebook."""
-    import matplotlib
     import matplotlib.pyplot as plt
 
-    matplotlib.use("Agg")
     by_blank: dict[str, list[tuple[str, str]]] = {}
     for key, blank, code in answers:
         by_blank.setdefault(blank, []).append((key, code))
     nb = cells.read(lab.source_notebook)
     model = {cells.grade_id(c): c.source for c in nb.cells if cells.is_code_answer(c)}
     code_cells = [c for c in nb.cells if c.cell_type == "code" and not cells.meta(c).get("grade")]
-    last_check = max(i for i, c in enumerate(code_cells) if cells.meta(c).get("grade_id", "").startswith("check_"))
+    last_check = max(i for i, c in enumerate(code_cells) if cells.is_visible_check(c))
     namespace: dict = {"__name__": "__main__"}
     verdicts: dict[str, BaseException | None] = {}
-    with contextlib.chdir(lab.source_notebook.parent), contextlib.redirect_stdout(io.StringIO()):
+    with _in_lab_folder(lab):
         for cell in code_cells[:last_check + 1]:
             gid = cells.meta(cell).get("grade_id", "")
-            for key, code in by_blank.get(gid.removeprefix("check_"), []) if gid.startswith("check_") else []:
+            blank = gid.removeprefix(cells.CHECK_PREFIX)
+            for key, code in by_blank.get(blank, []) if cells.is_visible_check(cell) else []:
                 verdicts[key] = run_cell(code, namespace) or run_cell(cell.source, namespace)
-                if run_cell(model[gid.removeprefix("check_")], namespace) is not None:
-                    raise SolvedNotebookFails(f"the model answer of {gid.removeprefix('check_')} no longer runs")
+                if run_cell(model[blank], namespace) is not None:
+                    raise SolvedNotebookFails(f"the model answer of {blank} no longer runs")
                 plt.close("all")
             error = run_cell(cell.source, namespace)
             plt.close("all")
             if error is not None:
                 raise SolvedNotebookFails(f"{gid or cell.id} fails on the solved notebook: {error}")
     return verdicts
+
+
+def failing_checks(lab: Lab, answers: dict[str, str]) -> set[str]:
+    """The blanks whose visible check cells raise when the solved notebook is run with ``answers``
+    (blank -> code) in place of the model answers, as one student's notebook: a wrong answer can fail
+    the checks of the blanks that use it too."""
+    import matplotlib.pyplot as plt
+
+    nb = cells.read(lab.source_notebook)
+    namespace: dict = {"__name__": "__main__"}
+    failing = set()
+    with _in_lab_folder(lab):
+        for cell in (c for c in nb.cells if c.cell_type == "code" and not cells.meta(c).get("grade")):
+            gid = cells.meta(cell).get("grade_id", "")
+            code = answers.get(gid, cells.model_answer(cell)) if cells.is_code_answer(cell) else cell.source
+            if run_cell(code, namespace) is not None and cells.is_visible_check(cell):
+                failing.add(gid.removeprefix(cells.CHECK_PREFIX))
+            plt.close("all")
+    return failing
 
 
 def mistakes_caught(lab: Lab) -> tuple[int, int, int]:

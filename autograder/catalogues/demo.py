@@ -16,7 +16,7 @@ from pathlib import Path
 
 from autograder import cells
 from autograder.catalogues import cheats, faults, submissions
-from autograder.pipeline import grading, grades, nbgrader_apps, table
+from autograder.pipeline import class_report, grading, grades, nbgrader_apps, table
 from autograder.labs import ROOT, Lab, all_labs
 from autograder.catalogues.mistakes import catalogue
 from autograder.catalogues.synthetic_class import (MISTAKE, Outcome, cheat_outcome, fault_outcome, honest_outcome,
@@ -38,7 +38,7 @@ def _honest(lab: Lab, folder: Path, mistakes) -> list[Outcome]:
                 honest_outcome(submissions.SOLVED, None)]
     for mistake in mistakes:
         submissions.write(submissions.with_mistake(lab, mistake), folder, mistake.student_id(lab), lab)
-        outcomes.append(honest_outcome(mistake.student_id(lab), mistake.blank))
+        outcomes.append(honest_outcome(mistake.student_id(lab), mistake))
     return outcomes
 
 
@@ -117,6 +117,8 @@ def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = Fal
     steps = [  # what to look at, and where (a path or a command, on a line of its own to copy)
         ("The grades, one row per submission:", [str(shown(grades_csv))]),
         ("One student's feedback page:", [str(shown(nbgrader_apps.feedback_page(course, example_lab, example)))]),
+        ("The class report, what the class got wrong (a page per lab, with its figure and counts beside it):",
+         [str(shown(class_report.page_path(course, lab.id))) for lab in labs]),
         (f"The written answers, to grade by hand: from {ROOT}, start JupyterLab on the demo's course and open "
          "Nbgrader > Formgrader > Manual Grading; then rewrite the feedback pages and the grades:",
          [f".venv/bin/jupyter lab --CourseDirectory.root={root}", f".venv/bin/python -m autograder feedback --workdir {root}"]),

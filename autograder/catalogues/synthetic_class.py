@@ -18,7 +18,7 @@ from autograder.catalogues import cheats, faults, submissions
 from autograder.catalogues.cheats import STATIC, Cheat, target
 from autograder.pipeline.grading import GradeRow
 from autograder.labs import Lab
-from autograder.catalogues.mistakes import catalogue as mistake_catalogue
+from autograder.catalogues.mistakes import Mistake, catalogue as mistake_catalogue
 
 FAULT, CHEAT, MISTAKE, SOLVED = "fault", "cheat", "mistake", "solved"
 
@@ -36,6 +36,8 @@ class Outcome:
     """Every other autograded cell must keep full marks."""
     flagged: bool
     """Whether the submission must be flagged for review (it must not be otherwise)."""
+    mistake: str = ""
+    """A MISTAKE's slug in its blank's catalogue."""
 
     def errors(self, row: GradeRow) -> list[str]:
         """How ``row`` differs from this outcome (empty: it is as catalogued)."""
@@ -60,11 +62,12 @@ def cheat_outcome(lab: Lab, cheat: Cheat) -> Outcome:
     return Outcome(cheat.name, CHEAT, () if wrong is None else (f"test_{wrong}",), only=False, flagged=False)
 
 
-def honest_outcome(student: str, wrong: str | None) -> Outcome:
-    """The solved notebook (``wrong`` None), or a catalogued mistake in the blank ``wrong``, which
-    loses that blank's test and nothing else; neither is flagged."""
-    return Outcome(student, SOLVED if wrong is None else MISTAKE, () if wrong is None else (f"test_{wrong}",),
-                   only=True, flagged=False)
+def honest_outcome(student: str, wrong: Mistake | None) -> Outcome:
+    """The solved notebook (``wrong`` None), or the catalogued mistake ``wrong``, which loses its
+    blank's test and nothing else; neither is flagged."""
+    if wrong is None:
+        return Outcome(student, SOLVED, (), only=True, flagged=False)
+    return Outcome(student, MISTAKE, (f"test_{wrong.blank}",), only=True, flagged=False, mistake=wrong.slug)
 
 
 def fault_outcome(lab: Lab, fault: faults.Fault, blank: str) -> Outcome:
@@ -91,7 +94,7 @@ def write_honest(lab: Lab, size: int, folder: Path) -> list[Outcome]:
     """Write ``size`` honest submissions of ``lab``, the solved notebook and each catalogued mistake
     in turn, as the students ``student000``, ``student001``, ...; their outcomes."""
     honest = itertools.cycle([(submissions.solved(lab), None)]
-                             + [(submissions.with_mistake(lab, m), m.blank) for m in mistake_catalogue(lab)])
+                             + [(submissions.with_mistake(lab, m), m) for m in mistake_catalogue(lab)])
     outcomes = []
     for k in range(size):
         nb, wrong = next(honest)

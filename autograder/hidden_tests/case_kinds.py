@@ -31,6 +31,9 @@ MAX_LISTED = 3
 """The most kinds of failing case a sentence lists; beyond, a list says less than the count alone."""
 NARROWED = ("is right on every case with", "is right on ")
 """How a narrowing sentence begins after the blank's name (the mutation report counts them)."""
+WRONG_ONLY_ATTRIBUTE = "kit_wrong_only"
+"""The attribute of a failed check's exception that holds, when a property splits the cases exactly,
+the cases it was wrong on ("a full R"): the grader records it as data (the class report groups by it)."""
 
 
 @dataclass
@@ -99,7 +102,36 @@ def labelled(blank: str) -> Iterator[None]:
     sentence = narrowing(blank, run.cases)
     if sentence:
         add_to_message(error, sentence)
+    split = _split(run.cases)
+    if split is not None:
+        with contextlib.suppress(AttributeError):  # an exception type that takes no attributes keeps its message only
+            setattr(error, WRONG_ONLY_ATTRIBUTE, " or ".join(split[1]))
     raise error
+
+
+def wrong_only(error: BaseException) -> str | None:
+    """The kind of case that alone the failure ``error`` was wrong on (``labelled``), or None."""
+    found = getattr(error, WRONG_ONLY_ATTRIBUTE, None)
+    return found if isinstance(found, str) else None
+
+
+def _split(cases: list[_Case]) -> tuple[list[str], list[str]] | None:
+    """The values of the property that splits the cases exactly, (right on, wrong on), the fewest values
+    first; None when no property does (or every case is right, or every case wrong)."""
+    wrong = [c for c in cases if c.error is not None]
+    right = [c for c in cases if c.error is None]
+    if not wrong or not right:
+        return None
+    splits = []
+    for key in dict.fromkeys(k for c in cases for k in c.properties):
+        good = {c.properties.get(key) for c in right}
+        bad = {c.properties.get(key) for c in wrong}
+        if None not in good | bad and not good & bad:
+            splits.append((len(bad) + len(good), key, sorted(good), sorted(bad)))
+    if not splits:
+        return None
+    _, _, good, bad = min(splits)
+    return good, bad
 
 
 def narrowing(blank: str, cases: list[_Case]) -> str:
@@ -109,15 +141,9 @@ def narrowing(blank: str, cases: list[_Case]) -> str:
     right = [c for c in cases if c.error is None]
     if not wrong or not right:
         return ""
-    keys = [k for k in dict.fromkeys(k for c in cases for k in c.properties)]
-    splits = []
-    for key in keys:
-        good = {c.properties.get(key) for c in right}
-        bad = {c.properties.get(key) for c in wrong}
-        if None not in good | bad and not good & bad:
-            splits.append((len(bad) + len(good), key, sorted(good), sorted(bad)))
-    if splits:
-        _, key, good, bad = min(splits)
+    split = _split(cases)
+    if split is not None:
+        good, bad = split
         return (f"Your {blank} is right on every case with {' or '.join(good)} and wrong on every case with "
                 f"{' or '.join(bad)}.")
     described = [_listed([v for v in c.properties.values()]) for c in wrong]

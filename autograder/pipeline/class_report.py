@@ -2,10 +2,14 @@
 
 Each autograded test cell of each graded submission has one outcome: full marks; lost to a
 catalogued mistake (the diagnosis the grader recorded as data while grading, ``GradeRow.diagnosed``,
-never read back out of a message); lost another way (grouped by the name of the error that failed
-it); or not written (its blank still holds the released stub). Per lab, the report also counts the
+never read back out of a message); lost another way (grouped by the kind of case that alone it was
+wrong on, when the grader recorded one, ``GradeRow.wrong_only``, else by the name of the error that
+failed it); or not written (its blank still holds the released stub). Per lab, the report also counts the
 submissions flagged for review, late, and faulted (a grader's note other than a flag: a stopped
-cell, a dead kernel, restored cells), and the written answers still waiting for a hand grade.
+cell, a dead kernel, restored cells), the submissions handed in with a written blank whose visible
+checks failed (per blank and in all, from the record the grader made while grading,
+``GradeRow.visible_failed``: information, never part of a score), and the written answers still
+waiting for a hand grade.
 
 ``write_report`` writes into ``COURSE/report/``, per lab: ``<lab>.html`` (counts only, for a
 lecture: report_page.py), ``<lab>.png`` (report_figure.py), ``<lab>.csv`` (the counts) and
@@ -28,8 +32,10 @@ FULL, MISTAKE, OTHER, NOT_WRITTEN = "full marks", "catalogued mistake", "lost an
 """The outcomes of one test cell of one submission."""
 FLAGGED_DETAIL = "in a submission flagged for review"
 """The detail of a blank lost in a flagged submission that no catalogued mistake explains."""
-SUBMITTED, FLAGGED, LATE, FAULTED, WAITING, SCORE = (
-    "graded", "flagged", "late", "faulted", "waiting for a hand grade", "autograded score")
+WRONG_ONLY = report_page.WRONG_ONLY_LEAD + " {}"
+"""The detail of a blank lost another way, wrong on one kind of case alone ("a full R")."""
+SUBMITTED, FLAGGED, LATE, FAULTED, WAITING, SCORE, VISIBLE_FAILED = (
+    "graded", "flagged", "late", "faulted", "waiting for a hand grade", "autograded score", "visible checks failed")
 """The lab's other counts, as the CSVs name them."""
 
 
@@ -42,8 +48,10 @@ class BlankCounts:
     mistakes: dict[str, tuple[str, ...]]
     """Mistake slug -> students, most common first."""
     other: dict[str, tuple[str, ...]]
-    """The failing error's name -> students, most common first."""
+    """The kind of case alone wrong (WRONG_ONLY), or else the failing error's name -> students, most common first."""
     not_written: tuple[str, ...]
+    visible_failed: tuple[str, ...]
+    """The students who wrote the blank and handed it in with its visible checks failing (whatever its score)."""
 
     @property
     def blank(self) -> str:
@@ -66,6 +74,8 @@ class LabCounts:
     flagged: tuple[str, ...]
     late: tuple[str, ...]
     faulted: tuple[str, ...]
+    visible_failed: tuple[str, ...]
+    """The students with at least one written blank whose visible checks failed."""
     waiting: dict[str, tuple[str, ...]]
     """Written answer cell -> students whose hand grade is missing."""
     mistakes: dict[tuple[str, str], Mistake]
@@ -98,7 +108,8 @@ def _by_size(groups: dict[str, list[str]]) -> dict[str, tuple[str, ...]]:
 
 def outcome(row: GradeRow, cell: str, mistakes: dict[tuple[str, str], Mistake]) -> tuple[str, str]:
     """The outcome of the test cell ``cell`` in ``row``, and its detail: the mistake's slug, or the
-    failing error's name (a slug the lab does not catalogue counts as lost another way)."""
+    kind of case that alone it was wrong on, or the failing error's name (a slug the lab does not
+    catalogue counts as lost another way)."""
     if (row.cells[cell] or 0.0) >= row.max_cells[cell]:
         return FULL, ""
     if cell in row.not_written:
@@ -108,7 +119,14 @@ def outcome(row: GradeRow, cell: str, mistakes: dict[tuple[str, str], Mistake]) 
         return MISTAKE, slug
     if row.flags:  # the scan's flag zeroes the blanks a finding games: the error then says nothing of the cause
         return OTHER, FLAGGED_DETAIL
+    if cell in row.wrong_only:
+        return OTHER, WRONG_ONLY.format(row.wrong_only[cell])
     return OTHER, row.reasons.get(cell, "no reason recorded").partition(":")[0].strip()
+
+
+def _visible_failed(row: GradeRow, cell: str) -> bool:
+    """Whether ``row``'s student wrote the blank of the test cell ``cell`` and its visible checks failed."""
+    return cell in row.visible_failed and cell not in row.not_written
 
 
 def count_lab(lab: Lab, rows: list[GradeRow]) -> LabCounts:
@@ -124,7 +142,8 @@ def count_lab(lab: Lab, rows: list[GradeRow]) -> LabCounts:
             groups.setdefault(outcome(row, cell, mistakes), []).append(row.student)
         of = lambda kind: _by_size({detail: s for (k, detail), s in groups.items() if k == kind})  # noqa: E731
         blanks.append(BlankCounts(cell, tuple(sorted(groups.get((FULL, ""), []))), of(MISTAKE), of(OTHER),
-                                  tuple(sorted(groups.get((NOT_WRITTEN, ""), [])))))
+                                  tuple(sorted(groups.get((NOT_WRITTEN, ""), []))),
+                                  tuple(row.student for row in rows if _visible_failed(row, cell))))
     written = [c for c in first.cells if c not in first.autograded] if first else []
     return LabCounts(
         lab.id,
@@ -134,6 +153,7 @@ def count_lab(lab: Lab, rows: list[GradeRow]) -> LabCounts:
         tuple(row.student for row in rows if row.flags),
         tuple(row.student for row in rows if row.late_penalty > 0),
         tuple(row.student for row in rows if any(not note.startswith(FLAG) for note in row.notes)),
+        tuple(row.student for row in rows if any(_visible_failed(row, cell) for cell in tests)),
         {cell: tuple(row.student for row in rows if row.cells.get(cell) is None) for cell in written},
         mistakes,
     )
@@ -148,7 +168,9 @@ def entries(counts: LabCounts) -> list[tuple[str, str, str, tuple[str, ...]]]:
         found += [(blank.cell, MISTAKE, slug, students) for slug, students in blank.mistakes.items()]
         found += [(blank.cell, OTHER, name, students) for name, students in blank.other.items()]
         found.append((blank.cell, NOT_WRITTEN, "", blank.not_written))
-    found += [("", FLAGGED, "", counts.flagged), ("", LATE, "", counts.late), ("", FAULTED, "", counts.faulted)]
+        found.append((blank.cell, VISIBLE_FAILED, "", blank.visible_failed))
+    found += [("", FLAGGED, "", counts.flagged), ("", LATE, "", counts.late), ("", FAULTED, "", counts.faulted),
+              ("", VISIBLE_FAILED, "", counts.visible_failed)]
     found += [(cell, WAITING, "", students) for cell, students in counts.waiting.items()]
     return found
 
@@ -172,6 +194,11 @@ def write_csvs(counts: LabCounts, folder: Path) -> tuple[Path, Path]:
     return counts_path, students_path
 
 
+def page_path(workdir: Path, lab_id: str) -> Path:
+    """Where the class report's page of ``lab_id`` is written for the course ``workdir``."""
+    return workdir / "report" / f"{lab_id}.html"
+
+
 def write_report(workdir: Path, rows: list[GradeRow]) -> list[Path]:
     """Write the class report of every lab in ``rows`` into ``workdir/report/``; the HTML pages."""
     folder = workdir / "report"
@@ -181,5 +208,5 @@ def write_report(workdir: Path, rows: list[GradeRow]) -> list[Path]:
         counts = count_lab(Lab(lab_id), rows)
         write_csvs(counts, folder)
         figure = report_figure.draw(counts, folder / f"{lab_id}.png")
-        pages.append(report_page.write(counts, figure, folder / f"{lab_id}.html"))
+        pages.append(report_page.write(counts, figure, page_path(workdir, lab_id)))
     return pages

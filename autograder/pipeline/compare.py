@@ -50,6 +50,7 @@ from nbformat import NotebookNode
 from nbformat.v4 import new_output
 
 from autograder import cells
+from autograder.hidden_tests.case_kinds import wrong_only
 from autograder.hidden_tests.diagnosis import diagnosed_mistake
 from autograder.hidden_tests.isolate import called_blanks, warning_failure
 from autograder.kernel import side
@@ -253,11 +254,12 @@ def error_output(ename: str, evalue: str, where: str = "") -> NotebookNode:
 
 
 def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[str],
-              max_chars: int) -> tuple[list[NotebookNode], int, str | None]:
+              max_chars: int) -> tuple[list[NotebookNode], int, str | None, str | None]:
     """Run ``check`` on the student's function over ``peer``: the outputs the cell gets, how many
     characters the student's function printed (and warned) in all, of which the outputs keep the
     first ``max_chars``, and the slug of the catalogued mistake that the check's diagnosis found
-    behind its failure (autograder/hidden_tests/diagnosis.py), or None: read from the exception the
+    behind its failure (autograder/hidden_tests/diagnosis.py), or None, and the kind of case that alone
+    it was wrong on (autograder/hidden_tests/case_kinds.py), or None: both read from the exception the
     check raised in this process, never from anything the kernel sent.
 
     The outputs are what the student's function printed, as stdout text (whatever stream it wrote
@@ -271,7 +273,7 @@ def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[
     """
     out = Capped(max_chars)
     outputs: list[NotebookNode] = []
-    mistake = None
+    mistake = wrong_on = None
     with contextlib.redirect_stdout(out), contextlib.redirect_stderr(out), warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
         try:
@@ -284,7 +286,7 @@ def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[
             outputs.append(error_output("GradingError", f"The grader could not read your kernel's answer ({error})."))
         except Exception as error:  # noqa: BLE001 (a failing check: its message is the student's feedback)
             notes = getattr(error, "__notes__", [])
-            mistake = diagnosed_mistake(error)
+            mistake, wrong_on = diagnosed_mistake(error), wrong_only(error)
             outputs.append(error_output(type(error).__name__, "\n".join([str(error), *notes]), getattr(error, "where", "")))
     for w in caught:
         out.write(f"{w.category.__name__}: {w.message}\n")
@@ -293,7 +295,7 @@ def run_check(peer: Peer, test: HiddenTest, check: Callable, earlier: frozenset[
         outputs.append(error_output("AssertionError", warning_failure(test.blank, first.category.__name__, str(first.message))))
     printed = out.getvalue()
     streams = [new_output("stream", name="stdout", text=printed)] if printed else []
-    return streams + outputs, out.written, mistake
+    return streams + outputs, out.written, mistake, wrong_on
 
 
 class Capped(io.TextIOBase):

@@ -38,11 +38,12 @@ class CheckFailed(RuntimeError):
     """The check raised something it should not have: a fault of the grader's, not of the student's."""
 
 
-def run(check: Callable[[], tuple[list[NotebookNode], int, str | None]], deadline: float | None,
-        memory_bytes: int) -> tuple[list[NotebookNode], int, str | None]:
+def run(check: Callable[[], tuple[list[NotebookNode], int, str | None, str | None]], deadline: float | None,
+        memory_bytes: int) -> tuple[list[NotebookNode], int, str | None, str | None]:
     """``check()`` run in a forked child of this process, whose address space may grow by at most
     ``memory_bytes`` (0: no cap) and which is killed once ``deadline`` (time.monotonic(); None: none)
-    has passed: what ``check()`` returned (outputs, characters printed, diagnosed mistake or None).
+    has passed: what ``check()`` returned (outputs, characters printed, diagnosed mistake or None, the
+    kind of case alone wrong or None).
 
     Raises PeerTimeout at the deadline, what the check raised among PASSED_ON, and CheckFailed for
     anything else it raised. A child that dies without an answer (over its memory cap where Python
@@ -70,25 +71,26 @@ def run(check: Callable[[], tuple[list[NotebookNode], int, str | None]], deadlin
         how = f"was stopped by signal {-code}" if code < 0 else f"ended with status {code}"
         return [error_output("GradingError", f"The grader's check of your function {how} before it finished, "
                              "most likely because what your function sent back, or asked the grader to compute, "
-                             "needed more memory than a check may use.")], 0, None
+                             "needed more memory than a check may use.")], 0, None, None
     if "raised" in reply:
         raise PASSED_ON[reply["raised"]]()
     if "failed" in reply:
         raise CheckFailed(f"The hidden test's check failed in the grader:\n{reply['failed']}")
-    mistake = reply.get("mistake")
+    mistake, wrong_on = reply.get("mistake"), reply.get("wrong_only")
     return ([nbformat.from_dict(output) for output in reply["outputs"]], int(reply["printed"]),
-            mistake if isinstance(mistake, str) else None)
+            mistake if isinstance(mistake, str) else None, wrong_on if isinstance(wrong_on, str) else None)
 
 
-def _child(check: Callable[[], tuple[list[NotebookNode], int, str | None]], fd: int, memory_bytes: int) -> NoReturn:
+def _child(check: Callable[[], tuple[list[NotebookNode], int, str | None, str | None]], fd: int,
+           memory_bytes: int) -> NoReturn:
     """In the forked child: cap the address space, run ``check``, write the answer to ``fd`` and
     exit (status 0 once the answer is written) without running anything of the parent's: no atexit
     handlers, no finalizers."""
     try:
         cap_memory(memory_bytes)
         try:
-            outputs, printed, mistake = check()
-            reply: dict = {"outputs": outputs, "printed": printed, "mistake": mistake}
+            outputs, printed, mistake, wrong_on = check()
+            reply: dict = {"outputs": outputs, "printed": printed, "mistake": mistake, "wrong_only": wrong_on}
         except tuple(PASSED_ON.values()) as error:
             reply = {"raised": type(error).__name__}
         except BaseException:  # noqa: BLE001 (the grader's fault: the parent raises it as CheckFailed)

@@ -181,6 +181,7 @@ class GradingExecute(Execute):
                 restarts += 1
                 self._restart_and_replay(index, failed, deadline)
         notes += self._output.notes(lambda i: _name(self.nb.cells[i], i))
+        verdicts.record_visible_checks(self.nb, NOT_RUN)
         _whole_execution_counts(self.nb)
         add_grader_notes(self.nb, first_cause(self.nb) + notes)
         self.set_widgets_metadata()
@@ -210,13 +211,13 @@ class GradingExecute(Execute):
         try:
             peer, why_not = compare.connect(listener, deadline, lambda: self._replied(msg_id))
             printed = room = 0
-            mistake = None
+            mistake = wrong_on = None
             if peer is None:
                 outputs = [compare.error_output("AssertionError", why_not)]
             else:
                 try:
                     room = self._output.room(index)
-                    outputs, printed, mistake = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
+                    outputs, printed, mistake, wrong_on = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
                                                           deadline, self._memory_bytes())
                 except compare.KernelStopped:
                     if not self._finished_alive(msg_id):
@@ -238,6 +239,8 @@ class GradingExecute(Execute):
             self._fail(cell, f"{failures[0].ename}: {failures[0].evalue}")
             if mistake is not None:
                 verdicts.record_diagnosis(cell, mistake)
+            if wrong_on is not None:
+                verdicts.record_wrong_only(cell, wrong_on)
         else:
             verdicts.record(self.resources, cells.grade_id(cell), passed=True)
         self._wait_served(msg_id)

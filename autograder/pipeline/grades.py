@@ -51,6 +51,12 @@ class GradeRow:
     cell short of full marks whose failure was diagnosed (recorded by the grader, verdicts.DIAGNOSIS_KEY)."""
     not_written: frozenset[str] = frozenset()
     """The test cells whose blank still holds the stub it was released with (never written)."""
+    wrong_only: dict[str, str] = field(default_factory=dict)
+    """Test cell -> the kind of case that alone its failing hidden test was wrong on, for each cell short
+    of full marks where a property split the cases exactly (recorded by the grader, verdicts.WRONG_ONLY_KEY)."""
+    visible_failed: frozenset[str] = frozenset()
+    """The test cells whose blank's visible checks failed in the grading run (recorded by the grader,
+    verdicts.VISIBLE_CHECK_KEY): for the class report, never part of a score."""
 
     @property
     def total(self) -> float:
@@ -95,7 +101,7 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
                     if grade.cell.cell_type == "code":
                         auto.add(grade.name)
                 order = [c.name for c in gb.find_notebook(lab.id, lab.id).grade_cells]
-                notes, reasons, diagnosed, not_written = _read_autograded(autograded)
+                notes, reasons, diagnosed, wrong_only, not_written, visible_failed = _read_autograded(autograded)
                 lost = {c for c in order if (cells[c] or 0.0) < maxima[c]}
                 rows.append(
                     GradeRow(
@@ -109,6 +115,8 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
                         {c: reasons[c] for c in order if c in reasons and c in lost},
                         {c: diagnosed[c] for c in order if c in diagnosed and c in lost},
                         frozenset(not_written & auto),
+                        {c: wrong_only[c] for c in order if c in wrong_only and c in lost},
+                        frozenset(visible_failed & auto),
                     )
                 )
     return rows
@@ -117,11 +125,14 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
 ANSI = re.compile(r"\x1b\[[0-9;]*m")
 
 
-def _read_autograded(autograded: Path) -> tuple[tuple[str, ...], dict[str, str], dict[str, str], set[str]]:
+def _read_autograded(autograded: Path) -> tuple[tuple[str, ...], dict[str, str], dict[str, str], dict[str, str],
+                                                 set[str], set[str]]:
     """What an autograded notebook says beside the gradebook: the grader's notes; for each graded
     cell its first error (the grader's reason for a failing verdict, the only error a test cell
-    holds, autograder/pipeline/verdicts.py); test cell -> diagnosed mistake (``verdicts.diagnoses``);
-    and the test cells of the blanks that still hold their stub."""
+    holds, autograder/pipeline/verdicts.py); test cell -> diagnosed mistake (``verdicts.diagnoses``), and
+    -> the kind of case alone wrong;
+    the test cells of the blanks that still hold their stub; and those of the blanks whose visible
+    checks failed (``verdicts.visible_checks_failed``)."""
     nb = nbformat.read(autograded, as_version=4)
     reasons = {}
     for cell in nb.cells:
@@ -131,7 +142,8 @@ def _read_autograded(autograded: Path) -> tuple[tuple[str, ...], dict[str, str],
         if errors:
             reasons[cells.grade_id(cell)] = ANSI.sub("", f"{errors[0].ename}: {errors[0].evalue}")
     not_written = {f"test_{cells.grade_id(c)}" for c in nb.cells if cells.is_code_answer(c) and NOT_WRITTEN in c.source}
-    return tuple(grader_notes(nb)), reasons, verdicts.diagnoses(nb), not_written
+    return (tuple(grader_notes(nb)), reasons, verdicts.diagnoses(nb), verdicts.diagnoses(nb, verdicts.WRONG_ONLY_KEY),
+            not_written, verdicts.visible_checks_failed(nb))
 
 
 def write_grades(rows: list[GradeRow], path: Path) -> None:

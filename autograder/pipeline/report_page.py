@@ -17,6 +17,9 @@ from typing import TYPE_CHECKING
 if TYPE_CHECKING:
     from autograder.pipeline.class_report import BlankCounts, LabCounts
 
+WRONG_ONLY_LEAD = "wrong only on the cases with"
+"""How the detail of a loss grouped by the kind of case alone wrong begins (class_report.WRONG_ONLY)."""
+
 STYLE = """
 body { font-family: system-ui, sans-serif; max-width: 60rem; margin: 2rem auto; padding: 0 1rem; color: #222; }
 h1 { font-size: 1.5rem; } h2 { font-size: 1.2rem; margin-top: 2rem; } h3 { font-size: 1rem; margin: 1.2rem 0 0.3rem; }
@@ -26,6 +29,8 @@ td.n { text-align: right; min-width: 3rem; font-variant-numeric: tabular-nums; }
 td.hint { color: #444; font-size: 0.9rem; max-width: 36rem; overflow-wrap: anywhere; }
 .bar { display: inline-block; height: 0.8rem; background: #3a7bbf; vertical-align: middle; }
 img { max-width: 100%; } p.note { color: #555; font-size: 0.9rem; }
+table.blank { table-layout: fixed; width: 100%; } table.blank td:first-child { overflow-wrap: anywhere; }
+td.sub { padding-left: 1.6rem; color: #444; }
 """
 CSP = "default-src 'none'; img-src data:; style-src 'unsafe-inline'"
 """Nothing loads but the embedded figure and the inline style; no script runs."""
@@ -39,14 +44,19 @@ def _rows(rows: list[tuple[str, int, str]]) -> str:
 
 def _blank_section(counts: LabCounts, blank: BlankCounts) -> str:
     """A blank's counts: full marks, each catalogued mistake with its hint, lost another way (by the
-    failing error's name), not written."""
+    kind of case alone wrong, or the failing error's name), not written."""
     rows = [("full marks", len(blank.full), "")]
     rows += [(f"mistake: {slug}", len(students), counts.mistakes[blank.blank, slug].hint)
              for slug, students in blank.mistakes.items()]
+    narrowed = {detail: students for detail, students in blank.other.items() if detail.startswith(WRONG_ONLY_LEAD)}
     rows.append(("lost another way", len(blank.other_students),
-                 ", ".join(f"{name}: {len(students)}" for name, students in blank.other.items())))
-    rows.append(("not written", len(blank.not_written), ""))
-    return f"<h3>{escape(blank.blank)}</h3><table>{_rows(rows)}</table>"
+                 ", ".join(f"{name}: {len(students)}" for name, students in blank.other.items() if name not in narrowed)))
+    after = [("not written", len(blank.not_written), ""),
+             ("visible checks failed", len(blank.visible_failed), "")]
+    sub = "".join(f'<tr><td class="sub">{escape(detail)}</td><td class="n">{len(students)}</td><td></td></tr>'
+                  for detail, students in narrowed.items())
+    return (f'<h3>{escape(blank.blank)}</h3><table class="blank"><colgroup><col style="width:17rem">'
+            f'<col style="width:4rem"><col></colgroup>{_rows(rows)}{sub}{_rows(after)}</table>')
 
 
 def render(counts: LabCounts, figure_png: bytes) -> str:
@@ -76,13 +86,18 @@ graded by hand.</p>
 <table><tr><th>score</th><th>students</th><th></th></tr>{histogram}</table>
 <h2>Each blank</h2>
 <p class="note">A catalogued mistake is one the grader diagnosed while grading: on every hidden case, the student's
-function gave that mistake's results. Lost another way: the test failed otherwise (by the failing error's name).</p>
+function gave that mistake's results. Lost another way: the test failed otherwise, grouped by the kind of case
+that alone it was wrong on when its cases split so ("wrong only on the cases with a full R"), else by the failing
+error's name. Visible checks failed: the blank was written and handed in with a visible check that raised an error
+when graded, whatever its score (information only, never part of a score).</p>
 {"".join(_blank_section(counts, blank) for blank in counts.blanks)}
 <h2>Submissions to look at</h2>
 <table>{_rows([("flagged for review", len(counts.flagged), "the integrity scan found something"),
                ("late", len(counts.late), "a late penalty was taken"),
                ("faulted", len(counts.faulted), "the grader noted a change or a fault: a stopped cell, a dead "
-                "kernel, restored cells, cut output")])}</table>
+                "kernel, restored cells, cut output"),
+               ("visible checks failed", len(counts.visible_failed), "handed in with a written blank whose "
+                "visible checks raised an error; not part of any score")])}</table>
 <h2>Written answers waiting for a hand grade</h2>
 {waiting}
 </body></html>

@@ -23,6 +23,14 @@ kernel can put in a graded cell would then be part of the score. Here it is not,
   autograded notebook then holds the diagnosis as data, beside the grader's notes, which survives
   sharding (it travels with autograded/) and is replaced when the submission is regraded. The kernel
   sends outputs only, never a cell's metadata, so nothing it emits decides a diagnosis.
+- ``record_wrong_only`` writes likewise the kind of case that alone a failing hidden test was wrong on,
+  when a property of its cases splits them exactly (autograder/hidden_tests/case_kinds.py,
+  ``WRONG_ONLY_KEY``): the class report groups the failures that no catalogued mistake explains by it.
+- ``record_visible_checks`` marks, in the same way, each visible check cell (``check_<blank>``) whose
+  run in the grading kernel ended in an error (``VISIBLE_CHECK_KEY``): the class report counts the
+  submissions handed in with failing visible checks. That is information for the instructor and
+  never part of a score. It is read from the kernel's outputs, so a submission can make its own
+  check cells fail or pass; that is harmless here, as nothing is decided by it.
 """
 
 from __future__ import annotations
@@ -65,10 +73,18 @@ DIAGNOSIS_KEY = "autograder_diagnosis"
 """The key of a test cell's metadata, in the autograded notebook, that holds the diagnosed mistake's slug."""
 
 
+WRONG_ONLY_KEY = "autograder_wrong_only"
+"""The key of a test cell's metadata, in the autograded notebook, that holds the kind of case alone wrong."""
+VISIBLE_CHECK_KEY = "autograder_visible_check_failed"
+"""The key of a visible check cell's metadata, in the autograded notebook, set (True) when it raised."""
+
+
 def forget_diagnoses(nb: NotebookNode) -> None:
-    """Remove every diagnosis from ``nb``'s cells: only the grader writes them, while it grades."""
+    """Remove every diagnosis and visible check record from ``nb``'s cells: only the grader writes
+    them, while it grades."""
     for cell in nb.cells:
-        cell.metadata.pop(DIAGNOSIS_KEY, None)
+        for key in (DIAGNOSIS_KEY, WRONG_ONLY_KEY, VISIBLE_CHECK_KEY):
+            cell.metadata.pop(key, None)
 
 
 def record_diagnosis(cell: NotebookNode, slug: str) -> None:
@@ -76,10 +92,31 @@ def record_diagnosis(cell: NotebookNode, slug: str) -> None:
     cell.metadata[DIAGNOSIS_KEY] = slug
 
 
-def diagnoses(nb: NotebookNode) -> dict[str, str]:
-    """Test cell id -> the slug of the catalogued mistake diagnosed there, in an autograded notebook."""
-    return {cells.grade_id(c): c.metadata[DIAGNOSIS_KEY] for c in nb.cells
-            if cells.is_autograded_test(c) and isinstance(c.metadata.get(DIAGNOSIS_KEY), str)}
+def record_wrong_only(cell: NotebookNode, cases: str) -> None:
+    """Record in the test cell ``cell`` that its hidden test was wrong only on the cases with ``cases``."""
+    cell.metadata[WRONG_ONLY_KEY] = cases
+
+
+def diagnoses(nb: NotebookNode, key: str = DIAGNOSIS_KEY) -> dict[str, str]:
+    """Test cell id -> the slug of the catalogued mistake diagnosed there (``key`` WRONG_ONLY_KEY: the
+    kind of case alone wrong there), in an autograded notebook."""
+    return {cells.grade_id(c): c.metadata[key] for c in nb.cells
+            if cells.is_autograded_test(c) and isinstance(c.metadata.get(key), str)}
+
+
+def record_visible_checks(nb: NotebookNode, not_run: str) -> None:
+    """Mark each visible check cell of the executed ``nb`` that holds an error, other than the
+    grader's ``not_run`` (a cell left unrun is no failed check): a stopped cell and a dead kernel count."""
+    for cell in nb.cells:
+        if cells.is_visible_check(cell) and any(o.output_type == "error" and o.get("ename") != not_run
+                                                for o in cell.outputs):
+            cell.metadata[VISIBLE_CHECK_KEY] = True
+
+
+def visible_checks_failed(nb: NotebookNode) -> set[str]:
+    """The test cells (``test_<blank>``) whose blank's visible checks failed, in an autograded notebook."""
+    return {"test_" + cells.grade_id(c).removeprefix(cells.CHECK_PREFIX) for c in nb.cells
+            if cells.is_visible_check(c) and c.metadata.get(VISIBLE_CHECK_KEY) is True}
 
 
 def display_only(output: NotebookNode) -> NotebookNode:
