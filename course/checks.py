@@ -69,7 +69,8 @@ def check_array(value: Any, name: str, shape: tuple[int, ...], hint: str = "") -
     array = _as_array(value, name, f"one array of shape {shape}", hint)
     if array.shape != shape:
         raise AssertionError(
-            f"{name} should have shape {shape}, but it has shape {array.shape}. {hint}".strip()
+            f"{name} should have shape {shape}, but it has shape {array.shape}"
+            f"{' (a single number)' if array.shape == () else ''}. {hint}".strip()
         )
     if not np.all(np.isfinite(array)):
         raise AssertionError(f"{name} contains NaN or infinite entries: {array}. {hint}".strip())
@@ -466,8 +467,8 @@ _MEANINGS: list[tuple[str, str, str]] = [
     ("ValueError", "aligned", "Two arrays in a product have shapes that do not fit. Check the transposes and "
      "the order of the factors."),
     ("ValueError", "inhomogeneous|input arrays must have the same shape", "An array was built from pieces of "
-     "different shapes, such as an array beside a plain number: give every piece the same shape "
-     "(np.zeros_like(x), np.full_like(x, value)) and join them with np.stack."),
+     "different shapes, such as an array beside a plain number: give every piece the shape of the arrays "
+     "beside it (np.zeros_like(a), np.full_like(a, value) for one of those arrays a) and join them with np.stack."),
     ("ValueError", "concatenation axis must match", "The blocks you join (np.block, np.concatenate, np.vstack) "
      "do not line up: the blocks side by side need the same number of rows, and the blocks one above the "
      "other the same number of columns. Compare the shape of each block."),
@@ -704,11 +705,14 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
         return f"{blame}\n\n{said}" if raised_in else f"{said}\n\n{blame}"
 
     message = composed("this cell")
-    if checked is not None and not isinstance(value, NotWrittenYet):
+    if checked is not None:
         _passed.pop(checked, None)
         crashed = raised_in is None and explain(value, tb, [checked]) is not None
-        # validate() quotes it under the graded cell, where "this cell" would be the wrong one
-        _failed[checked] = (_current(checked), composed("the check cell") or f"{etype.__name__}: {value}", crashed)
+        # validate() quotes it under the graded cell, where "this cell" would be the wrong one; a check that stopped
+        # because another blank is not written yet says so there too (not "run the check cell", which was run)
+        said = (f"{etype.__name__}: {str(value).replace('This cell needs', 'The check cell needs', 1)}"
+                if isinstance(value, NotWrittenYet) else composed("the check cell") or f"{etype.__name__}: {value}")
+        _failed[checked] = (_current(checked), said, crashed)
     if message is None:
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []

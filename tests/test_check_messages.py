@@ -119,13 +119,22 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
         'require(speeds)\ncheck_close(speeds(np.ones((2, 3))), np.zeros((2, 3)), "speeds of 3")\npassed("speeds")',
         "def start(x0):\n    return speeds(x0) + 1.0",
         'require(start)\ncheck_close(start(np.zeros(2)), [0.0, 0.0], "start(0)", "Start at x0.")\npassed("start")',
+        'def needed(x):\n    raise NotImplementedError("Not written yet: replace this line with your code.")',
+        "def user(x):\n    return needed(x)",
+        'require(user, needed)\ncheck_close(user(1.0), 1.0, "user(1)")\npassed("user")',
+        "validate(user)",
     ]
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
     NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
                    resources={"metadata": {"path": str(tmp_path)}}).execute()
     errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
     text = [" ".join(re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(e.traceback)).split()) if e else "" for e in errors]
-    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19], text
+    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19, 21, 22], text
+    # a check that stopped because another blank is not written: Validate says that, not "run the check cell"
+    # (the student review of issue 34: it said "has not passed its visible checks since you last defined it")
+    assert text[24] == ("NotPassingYet: user does not pass its visible checks yet. Its check cell says: NotWrittenYet: "
+                        "The check cell needs needed(), which you have not written yet. Write it in its cell above "
+                        "(replace the line that raises NotImplementedError), run it, then run this cell again."), text[24]
     assert text[2].startswith("LinAlgError in your gain: Singular matrix"), text[2]
     assert "`K = gain(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))` of this cell" in text[2]
     assert "B = array of shape (2, 2), [[4., 0.], [0., 9.]]" in text[2]
