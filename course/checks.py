@@ -695,6 +695,8 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     def composed(here: str) -> str | None:
         """The message, for a reader who knows the cell that raised it as ``here``."""
         message = explain(value, tb, ([checked] if checked else []) + others, here)
+        if message is None and isinstance(value, NameError):
+            message = _set_by_a_cell_that_failed(value, shell)
         if message is None and isinstance(value, AssertionError) and not isinstance(value, NotPassingYet):
             message = wrap(f"{etype.__name__}: {value}")  # a check that fails: its message, wrapped for Validate
         if not blamed:
@@ -719,6 +721,25 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     stb = message.splitlines()
     shell._showtraceback(etype, value, stb)
     return stb
+
+
+def _set_by_a_cell_that_failed(error: NameError, shell: Any) -> str | None:
+    """For a name that a cell run earlier assigns (``history = run_particle_filter(...)``) but that is not
+    defined, since that cell stopped with an error before it: a message that points at that cell. None when
+    no cell run in this kernel assigns it (a typo, or a cell not run yet: Python's message says enough)."""
+    name = getattr(error, "name", None)
+    if not name:
+        return None
+    assigns = re.compile(rf"^[ \t]*(?:[\w\s,]*,\s*)?{re.escape(name)}\s*(?:,[\w\s,]*)?=(?!=).*$", re.MULTILINE)
+    for source in reversed(shell.user_ns.get("In", [])[:-1]):
+        found = assigns.search(source or "")
+        if found:
+            line = " ".join(found.group(0).split())
+            line = line if len(line) <= 60 else line[:57] + "..."
+            return wrap(f"NameError: name '{name}' is not defined. A cell above sets it, at the line `{line}`, but "
+                        f"that cell stopped with an error before {name} got its value. Run it again and fix its error "
+                        "first: this cell needs what it makes.")
+    return None
 
 
 def _blame(blamed: list[str], checked: str | None, raised_inside: bool, here: str) -> str:

@@ -123,6 +123,8 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
         "def user(x):\n    return needed(x)",
         'require(user, needed)\ncheck_close(user(1.0), 1.0, "user(1)")\npassed("user")',
         "validate(user)",
+        "outcome = np.linalg.solve(np.zeros((2, 2)), np.ones(2))",
+        "print(outcome)",
     ]
     nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
     NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
@@ -130,6 +132,11 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
     errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
     text = [" ".join(re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(e.traceback)).split()) if e else "" for e in errors]
     assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19, 21, 22], text
+    # a name that an earlier cell sets, after the line where it stopped (the student review of issue 34: a bare
+    # "NameError: name 'history' is not defined" under a figure, when the cell that runs the filter had failed)
+    assert text[26] == ("NameError: name 'outcome' is not defined. A cell above sets it, at the line `outcome = "
+                        "np.linalg.solve(np.zeros((2, 2)), np.ones(2))`, but that cell stopped with an error before "
+                        "outcome got its value. Run it again and fix its error first: this cell needs what it makes."), text[26]
     # a check that stopped because another blank is not written: Validate says that, not "run the check cell"
     # (the student review of issue 34: it said "has not passed its visible checks since you last defined it")
     assert text[24] == ("NotPassingYet: user does not pass its visible checks yet. Its check cell says: NotWrittenYet: "

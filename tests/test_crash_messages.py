@@ -36,7 +36,7 @@ CRASHES = {
         Crash("gain_covariance_form", "solves-for-K-not-its-transpose", "np.linalg.solve(S, H @ B).T",
               "np.linalg.solve(S, B @ H.T)", "K is n x m", "ValueError"),
         Crash("process_noise", "ragged-rows", "np.array([[h * h, h], [h, 1.0]])", "np.array([[h * h, h], [h]])",
-              "same shape", "ValueError"),
+              "the shape of the arrays beside it", "ValueError"),
         Crash("kupdate", "innovation-vector-on-the-left", "y - H @ x_f", "y - x_f @ H", "the order of the factors",
               "ValueError"),
         Crash("kupdate", "identity-of-size-2", "B_a = B_f - K @ H @ B_f",
