@@ -5,8 +5,8 @@ catalogued mistake (the diagnosis the grader recorded as data while grading, ``G
 never read back out of a message); lost another way (grouped by the kind of case that alone it was
 wrong on, when the grader recorded one, ``GradeRow.wrong_only``, else by the name of the error that
 failed it); or not written (its blank still holds the released stub). Per lab, the report also counts the
-submissions flagged for review, late, and faulted (a grader's note other than a flag: a stopped
-cell, a dead kernel, restored cells), the submissions handed in with a written blank whose visible
+submissions flagged for review, late, and faulted (a grader's note of a change: a stopped
+cell, a dead kernel, restored cells; not a flag, nor the note that only explains an error), the submissions handed in with a written blank whose visible
 checks failed (per blank and in all, from the record the grader made while grading,
 ``GradeRow.visible_failed``: information, never part of a score), and the written answers still
 waiting for a hand grade.
@@ -26,6 +26,7 @@ from autograder.catalogues.mistakes import Mistake, catalogue
 from autograder.integrity.flag import FLAG
 from autograder.labs import Lab
 from autograder.pipeline import report_figure, report_page
+from autograder.pipeline.execute import FAILED_AS_IT_RAN
 from autograder.pipeline.grades import GradeRow
 
 FULL, MISTAKE, OTHER, NOT_WRITTEN = "full marks", "catalogued mistake", "lost another way", "not written"
@@ -152,7 +153,7 @@ def count_lab(lab: Lab, rows: list[GradeRow]) -> LabCounts:
         tuple(blanks),
         tuple(row.student for row in rows if row.flags),
         tuple(row.student for row in rows if row.late_penalty > 0),
-        tuple(row.student for row in rows if any(not note.startswith(FLAG) for note in row.notes)),
+        tuple(row.student for row in rows if any(_is_fault(note) for note in row.notes)),
         tuple(row.student for row in rows if any(_visible_failed(row, cell) for cell in tests)),
         {cell: tuple(row.student for row in rows if row.cells.get(cell) is None) for cell in written},
         mistakes,
@@ -210,3 +211,9 @@ def write_report(workdir: Path, rows: list[GradeRow]) -> list[Path]:
         figure = report_figure.draw(counts, folder / f"{lab_id}.png")
         pages.append(report_page.write(counts, figure, page_path(workdir, lab_id)))
     return pages
+
+
+def _is_fault(note: str) -> bool:
+    """Whether a grader's note tells of a fault it handled (a stopped cell, a dead kernel, restored cells), not
+    a flag for review, nor the note that names the cell whose error the errors below it follow from."""
+    return not note.startswith(FLAG) and FAILED_AS_IT_RAN not in note

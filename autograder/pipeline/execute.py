@@ -388,6 +388,8 @@ def _name(cell: NotebookNode, index: int) -> str:
 
 SETUP = "setup"
 """The grade_id of every lab's set-up cell."""
+FAILED_AS_IT_RAN = "failed when the grader ran it"
+"""What every note of ``first_cause`` says: it explains errors, and changes nothing in the grading."""
 NOT_A_CAUSE = {"NotWrittenYet", TIMEOUT_ERROR, KERNEL_DIED, NOT_RUN}
 """Errors that are no cell's own failure, or that have a note of their own: a blank still unwritten, and
 the grader's stops."""
@@ -414,9 +416,9 @@ def first_cause(nb: NotebookNode) -> list[str]:
         message = str(errors[0].get("evalue", "")).strip().splitlines()
         error = f"{errors[0].get('ename')}: {message[0][:200] if message else ''}".rstrip(": ")
         if setup:
-            return [f"The set-up cell failed when the grader ran it ({error}). Every cell after it needs what it "
+            return [f"The set-up cell {FAILED_AS_IT_RAN} ({error}). Every cell after it needs what it "
                     "imports, so the errors below may all come from this one."]
-        return [f"Your cell {cells.grade_id(cell)} failed when the grader ran it ({error}), so what it defines after "
+        return [f"Your cell {cells.grade_id(cell)} {FAILED_AS_IT_RAN} ({error}), so what it defines after "
                 "the failing line was never defined: the cells below that use it fail because of this error. "
                 "Fix it first."]
     return []
