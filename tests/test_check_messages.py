@@ -86,6 +86,20 @@ def test_an_exception_inside_a_blank_names_the_call_its_inputs_and_a_likely_caus
         assert explain(error, error.__traceback__, ["gain_information_form"]) is None
 
 
+def _run_in_kernel(cells_source: list[str], folder) -> tuple:
+    """The cells run in a fresh kernel, as a student runs them: the notebook, each cell's error output (or None),
+    and each error's text on one line, without colours."""
+    import nbformat
+    from nbclient import NotebookClient
+
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
+    NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
+                   resources={"metadata": {"path": str(folder)}}).execute()
+    errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
+    text = [" ".join(re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(e.traceback)).split()) if e else "" for e in errors]
+    return nb, errors, text
+
+
 def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_and_says_each_thing_once(tmp_path):
     """A student's kernel. A sign error in gain raises LinAlgError inside it; its check says which call raised it,
     with the inputs and the likely cause. The check of update, which calls gain, blames gain first, as the error
@@ -94,9 +108,6 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
     first; a blank that failed its check by crashing, and did not crash here, is not blamed. An error
     inside a blank that passes its checks blames nobody else, and a cell that is not a check says what raised,
     then once that a blank it uses fails its checks. An error outside any blank keeps IPython's own traceback."""
-    import nbformat
-    from nbclient import NotebookClient
-
     cells_source = [
         "%xmode Minimal\nimport numpy as np\nfrom course.checks import check_close, passed, require, validate",
         "def gain(B, H, R):\n    RinvH = np.linalg.solve(R, H)\n    return np.linalg.solve(np.linalg.inv(B) - H.T @ RinvH, RinvH.T)",
@@ -126,11 +137,7 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
         "outcome = np.linalg.solve(np.zeros((2, 2)), np.ones(2))",
         "print(outcome)",
     ]
-    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
-    NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
-                   resources={"metadata": {"path": str(tmp_path)}}).execute()
-    errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
-    text = [" ".join(re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(e.traceback)).split()) if e else "" for e in errors]
+    nb, errors, text = _run_in_kernel(cells_source, tmp_path)
     assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19, 21, 22], text
     # a name that an earlier cell sets, after the line where it stopped (the student review of issue 34: a bare
     # "NameError: name 'history' is not defined" under a figure, when the cell that runs the filter had failed)
@@ -273,9 +280,6 @@ def test_while_grading_only_a_check_cells_crash_is_explained_and_validate_does_n
     """nbgrader's autograder (NBGRADER_EXECUTION=autograde): the feedback page explains a crash in a visible check
     cell, whose inputs are the notebook's own, with the check's hint; a crash in any other cell, which could come
     from a hidden case, keeps IPython's own message; validate() lets every blank through."""
-    import nbformat
-    from nbclient import NotebookClient
-
     from course.checks import GRADING
 
     monkeypatch.setenv("NBGRADER_EXECUTION", GRADING)
@@ -286,11 +290,7 @@ def test_while_grading_only_a_check_cells_crash_is_explained_and_validate_does_n
         "grow(np.eye(3))",
         "validate(grow)",
     ]
-    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(s) for s in cells_source])
-    NotebookClient(nb, timeout=120, allow_errors=True, kernel_name="python3",
-                   resources={"metadata": {"path": str(tmp_path)}}).execute()
-    errors = [next((o for o in c.outputs if o.output_type == "error"), None) for c in nb.cells]
-    text = [" ".join(re.sub(r"\x1b\[[0-9;]*m", "", "\n".join(e.traceback)).split()) if e else "" for e in errors]
+    nb, errors, text = _run_in_kernel(cells_source, tmp_path)
     assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 4], text
     assert text[2].startswith("ValueError in your grow: matmul") and "Size the identity from B." in text[2], text[2]
     assert "B = array of shape (3, 3)" in text[2]
