@@ -350,9 +350,9 @@ GRADING = "autograde"
 
 _passed: dict[str, Callable] = {}
 """Blank name -> the function object that last passed its visible checks."""
-_failed: dict[str, tuple[Callable, str, bool]] = {}
-"""Blank name -> the function that last failed its visible checks, what they said, and whether it failed by
-raising an error of its own (a crash) rather than by a wrong result."""
+_failed: dict[str, tuple[Callable, str, bool, tuple[str, ...]]] = {}
+"""Blank name -> the function that last failed its visible checks, what they said, whether it failed by
+raising an error of its own (a crash) rather than by a wrong result, and the other blanks its check blamed."""
 _cell: dict[str, Any] = {"checks": None, "uses": []}
 """The running cell: the blank whose checks it runs (or None), and the blanks it requires."""
 
@@ -714,7 +714,7 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
         # because another blank is not written yet says so there too (not "run the check cell", which was run)
         said = (f"{etype.__name__}: {str(value).replace('This cell needs', 'The check cell needs', 1)}"
                 if isinstance(value, NotWrittenYet) else composed("the check cell") or f"{etype.__name__}: {value}")
-        _failed[checked] = (_current(checked), said, crashed)
+        _failed[checked] = (_current(checked), said, crashed, tuple(blamed))
     if message is None:
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []
@@ -752,8 +752,19 @@ def _blame(blamed: list[str], checked: str | None, raised_inside: bool, here: st
     else:
         subject = f"This may come from {w['your']}, which {checked or 'this cell'} uses: {w['they']} {failing}"
     says = "says" if len(blamed) == 1 else "say"
+    # one step further back: the blanks that the blamed ones' own checks blamed (tracking_dynamics, when pf_step's
+    # check failed because of it and this error was raised inside pf_step)
+    behind = [n for b in blamed for n in _blamed_by_check(b) if n not in blamed and n != checked]
+    further = (f" Its check in turn points at {_upstream(list(dict.fromkeys(behind)))['your']}: start there."
+               if behind else "")
     return (f"{subject}. Make {w['it']} pass {w['its']} checks first ({w['its']} check {w['cell']} {says} what is "
-            f"wrong), then run {here} again.")
+            f"wrong), then run {here} again.{further}")
+
+
+def _blamed_by_check(name: str) -> tuple[str, ...]:
+    """The blanks that the last failing check of the blank ``name``, as it is defined now, blamed."""
+    failed = _failed.get(name)
+    return failed[3] if failed is not None and failed[0] is _current(name) else ()
 
 
 def _calls(name: str) -> list[str]:

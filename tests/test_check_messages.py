@@ -136,9 +136,19 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
         "validate(user)",
         "outcome = np.linalg.solve(np.zeros((2, 2)), np.ones(2))",
         "print(outcome)",
+        "def dyn(x):\n    return (x, x)",
+        'require(dyn)\ncheck_array(dyn(np.ones(2)), "dyn(x)", (2,))\npassed("dyn")',
+        "def step(x):\n    return dyn(x) * 2.5",
+        'require(step)\ncheck_close(step(np.ones(2)), 2.5 * np.ones(2), "step(x)")\npassed("step")',
+        "def loop(x):\n    return step(x)",
+        'require(loop)\ncheck_close(loop(np.ones(2)), 2.5 * np.ones(2), "loop(x)")\npassed("loop")',
     ]
     nb, errors, text = _run_in_kernel(cells_source, tmp_path)
-    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19, 21, 22], text
+    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19, 21, 22, 27, 29, 31], text
+    # a crash inside step, whose own check failed because of dyn: both are named, dyn as where to start (the student
+    # review of issue 34: pf_step was blamed, tracking_dynamics, whose tuple pf_step multiplied, was not named)
+    assert text[32].startswith("The error was raised inside your step, which does not pass its own visible checks yet."), text[32]
+    assert "Its check in turn points at your dyn: start there." in text[32], text[32]
     # a name that an earlier cell sets, after the line where it stopped (the student review of issue 34: a bare
     # "NameError: name 'history' is not defined" under a figure, when the cell that runs the filter had failed)
     assert text[26] == ("NameError: name 'outcome' is not defined. A cell above sets it, at the line `outcome = "
