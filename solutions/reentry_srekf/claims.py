@@ -136,7 +136,7 @@ def _() -> None:
 # ---------------------------------------------------------------------------------------------
 @claim("reentry-srekf/covariance-form-breaks")
 def _() -> None:
-    """Short covariance form: float32 wrong by 100% (variance exactly 0) for every sigma <= 0.2-0.5 m; float64 not PD (variance 0, then -1e-10 to -1e-8 m^2, over 1e10 times the exact at the end) from 1e-5-3e-5 m down, error growing before."""
+    """Short covariance form: float32 wrong by 100% (variance exactly 0) for every sigma <= 0.2-0.5 m; float64 not PD (variance 0, then -2^-30 m^2: 7 times the exact at 1e-5 m, 7e10 at 1e-10 m) from 1e-5-3e-5 m down, error growing before."""
     comparison = _first_update_comparison()
     error = {
         name: np.abs(getattr(comparison, name) - comparison.exact) / comparison.exact
@@ -154,11 +154,13 @@ def _() -> None:
     # float64: the error grows as the radar gets more precise (by over eight decades before breaking)
     working = comparison.pd_covariance64
     assert error["covariance64"][working][-1] > 1e8 * error["covariance64"][working][0], "float64's error does not grow"
-    # once broken, the variance is small in m^2 (measured 0, then -9.3e-10 at every sigma) but up to 7e10 times the exact one
+    # once broken, the variance is exactly 0, then -2^-30 m^2 (one rounding unit of P_hh) at every finer radar: about
+    # 7 times the exact variance at 1e-5 m and 7e10 times at 1e-10 m
     broken64 = comparison.covariance64[~working]
-    assert np.all((broken64 > -1e-8) & (broken64 <= 0.0)) and np.all(broken64[1:] < -1e-10), \
-        f"the broken float64 variances range over {broken64}"
-    assert error["covariance64"][-1] > 1e10, f"at the most precise radar the float64 error is {error['covariance64'][-1]:.2g}"
+    assert broken64[0] == 0.0 and np.all(broken64[1:] == -(2.0**-30)), f"the broken float64 variances are {broken64}"
+    ratio = np.abs(broken64) / comparison.exact[~working]
+    at = {s: float(ratio[np.argmin(np.abs(np.log(comparison.sigma[~working] / s)))]) for s in (1e-5, 1e-10)}
+    assert 5 <= at[1e-5] <= 10 and 5e10 <= at[1e-10] <= 1e11, f"the broken variance against the exact one: {at}"
 
 
 @claim("reentry-srekf/square-root-form-holds")
@@ -288,12 +290,15 @@ def _first_update_nees(sigma_h: float, n: int, seed: int) -> np.ndarray:
 
 @claim("reentry-srekf/first-update-nees-spike")
 def _() -> None:
-    """The average NEES at t = 0 is 7-13 (above its band); alone, about one first update in seven (10-19%) has a
-    NEES above 9.35, against at most 5% when sigma_h is 1000 m."""
+    """The average NEES at t = 0 of the shipped falls is 7-13 (above its band); alone, about one first update in
+    seven (10-19%) has a NEES above 9.35, against at most 3.5% (2.5% when consistent) when sigma_h is 1000 m."""
     # Measured: 9.74 at t = 0 over the shipped falls. Over 2000 first updates: 13.8% / 14.8% above 9.35 (seeds 1 / 2)
     # at sigma_h = 2200 m, 3.8% / 2.7% at 1000 m, 2.8% / 2.2% at 500 m; a consistent update has 2.5%. The mean of
     # those NEES is no statistic to quote: a heavy tail puts it at 9.4, 18 or 13 by batch, while the median stays
-    # near 3. The binomial standard deviation of a rate near 0.14 over 2000 updates is 0.008.
+    # near 3. The binomial standard deviation of a rate near 0.14 over 2000 updates is 0.008. An independent review
+    # (200,000 first updates a sigma_h) found 0.137 at 2200 m and 0.030 at 1000 m; a first update linearised exactly
+    # gives 0.025 at every sigma_h, so the excess is the range's curvature. The average at t = 0 is a mean of 40
+    # heavy-tailed values: 3.9 to 45 over eight other sets of 40 falls, so the text quotes it for these falls only.
     falls = _falls()
     _, upper = starship.average_nees_band(falls.nees.shape[0])
     first = falls.nees[:, 0].mean()
@@ -303,7 +308,7 @@ def _() -> None:
         wide = np.mean(_first_update_nees(2200.0, 2000, seed) > single_upper)
         assert 0.10 <= wide <= 0.19, f"{wide:.1%} of the first updates from sigma_h = 2200 m have a NEES above {single_upper:.2f}"
         narrow = np.mean(_first_update_nees(1000.0, 2000, seed) > single_upper)
-        assert narrow <= 0.05, f"{narrow:.1%} of the first updates from sigma_h = 1000 m have a NEES above {single_upper:.2f}"
+        assert narrow <= 0.04, f"{narrow:.1%} of the first updates from sigma_h = 1000 m have a NEES above {single_upper:.2f}"
 
 
 @claim("reentry-srekf/average-nees-consistent-late")
