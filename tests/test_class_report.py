@@ -22,6 +22,7 @@ from autograder.hidden_tests.case_kinds import wrong_only
 from autograder.pipeline.grades import GradeRow
 from lab_code import define, hidden_tests
 from over_labs import about
+from course.checks import NOT_WRITTEN
 
 LAB = get_lab("train-kf")
 MISTAKES = {"no-Q": 3, "innovation-sign": 2}
@@ -232,3 +233,54 @@ def test_a_submissions_text_is_escaped_on_the_page_and_neutralised_in_the_csv(tm
     students = (tmp_path / "report" / f"{LAB.id}-students.csv").read_text()
     assert "'=HYPERLINK(1)" in students and "\n=" not in students.replace("\r\n", "\n")
     shutil.rmtree(tmp_path / "report")
+
+
+FAKE_STOP = '''
+class _Shown:
+    def __init__(self, name, text):
+        self.name, self.text = name, text
+    def _repr_html_(self):
+        raise type(self.name, (Exception,), {})(self.text)
+    def __repr__(self):
+        return ""
+_kit_validate = validate
+def validate(f):
+    if getattr(f, "__name__", "") == "kupdate":
+        display(_Shown("CellTimeoutError", "fake"))
+        return None
+    return _kit_validate(f)
+'''
+"""What an adversarial review of issue 31 appended to kupdate's cell: a display that raises, so that the visible part of
+kupdate's test cell shows an error named CellTimeoutError, which made the grader take the cell as stopped, skip its
+hidden test and its diagnosis, and keep the kernel's errors in the test cell."""
+
+
+def test_a_submission_cannot_hide_its_mistake_from_the_report(tmp_path):
+    """The review's two routes, in one submission with a catalogued mistake in kupdate: the stub's text left as a comment
+    (the blank was counted not written) and a faked stop (the hidden test was skipped). The grader still runs the hidden
+    test and diagnoses the mistake, the blank counts as written, and the cell holds the grader's error alone."""
+    nb = submissions.with_mistake(LAB, mistake("innovation-sign"))
+    [cell] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == "kupdate"]
+    cell.source = f"# {NOT_WRITTEN}\n{cell.source}\n{FAKE_STOP}"
+    submissions.write(nb, tmp_path / "class", "s001", LAB)
+    [row] = grading.grade(tmp_path / "class", tmp_path / "course", jobs=1)
+    assert row.lost == ["test_kupdate"] and row.diagnosed == {"test_kupdate": "innovation-sign"}, (row.lost, row.reasons)
+    assert "test_kupdate" not in row.not_written
+    assert not any("ran for more than" in note for note in row.notes), row.notes
+    graded = nbformat.read(tmp_path / "course" / "autograded" / "s001" / LAB.id / LAB.notebook_name, as_version=4)
+    [test] = [c for c in graded.cells if cells.meta(c).get("grade_id") == "test_kupdate"]
+    assert [o.ename for o in test.outputs if o.output_type == "error"] == ["AssertionError"], test.outputs
+
+
+def test_only_the_graders_own_note_of_a_failing_cell_is_not_a_fault():
+    """The review's count route: a file named 'x failed when the grader ran it.ipynb' kept its intake note out of
+    the faulted count. Only a note that begins as execute.first_cause's do is left out."""
+    from autograder.pipeline.execute import first_cause
+
+    nb = submissions.solved(LAB)
+    for grade_id, ename in (("kupdate", "ZeroDivisionError"), ("test_kupdate", "NameError")):
+        [c] = [c for c in nb.cells if cells.meta(c).get("grade_id") == grade_id]
+        c.outputs = [nbformat.v4.new_output("error", ename=ename, evalue="x", traceback=[])]
+    [note] = first_cause(nb)
+    assert not class_report._is_fault(note)
+    assert class_report._is_fault("Your notebook was submitted as 'x failed when the grader ran it (1).ipynb'; graded.")

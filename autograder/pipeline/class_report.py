@@ -26,7 +26,7 @@ from autograder.catalogues.mistakes import Mistake, catalogue
 from autograder.integrity.flag import FLAG
 from autograder.labs import Lab
 from autograder.pipeline import report_figure, report_page
-from autograder.pipeline.execute import FAILED_AS_IT_RAN
+from autograder.pipeline.execute import FIRST_CAUSE_NOTE
 from autograder.pipeline.grades import GradeRow
 
 FULL, MISTAKE, OTHER, NOT_WRITTEN = "full marks", "catalogued mistake", "lost another way", "not written"
@@ -216,4 +216,4 @@ def write_report(workdir: Path, rows: list[GradeRow]) -> list[Path]:
 def _is_fault(note: str) -> bool:
     """Whether a grader's note tells of a fault it handled (a stopped cell, a dead kernel, restored cells), not
     a flag for review, nor the note that names the cell whose error the errors below it follow from."""
-    return not note.startswith(FLAG) and FAILED_AS_IT_RAN not in note
+    return not note.startswith(FLAG) and not FIRST_CAUSE_NOTE.match(note)

@@ -29,6 +29,7 @@ import contextlib
 import functools
 import json
 import os
+import re
 import shutil
 import tempfile
 import time
@@ -128,6 +129,7 @@ class GradingExecute(Execute):
         self.resources[verdicts.RESOURCES_KEY] = {}
         verdicts.forget_diagnoses(self.nb)
         notes: list[str] = []
+        self._stopped: set[int] = set()
         deadline = time.monotonic() + self.notebook_timeout
         failed: set[int] = set()
         restarts = 0
@@ -168,13 +170,12 @@ class GradingExecute(Execute):
                     _add_error(cell, TIMEOUT_ERROR, stopped)
                     self._fail(cell, f"it ran for more than {self.timeout} s and was stopped")
                 else:
-                    timeouts = [o for o in cell.outputs if o.output_type == "error" and o.ename == TIMEOUT_ERROR]
-                    if not timeouts:
+                    if id(cell) not in self._stopped:
                         continue
-                    timeouts[-1]["evalue"] = stopped
-                    timeouts[-1]["traceback"] = [f"{TIMEOUT_ERROR}: {stopped}"]
-                    # the KeyboardInterrupt that stopping it raised is the grader's doing, not the student's
-                    cell.outputs = [o for o in cell.outputs if o.get("ename") != "KeyboardInterrupt"]
+                    # the grader stopped it (``_async_handle_timeout``): its error, and the KeyboardInterrupt that
+                    # stopping it raised, are the grader's doing; an error that the kernel named so is not
+                    cell.outputs = [o for o in cell.outputs if o.get("ename") not in (TIMEOUT_ERROR, "KeyboardInterrupt")]
+                    _add_error(cell, TIMEOUT_ERROR, stopped)
                     notes.append(f"Cell {_name(cell, index)} ran for more than {self.timeout} s and was stopped.")
                     self._fail(cell, f"it ran for more than {self.timeout} s and was stopped")
                 failed.add(index)
@@ -201,7 +202,7 @@ class GradingExecute(Execute):
             self.execute_cell(cell, index, store_history=True)
         finally:
             cell.source = source
-        if any(o.output_type == "error" and o.get("ename") == TIMEOUT_ERROR for o in cell.outputs):
+        if id(cell) in self._stopped:
             return  # stopped: the caller restarts the kernel and records the failure
         cell.outputs = [verdicts.display_only(o) for o in cell.outputs]
         deadline = start + self.timeout if self.timeout else None
@@ -282,6 +283,14 @@ class GradingExecute(Execute):
             return
         self.wait_for_reply(msg_id)
 
+    async def _async_handle_timeout(self, timeout: int, cell: NotebookNode | None = None) -> dict | None:
+        """nbclient's: interrupt the kernel, and reply with a CellTimeoutError. The cell is recorded as
+        stopped here, in the grader's process: an error of that name from the kernel is the student's own
+        output, not a stop (a review of issue 31 faked one to skip a hidden test and write the report's detail)."""
+        if cell is not None:
+            self._stopped.add(id(cell))
+        return await super()._async_handle_timeout(timeout, cell)
+
     def _restart_and_replay(self, upto: int, failed: set[int], deadline: float) -> None:
         """A fresh kernel that has silently run every code cell before ``upto`` that did not fail."""
         run_sync(self._async_restart)()
@@ -290,11 +299,12 @@ class GradingExecute(Execute):
                 continue
             source = compare.split(cell.source)[0]  # a hidden test never runs in the kernel
             msg_id = self.kc.execute(source, silent=True, store_history=False, allow_stdin=False)
+            self._stopped.discard(id(cell))
             try:
                 reply = self.wait_for_reply(msg_id, cell)
             except (DeadKernelError, CellTimeoutError):
                 reply = None
-            if reply is None or reply["content"].get("ename") == TIMEOUT_ERROR:
+            if reply is None or id(cell) in self._stopped:
                 failed.add(index)
                 run_sync(self._async_restart)()
 
@@ -389,7 +399,9 @@ def _name(cell: NotebookNode, index: int) -> str:
 SETUP = "setup"
 """The grade_id of every lab's set-up cell."""
 FAILED_AS_IT_RAN = "failed when the grader ran it"
-"""What every note of ``first_cause`` says: it explains errors, and changes nothing in the grading."""
+FIRST_CAUSE_NOTE = re.compile(rf"(?:The set-up cell|Your cell \w+) {FAILED_AS_IT_RAN} \(")
+"""How every note of ``first_cause`` begins: it explains errors, and changes nothing in the grading (a note that
+only quotes the words, such as a file name in an intake note, does not begin so)."""
 NOT_A_CAUSE = {"NotWrittenYet", TIMEOUT_ERROR, KERNEL_DIED, NOT_RUN}
 """Errors that are no cell's own failure, or that have a note of their own: a blank still unwritten, and
 the grader's stops."""

@@ -3,6 +3,7 @@ grading environment beside it."""
 
 from __future__ import annotations
 
+import functools
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -17,7 +18,6 @@ from autograder.labs import ROOT, Lab
 from autograder.pipeline import verdicts, versions
 from autograder.pipeline.nbgrader_apps import course_config
 from autograder.pipeline.restore import grader_notes
-from course.checks import NOT_WRITTEN
 
 
 def all_graded_labs(workdir: Path) -> list[Lab]:
@@ -101,7 +101,7 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
                     if grade.cell.cell_type == "code":
                         auto.add(grade.name)
                 order = [c.name for c in gb.find_notebook(lab.id, lab.id).grade_cells]
-                notes, reasons, diagnosed, wrong_only, not_written, visible_failed = _read_autograded(autograded)
+                notes, reasons, diagnosed, wrong_only, not_written, visible_failed = _read_autograded(autograded, lab)
                 lost = {c for c in order if (cells[c] or 0.0) < maxima[c]}
                 rows.append(
                     GradeRow(
@@ -125,14 +125,26 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
 ANSI = re.compile(r"\x1b\[[0-9;]*m")
 
 
-def _read_autograded(autograded: Path) -> tuple[tuple[str, ...], dict[str, str], dict[str, str], dict[str, str],
-                                                 set[str], set[str]]:
+@functools.cache
+def _stubs(lab_id: str) -> dict[str, str]:
+    """Blank -> the code of its released stub, lines stripped and blank lines left out."""
+    return {cells.grade_id(c): _lines(c.source) for c in cells.read(Lab(lab_id).release_notebook).cells
+            if cells.is_code_answer(c)}
+
+
+def _lines(source: str) -> str:
+    return "\n".join(line.rstrip() for line in source.strip().splitlines() if line.strip())
+
+
+def _read_autograded(autograded: Path, lab: Lab) -> tuple[tuple[str, ...], dict[str, str], dict[str, str],
+                                                          dict[str, str], set[str], set[str]]:
     """What an autograded notebook says beside the gradebook: the grader's notes; for each graded
     cell its first error (the grader's reason for a failing verdict, the only error a test cell
     holds, autograder/pipeline/verdicts.py); test cell -> diagnosed mistake (``verdicts.diagnoses``), and
     -> the kind of case alone wrong;
-    the test cells of the blanks that still hold their stub; and those of the blanks whose visible
-    checks failed (``verdicts.visible_checks_failed``)."""
+    the test cells of the blanks that still hold their stub as released (the stub's text inside written code,
+    a comment say, does not count: a review of issue 31 hid a diagnosed mistake so); and those of the blanks
+    whose visible checks failed (``verdicts.visible_checks_failed``)."""
     nb = nbformat.read(autograded, as_version=4)
     reasons = {}
     for cell in nb.cells:
@@ -141,7 +153,9 @@ def _read_autograded(autograded: Path) -> tuple[tuple[str, ...], dict[str, str],
         errors = [o for o in cell.outputs if o.output_type == "error"]
         if errors:
             reasons[cells.grade_id(cell)] = ANSI.sub("", f"{errors[0].ename}: {errors[0].evalue}")
-    not_written = {f"test_{cells.grade_id(c)}" for c in nb.cells if cells.is_code_answer(c) and NOT_WRITTEN in c.source}
+    stubs = _stubs(lab.id)
+    not_written = {f"test_{cells.grade_id(c)}" for c in nb.cells
+                   if cells.is_code_answer(c) and _lines(c.source) == stubs.get(cells.grade_id(c))}
     return (tuple(grader_notes(nb)), reasons, verdicts.diagnoses(nb), verdicts.diagnoses(nb, verdicts.WRONG_ONLY_KEY),
             not_written, verdicts.visible_checks_failed(nb))
 
