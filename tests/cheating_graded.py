@@ -55,7 +55,7 @@ def graded(request, tmp_path_factory):
     class_dir = tmp_path_factory.mktemp("class")
     _write(*_chosen(request), class_dir)
     workdir = tmp_path_factory.mktemp("course")
-    rows = grading.grade(class_dir, workdir, jobs=2)
+    rows = grading.grade(class_dir, workdir, jobs=2).rows
     return {(row.student, row.lab): row for row in rows}, workdir
 
 
@@ -93,5 +93,5 @@ def test_regrading_cheats_gives_every_field_again(graded, request, tmp_path):
         again_cases += [min((case for case in cases if way in case[1].caught_by), key=lambda case: len(case[1].caught_by))]
     again_cases = list(dict.fromkeys(again_cases))
     _write(again_cases, [], tmp_path / "class")
-    again = {(row.student, row.lab): row for row in grading.grade(tmp_path / "class", tmp_path / "course", jobs=2)}
+    again = {(row.student, row.lab): row for row in grading.grade(tmp_path / "class", tmp_path / "course", jobs=2).rows}
     assert again == {(c.name, lab.id): graded[0][(c.name, lab.id)] for lab, c in again_cases}

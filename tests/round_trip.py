@@ -67,7 +67,7 @@ def graded(request, tmp_path_factory) -> tuple[dict[tuple[str, str], GradeRow], 
     folder = tmp_path_factory.mktemp("round-trip")
     class_dir, workdir = folder / "class", folder / "course"
     submissions.write_class(chosen(request.config, request.module.HALF), class_dir, grouped=True)
-    rows = grading.grade(class_dir, workdir, jobs=2)
+    rows = grading.grade(class_dir, workdir, jobs=2).rows
     return {(row.student, row.lab): row for row in rows}, workdir
 
 
@@ -136,7 +136,7 @@ def test_regrading_gives_every_cell_again(graded, request, tmp_path) -> None:
         picked[(student, lab)] = submissions.with_mistakes(lab, mistakes)
     for (student, lab), nb in picked.items():
         submissions.write(nb, class_dir, student, lab)
-    again = {(row.student, row.lab): row for row in grading.grade(class_dir, tmp_path / "course", jobs=2)}
+    again = {(row.student, row.lab): row for row in grading.grade(class_dir, tmp_path / "course", jobs=2).rows}
     first = {(student, lab.id): rows[(student, lab.id)] for student, lab in picked}
     assert again.keys() == first.keys()
 

@@ -56,7 +56,7 @@ def graded(request, tmp_path_factory):
         for k in KS:
             submissions.write(_submission(lab, k, False), folder, f"alt-{k}", lab)
             submissions.write(_submission(lab, k, True), folder, f"alt-{k}-with-mistakes", lab)
-    rows = grading.grade(folder, tmp_path_factory.mktemp("course"), jobs=2)
+    rows = grading.grade(folder, tmp_path_factory.mktemp("course"), jobs=2).rows
     return {(row.student, row.lab): row for row in rows}
 
 

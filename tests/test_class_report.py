@@ -20,6 +20,7 @@ from autograder.labs import get_lab
 from autograder.pipeline import class_report, grading, late, verdicts
 from autograder.hidden_tests.case_kinds import wrong_only
 from autograder.pipeline.grades import GradeRow
+from autograder.pipeline.restore import GraderNote, NoteKind
 from lab_code import define, hidden_tests
 from over_labs import about
 from course.checks import NOT_WRITTEN
@@ -91,7 +92,7 @@ def behind(folder) -> dict[tuple[str, str, str], set[str]]:
 def graded(tmp_path_factory):
     root = tmp_path_factory.mktemp("class-report")
     built = write_class(root / "class")
-    rows = grading.grade(root / "class", root / "course", jobs=2)
+    rows = grading.grade(root / "class", root / "course", jobs=2).rows
     return root, built, rows
 
 
@@ -263,24 +264,24 @@ def test_a_submission_cannot_hide_its_mistake_from_the_report(tmp_path):
     [cell] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == "kupdate"]
     cell.source = f"# {NOT_WRITTEN}\n{cell.source}\n{FAKE_STOP}"
     submissions.write(nb, tmp_path / "class", "s001", LAB)
-    [row] = grading.grade(tmp_path / "class", tmp_path / "course", jobs=1)
+    [row] = grading.grade(tmp_path / "class", tmp_path / "course", jobs=1).rows
     assert row.lost == ["test_kupdate"] and row.diagnosed == {"test_kupdate": "innovation-sign"}, (row.lost, row.reasons)
     assert "test_kupdate" not in row.not_written
-    assert not any("ran for more than" in note for note in row.notes), row.notes
+    assert not any("ran for more than" in note.text for note in row.notes), row.notes
     graded = nbformat.read(tmp_path / "course" / "autograded" / "s001" / LAB.id / LAB.notebook_name, as_version=4)
     [test] = [c for c in graded.cells if cells.meta(c).get("grade_id") == "test_kupdate"]
     assert [o.ename for o in test.outputs if o.output_type == "error"] == ["AssertionError"], test.outputs
 
 
-def test_only_the_graders_own_note_of_a_failing_cell_is_not_a_fault():
+def test_only_what_the_grader_changed_counts_as_a_fault():
     """The review's count route: a file named 'x failed when the grader ran it.ipynb' kept its intake note out of
-    the faulted count. Only a note that begins as execute.first_cause's do is left out."""
-    from autograder.pipeline.execute import first_cause
-
-    nb = submissions.solved(LAB)
-    for grade_id, ename in (("kupdate", "ZeroDivisionError"), ("test_kupdate", "NameError")):
-        [c] = [c for c in nb.cells if cells.meta(c).get("grade_id") == grade_id]
-        c.outputs = [nbformat.v4.new_output("error", ename=ename, evalue="x", traceback=[])]
-    [note] = first_cause(nb)
-    assert not class_report._is_fault(note)
-    assert class_report._is_fault("Your notebook was submitted as 'x failed when the grader ran it (1).ipynb'; graded.")
+    the faulted count, when the report told execute.first_cause's note apart by its text. The report now reads
+    each note's kind from the grader's metadata (restore.NoteKind): a cause or a flag is not a fault, whatever
+    its text."""
+    names = {"test_kupdate": 1.0}
+    row = lambda *notes: GradeRow("s", LAB.id, names, names, frozenset(names), notes=notes)  # noqa: E731
+    quoting = GraderNote(NoteKind.CHANGE, "It was submitted as x failed when the grader ran it (1).ipynb and graded.")
+    cause = GraderNote(NoteKind.CAUSE, "Your cell kupdate failed when the grader ran it (ZeroDivisionError: x).")
+    flag = GraderNote(NoteKind.FLAG, "Flagged for review: it reads the reference. It costs no points.")
+    assert class_report.count_lab(LAB, [row(quoting)]).faulted == ("s",)
+    assert class_report.count_lab(LAB, [row(cause, flag)]).faulted == ()

@@ -13,6 +13,7 @@ from autograder import cells, default_jobs
 from autograder.pipeline import grading, table
 from autograder.__main__ import build_parser
 from autograder.pipeline.grading import GradeRow
+from autograder.pipeline.restore import GraderNote, NoteKind
 from autograder.authoring.inventory import print_inventory
 from autograder.labs import Lab
 
@@ -64,7 +65,7 @@ LONG = ("AssertionError: kupdate: the analysis differs from the reference on 3 o
         "or the covariance update leaves out a term. Check the Joseph form line by line against equation (12).")
 
 
-def _row(student: str, reasons: dict[str, str], lost: list[str], notes: tuple[str, ...] = ()) -> GradeRow:
+def _row(student: str, reasons: dict[str, str], lost: list[str], notes: tuple[GraderNote, ...] = ()) -> GradeRow:
     names = ["test_a", "test_b", "test_c", "test_d"]
     return GradeRow(student, "nonlinear-filters", {n: 0.0 if n in lost else 2.0 for n in names}, dict.fromkeys(names, 2.0),
                     frozenset(names), notes=notes, reasons=reasons)
@@ -105,7 +106,7 @@ def test_the_table_fits_100_columns_with_whole_words_and_each_lost_cell_once():
         _row("blank", dict.fromkeys(["test_a", "test_b", "test_c", "test_d"], "NotWrittenYet: You have not written this function yet."),
              ["test_a", "test_b", "test_c", "test_d"]),
         _row("solved", {}, []),
-        _row("noreason", {}, ["test_c"], notes=("It was submitted as train (1).ipynb and graded as train-kf.ipynb.",)),
+        _row("noreason", {}, ["test_c"], notes=(GraderNote(NoteKind.CHANGE, "It was submitted as train (1).ipynb and graded as train-kf.ipynb."),)),
     ]
     text = table.format_table(rows, {"nonlinear-filters": ["unreadable"]}, width=100)
     lines = text.splitlines()
@@ -162,7 +163,7 @@ def test_the_demo_closes_with_a_verdict_and_where_to_look(tmp_path, monkeypatch,
     from autograder.catalogues import demo
 
     monkeypatch.setattr(demo, "all_labs", lambda: [Lab("train-kf")])
-    monkeypatch.setattr(demo.grading, "grade", lambda *args, **kwargs: [])
+    monkeypatch.setattr(demo.grading, "grade", lambda *args, **kwargs: grading.Graded([], [], []))
     assert demo.run_demo(tmp_path, 1) is False
     out = capsys.readouterr().out
     assert " ".join(out.split()).startswith("Demo class: 6 submissions of 1 lab from 6 students in ")

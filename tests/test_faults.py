@@ -28,7 +28,7 @@ def graded(tmp_path_factory, short_timeouts):
         submissions.write(nb, class_dir, student, LAB)
     faults.write_faults(LAB, BLANK, class_dir)
     workdir = tmp_path_factory.mktemp("course")
-    rows = grading.grade(class_dir, workdir, jobs=3)
+    rows = grading.grade(class_dir, workdir, jobs=3).rows
     return {row.student: row for row in rows}, workdir, class_dir
 
 
@@ -52,7 +52,7 @@ def test_each_fault_costs_what_it_should_says_why_and_is_not_flagged(graded, fau
     graded, _, _ = graded
     row = graded[fault.student_id(LAB)]
     assert synthetic_class.fault_outcome(LAB, fault, BLANK).errors(row) == [], (row.reasons, row.notes)
-    said = " ".join([*row.notes, *row.reasons.values()])
+    said = " ".join([*(note.text for note in row.notes), *row.reasons.values()])
     assert fault.says in said, said
 
 
@@ -73,7 +73,7 @@ def test_a_blank_that_kills_its_kernel_costs_no_later_blank_that_calls_it(tmp_pa
     callers = [b for b in order[order.index(blank) + 1:] if blank in called_blanks(LAB.reference(), b, order)]
     assert callers, f"no blank after {blank} calls it: choose one that a later blank's reference calls"
     faults.write_fault(fault, LAB, blank, tmp_path / "class")
-    [row] = grading.grade(tmp_path / "class", tmp_path / "course", jobs=1)
+    [row] = grading.grade(tmp_path / "class", tmp_path / "course", jobs=1).rows
     assert synthetic_class.fault_outcome(LAB, fault, blank).errors(row) == [], (row.reasons, row.notes)
     assert all(row.cells[f"test_{b}"] > 0 for b in callers)
 
@@ -93,5 +93,5 @@ def test_regrading_faults_gives_every_field_again_and_leaves_every_other_row_as_
     assert len(students) == len(REGRADED)
     for student in students:
         shutil.copytree(class_dir / student, tmp_path / student)
-    again = {row.student: row for row in grading.grade(tmp_path, workdir, jobs=3)}
+    again = {row.student: row for row in grading.grade(tmp_path, workdir, jobs=3).rows}
     assert again == rows, "regrading changed a row (the regraded ones must come out the same too)"

@@ -33,7 +33,7 @@ def graded(tmp_path_factory):
     """The submission graded: (its grade row, the course folder)."""
     class_dir, workdir = tmp_path_factory.mktemp("class"), tmp_path_factory.mktemp("course")
     submissions.write(submissions.with_mistake(LAB, MISTAKE), class_dir, STUDENT, LAB)
-    [row] = grading.grade(class_dir, workdir, jobs=1)
+    [row] = grading.grade(class_dir, workdir, jobs=1).rows
     return row, workdir
 
 

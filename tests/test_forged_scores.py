@@ -20,7 +20,6 @@ import pytest
 from autograder import cells
 from autograder.catalogues import submissions
 from autograder.catalogues.cheats import FORGED_SCORES, _add_cell_after_setup
-from autograder.integrity.flag import FLAG
 from autograder.labs import ROOT, Lab
 from autograder.pipeline import grading
 from autograder.pipeline.audit import audit
@@ -52,7 +51,7 @@ def graded(request, tmp_path_factory):
         for name in FORGED_SCORES:
             submissions.write(_forged(submissions.solved(HONEST_LAB), name), folder, f"solved-{name}", HONEST_LAB)
     workdir = tmp_path_factory.mktemp("course")
-    rows = grading.grade(folder, workdir, jobs=2)
+    rows = grading.grade(folder, workdir, jobs=2).rows
     return {(row.student, row.lab): row for row in rows}, workdir
 
 
@@ -71,7 +70,7 @@ def test_a_solved_notebook_keeps_its_marks_whatever_its_kernel_shows(graded, req
     if not chosen(request.config, [HONEST_LAB]):
         pytest.skip("train-kf is not among the labs chosen with --lab")
     row = graded[0][f"solved-{name}", HONEST_LAB.id]
-    flagged = [note for note in row.notes if note.startswith(FLAG)]
+    flagged = row.flags
     for cell, points in _tests(HONEST_LAB).items():
         # a flag that costs every blank (README: the scan's findings) takes them all; nothing else does
         want = 0.0 if any("every blank" in note for note in flagged) else points

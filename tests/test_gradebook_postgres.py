@@ -66,7 +66,7 @@ def grade_and_hand_grade(class_dir, workdir, url: str | None):
             patch.setenv("GRADEBOOK_URL", url)
         else:
             patch.delenv("GRADEBOOK_URL", raising=False)
-        rows = grading.grade(class_dir, workdir, jobs=2)
+        rows = grading.grade(class_dir, workdir, jobs=2).rows
         db_url = CourseDirectory(config=nbgrader_apps.course_config(workdir)).db_url
     formgrader_gives(db_url, LAB.id, "late", {cell: p - 1.0 for cell, p in written_cells().items()})
     nbgrader_export(workdir, env)

@@ -8,7 +8,7 @@ from autograder import cells
 from autograder.pipeline import intake
 from autograder.catalogues import submissions
 from autograder.labs import get_lab
-from autograder.pipeline.restore import NOTE_TITLE, NOTES_KEY, add_grader_notes, grader_notes
+from autograder.pipeline.restore import NOTE_TITLE, NOTES_KEY, GraderNote, NoteKind, add_grader_notes, grader_notes
 
 LAB = get_lab("train-kf")
 NOTES = [
@@ -19,9 +19,10 @@ NOTES = [
 
 def test_notes_read_back_as_written_and_render_as_written():
     nb = nbformat.v4.new_notebook()
-    add_grader_notes(nb, NOTES[:1])
+    add_grader_notes(nb, NOTES[:1], NoteKind.FLAG)
     add_grader_notes(nb, NOTES[1:])
-    assert grader_notes(nb) == NOTES and len(nb.cells) == 1
+    assert grader_notes(nb) == [GraderNote(NoteKind.CHANGE, NOTES[1]), GraderNote(NoteKind.FLAG, NOTES[0])]
+    assert len(nb.cells) == 1
     page = markdown2html(nb.cells[0].source)
     for note in NOTES:
         expected = note.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;").replace('"', "&quot;")
@@ -39,7 +40,7 @@ def test_a_note_inside_a_submission_is_the_students_own_cell(tmp_path):
     intake.import_submissions(tmp_path / "class", tmp_path / "course", [LAB])
 
     imported = cells.read(tmp_path / "course" / "submitted" / "s001" / LAB.id / LAB.notebook_name)
-    assert grader_notes(imported) == [f"It was submitted as my copy.ipynb and graded as {LAB.notebook_name}."]
+    assert grader_notes(imported) == [GraderNote(NoteKind.CHANGE, f"It was submitted as my copy.ipynb and graded as {LAB.notebook_name}.")]
     assert imported.cells[1].source == forged.source and NOTES_KEY not in imported.cells[1].metadata
 
 
@@ -70,3 +71,25 @@ def test_a_failing_set_up_or_answer_cell_leads_the_notes_when_a_test_after_it_fa
     assert note.startswith("Your cell kupdate failed when the grader ran it (ZeroDivisionError: division by zero)")
     _failing(nb, "run_filter", "TypeError", "later")
     assert first_cause(nb) == [note], "the first failing cell is the cause named"
+
+
+def test_each_kind_of_note_is_listed_under_its_own_heading_the_cause_first():
+    """A note that explains errors was listed under "graded with these changes", which it is not (issue 31's
+    diff review); readers now tell the kinds apart by the note's metadata, not by its text."""
+    nb = nbformat.v4.new_notebook()
+    add_grader_notes(nb, ["Cell 3 ran for more than 30 s and was stopped."])
+    add_grader_notes(nb, ["Your cell kupdate failed when the grader ran it (ZeroDivisionError: x)."], NoteKind.CAUSE)
+    add_grader_notes(nb, ["Flagged for review: it reads the reference. It costs the points of every blank."], NoteKind.FLAG)
+    assert [note.kind for note in grader_notes(nb)] == [NoteKind.CAUSE, NoteKind.CHANGE, NoteKind.FLAG]
+    text = nb.cells[0].source
+    cause, change, flag = (text.index(heading) for heading in
+                           ("Why the failing cells below failed:", "graded with these changes:", "For your instructor to review:"))
+    assert text.index("kupdate") < change < text.index("ran for more than") < flag
+    assert cause < text.index("kupdate")
+
+
+def test_a_notebook_graded_before_notes_had_kinds_reads_back():
+    """Graded notebooks kept from an earlier version hold bare texts; export and report still read them."""
+    nb = nbformat.v4.new_notebook()
+    nb.cells.append(nbformat.v4.new_markdown_cell("old", metadata={NOTES_KEY: NOTES}))
+    assert grader_notes(nb) == [GraderNote(NoteKind.CHANGE, NOTES[1]), GraderNote(NoteKind.FLAG, NOTES[0])]

@@ -51,7 +51,7 @@ def test_a_submission_that_uses_up_its_time_is_stopped_and_told_once(tmp_path):
     for i in stopped:
         [error] = [o for o in nb.cells[i].outputs if o.output_type == "error"]
         assert error.evalue == "This cell was not run: the submission used up its time limit of 2 s."
-    notes = [note for note in grader_notes(nb) if "were not run" in note]
+    notes = [note.text for note in grader_notes(nb) if "were not run" in note.text]
     assert notes == [f"The cells from cell {stopped[0] + 1 - _offset(nb)} on were not run: the submission used up "
                      "its time limit of 2 s."], grader_notes(nb)
 
@@ -71,7 +71,7 @@ def test_a_kernel_restarted_too_often_stops_the_submission(tmp_path):
     assert [o.ename for o in code[0].outputs if o.output_type == "error"] == ["KernelDied"]
     assert [o.ename for o in code[1].outputs if o.output_type == "error"] == ["KernelDied"]
     assert not_run(nb) == [2 + offset, 3 + offset]
-    notes = grader_notes(nb)
+    notes = [note.text for note in grader_notes(nb)]
     assert notes == [
         "The kernel died in cell 1; it was restarted and the cells above it were run again.",
         "The kernel died in cell 2; it was restarted and the cells above it were run again.",

@@ -201,7 +201,7 @@ def test_a_timestamp_that_is_no_time_is_left_out_with_a_note_and_the_submission_
     intake.import_submissions(tmp_path / "subs", tmp_path / "course", [LAB])
     taken = tmp_path / "course" / "submitted"
     assert not (taken / "s001" / LAB.id / "timestamp.txt").exists()
-    assert any("timestamp.txt does not hold a time" in note
+    assert any("timestamp.txt does not hold a time" in note.text
                for note in grader_notes(nbformat.read(taken / "s001" / LAB.id / LAB.notebook_name, as_version=4)))
     assert (taken / "s002" / LAB.id / "timestamp.txt").read_text() == "2026-10-09 10:00:00.000000 UTC"
 

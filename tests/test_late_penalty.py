@@ -80,7 +80,7 @@ def test_late_submissions_lose_readmes_penalty_and_hand_grades_are_not_penalised
     collect(LAB, download, tmp_path / "students.csv", tmp_path / "SUBMISSIONS")
 
     workdir = tmp_path / "course"
-    rows = {row.student: row for row in grading.grade(tmp_path / "SUBMISSIONS", workdir)}
+    rows = {row.student: row for row in grading.grade(tmp_path / "SUBMISSIONS", workdir).rows}
     db_url = CourseDirectory(config=nbgrader_apps.course_config(workdir)).db_url
     with Gradebook(db_url) as gb:
         assert gb.find_assignment(LAB.id).duedate == due.replace(tzinfo=None)

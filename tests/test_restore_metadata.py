@@ -51,7 +51,7 @@ def test_changed_nbgrader_metadata_is_put_back_as_released(course, edit):
     released = {cells.grade_id(c): _flags(c) for c in cells.read(TRAIN.release_notebook).cells if "grade_id" in cells.meta(c)}
     got = {cells.grade_id(c): _flags(c) for c in graded.cells if "grade_id" in cells.meta(c)}
     assert got == released
-    assert any(f"nbgrader metadata of cells {grade_id} was not as released" in note for note in grader_notes(graded))
+    assert any(f"nbgrader metadata of cells {grade_id} was not as released" in note.text for note in grader_notes(graded))
 
 
 def test_the_release_itself_gets_no_note(course):

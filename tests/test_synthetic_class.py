@@ -6,6 +6,7 @@ import pytest
 from autograder.catalogues import cheats, faults, synthetic_class
 from autograder.integrity.flag import FLAG
 from autograder.pipeline.grading import GradeRow
+from autograder.pipeline.restore import GraderNote, NoteKind
 from autograder.labs import get_lab
 from autograder.catalogues.synthetic_class import CHEAT, FAULT, MISTAKE, SOLVED, Outcome
 
@@ -25,14 +26,14 @@ def test_a_class_too_small_for_its_hostile_work_is_refused(tmp_path):
         synthetic_class.write(LAB, 10, tmp_path)
 
 
-def _row(scores: dict[str, float], notes: tuple[str, ...] = ()) -> GradeRow:
+def _row(scores: dict[str, float], notes: tuple[GraderNote, ...] = ()) -> GradeRow:
     return GradeRow("s", LAB.id, dict(scores), {c: 1.0 for c in scores}, frozenset(scores), notes=notes)
 
 
 @pytest.mark.parametrize("scores, notes, expected", [
     ({"test_a": 1, "test_b": 1}, (), []),
     ({"test_a": 0, "test_b": 1}, (), ["s: test_a lost marks (no reason)"]),
-    ({"test_a": 1, "test_b": 1}, (f"{FLAG} it read the reference",), ["s: flagged: ['it read the reference']"]),
+    ({"test_a": 1, "test_b": 1}, (GraderNote(NoteKind.FLAG, f"{FLAG} it read the reference"),), ["s: flagged: ['it read the reference']"]),
 ])
 def test_honest_work_must_keep_its_marks_and_stay_unflagged(scores, notes, expected):
     assert Outcome("s", SOLVED, (), only=True, flagged=False).errors(_row(scores, notes)) == expected
@@ -40,10 +41,10 @@ def test_honest_work_must_keep_its_marks_and_stay_unflagged(scores, notes, expec
 
 def test_a_cheat_must_score_zero_on_what_it_games_and_be_flagged():
     cheat = Outcome("s", CHEAT, ("test_a",), only=False, flagged=True)
-    assert cheat.errors(_row({"test_a": 0, "test_b": 0}, (f"{FLAG} x",))) == []
+    assert cheat.errors(_row({"test_a": 0, "test_b": 0}, (GraderNote(NoteKind.FLAG, f"{FLAG} x"),))) == []
     assert cheat.errors(_row({"test_a": 1, "test_b": 1})) == ["s: test_a scored 1, not 0", "s: not flagged"]
     everything = Outcome("s", CHEAT, None, only=False, flagged=True)
-    assert everything.errors(_row({"test_a": 0, "test_b": 0.5}, (f"{FLAG} x",))) == ["s: test_b scored 0.5, not 0"]
+    assert everything.errors(_row({"test_a": 0, "test_b": 0.5}, (GraderNote(NoteKind.FLAG, f"{FLAG} x"),))) == ["s: test_b scored 0.5, not 0"]
 
 
 def test_a_missing_row_is_an_error():

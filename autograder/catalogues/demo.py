@@ -98,7 +98,7 @@ def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = Fal
     print(textwrap.fill(f"Demo class: {count(len(expected), 'submission')} of {count(len(labs), 'lab')} from "
                         f"{count(len(students), 'student')} in {class_dir} ({kinds} per lab).", table.TABLE_WIDTH,
                         break_on_hyphens=False, break_long_words=False))
-    rows = grading.grade(class_dir, course, grades_csv, jobs)
+    rows = grading.grade(class_dir, course, grades_csv, jobs).rows
     differ = unexpected(rows, expected)
     if differ:
         print(f"Not as expected: {count(len(differ), 'difference')} between the grades and the catalogues:")

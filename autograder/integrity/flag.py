@@ -19,7 +19,7 @@ from autograder.integrity.confined import confined_findings
 from autograder.integrity.scan import Finding
 from autograder.labs import Lab
 from autograder.pipeline import verdicts
-from autograder.pipeline.restore import add_grader_notes
+from autograder.pipeline.restore import NoteKind, add_grader_notes
 
 FLAG = "Flagged for review:"
 ERROR_NAME = "FlaggedForReview"
@@ -45,7 +45,7 @@ class FlagCheating(NbGraderPreprocessor):
                 verdicts.record(resources, cells.grade_id(cell), passed=False, why=why)
                 cell.outputs.append(new_output("error", ename=ERROR_NAME, evalue=f"This test was not counted. {why}",
                                                traceback=[f"{ERROR_NAME}: This test was not counted. {why}"]))
-        add_grader_notes(nb, [f"{FLAG} {f.reason.rstrip('.')}. {_cost(f)}" for f in findings])
+        add_grader_notes(nb, [f"{FLAG} {f.reason.rstrip('.')}. {_cost(f)}" for f in findings], NoteKind.FLAG)
         return nb, resources
 
 

@@ -23,10 +23,8 @@ from pathlib import Path
 
 from autograder import csv_cells
 from autograder.catalogues.mistakes import Mistake, catalogue
-from autograder.integrity.flag import FLAG
 from autograder.labs import Lab
 from autograder.pipeline import report_figure, report_page
-from autograder.pipeline.execute import FIRST_CAUSE_NOTE
 from autograder.pipeline.grades import GradeRow
 
 FULL, MISTAKE, OTHER, NOT_WRITTEN = "full marks", "catalogued mistake", "lost another way", "not written"
@@ -153,7 +151,7 @@ def count_lab(lab: Lab, rows: list[GradeRow]) -> LabCounts:
         tuple(blanks),
         tuple(row.student for row in rows if row.flags),
         tuple(row.student for row in rows if row.late_penalty > 0),
-        tuple(row.student for row in rows if any(_is_fault(note) for note in row.notes)),
+        tuple(row.student for row in rows if row.changes),
         tuple(row.student for row in rows if any(_visible_failed(row, cell) for cell in tests)),
         {cell: tuple(row.student for row in rows if row.cells.get(cell) is None) for cell in written},
         mistakes,
@@ -213,7 +211,3 @@ def write_report(workdir: Path, rows: list[GradeRow]) -> list[Path]:
     return pages
 
 
-def _is_fault(note: str) -> bool:
-    """Whether a grader's note tells of a fault it handled (a stopped cell, a dead kernel, restored cells), not
-    a flag for review, nor the note that names the cell whose error the errors below it follow from."""
-    return not note.startswith(FLAG) and not FIRST_CAUSE_NOTE.match(note)

@@ -29,7 +29,6 @@ import contextlib
 import functools
 import json
 import os
-import re
 import shutil
 import tempfile
 import time
@@ -48,7 +47,7 @@ from autograder.kernel.remove_tree import remove_tree
 from autograder.hidden_tests import cases
 from autograder.pipeline import compare, confined_check, grading_secret, verdicts
 from autograder.pipeline.output_caps import OutputBudget
-from autograder.pipeline.restore import add_grader_notes
+from autograder.pipeline.restore import NoteKind, add_grader_notes
 
 TIMEOUT_ERROR = "CellTimeoutError"
 KERNEL_DIED = "KernelDied"
@@ -184,7 +183,8 @@ class GradingExecute(Execute):
         notes += self._output.notes(lambda i: _name(self.nb.cells[i], i))
         verdicts.record_visible_checks(self.nb, NOT_RUN)
         _whole_execution_counts(self.nb)
-        add_grader_notes(self.nb, first_cause(self.nb) + notes)
+        add_grader_notes(self.nb, first_cause(self.nb), NoteKind.CAUSE)
+        add_grader_notes(self.nb, notes)
         self.set_widgets_metadata()
         return self.nb, self.resources
 
@@ -399,9 +399,6 @@ def _name(cell: NotebookNode, index: int) -> str:
 SETUP = "setup"
 """The grade_id of every lab's set-up cell."""
 FAILED_AS_IT_RAN = "failed when the grader ran it"
-FIRST_CAUSE_NOTE = re.compile(rf"(?:The set-up cell|Your cell \w+) {FAILED_AS_IT_RAN} \(")
-"""How every note of ``first_cause`` begins: it explains errors, and changes nothing in the grading (a note that
-only quotes the words, such as a file name in an intake note, does not begin so)."""
 NOT_A_CAUSE = {"NotWrittenYet", TIMEOUT_ERROR, KERNEL_DIED, NOT_RUN}
 """Errors that are no cell's own failure, or that have a note of their own: a blank still unwritten, and
 the grader's stops."""

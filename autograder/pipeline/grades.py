@@ -17,7 +17,7 @@ from autograder.integrity.flag import FLAG
 from autograder.labs import ROOT, Lab
 from autograder.pipeline import verdicts, versions
 from autograder.pipeline.nbgrader_apps import course_config
-from autograder.pipeline.restore import grader_notes
+from autograder.pipeline.restore import GraderNote, NoteKind, grader_notes
 
 
 def all_graded_labs(workdir: Path) -> list[Lab]:
@@ -42,8 +42,9 @@ class GradeRow:
     autograded: frozenset[str]
     late_penalty: float = 0.0
     """Points taken for a late submission (nbgrader's AssignLatePenalties, autograder/pipeline/late.py)."""
-    notes: tuple[str, ...] = ()
-    """What the grader changed before grading (the grader's note in the feedback)."""
+    notes: tuple[GraderNote, ...] = ()
+    """The grader's notes in the feedback: what it changed to grade, the cell whose failure the errors below
+    follow from, and its flags for review (``restore.NoteKind``)."""
     reasons: dict[str, str] = field(default_factory=dict)
     """Why each autograded cell short of full marks lost them: its error, or its stderr output."""
     diagnosed: dict[str, str] = field(default_factory=dict)
@@ -73,7 +74,12 @@ class GradeRow:
     @property
     def flags(self) -> list[str]:
         """Why the submission is flagged for review (integrity findings); empty if it is not."""
-        return [note.removeprefix(FLAG).strip() for note in self.notes if note.startswith(FLAG)]
+        return [note.text.removeprefix(FLAG).strip() for note in self.notes if note.kind == NoteKind.FLAG]
+
+    @property
+    def changes(self) -> list[str]:
+        """What the grader changed to grade the submission (a fault it handled: a stopped cell, restored cells)."""
+        return [note.text for note in self.notes if note.kind == NoteKind.CHANGE]
 
     @property
     def lost(self) -> list[str]:
@@ -178,6 +184,6 @@ def write_csv(rows: list[GradeRow], path: Path) -> None:
         writer.writerow(["student", "lab", *columns, "late_penalty", "total", "max_score", "flagged", "notes"])
         for row in rows:
             scores = ["" if row.cells.get(c) is None else f"{row.cells[c]:g}" for c in columns]
-            notes = [n for n in row.notes if not n.startswith(FLAG)] + [f"{c}: {why}" for c, why in row.reasons.items()]
+            notes = [n.text for n in row.notes if n.kind != NoteKind.FLAG] + [f"{c}: {why}" for c, why in row.reasons.items()]
             writer.writerow([row.student, row.lab, *scores, f"{row.late_penalty:g}", f"{row.total:g}",
                              f"{sum(row.max_cells.values()):g}", " | ".join(row.flags), " | ".join(notes)])

@@ -9,6 +9,7 @@ from __future__ import annotations
 import multiprocessing
 import sys
 from concurrent.futures import ProcessPoolExecutor, as_completed
+from dataclasses import dataclass
 from pathlib import Path
 
 from nbgrader.converters import Autograde, GenerateFeedback
@@ -103,15 +104,15 @@ class SandboxIncomplete(RuntimeError):
     """``grade --require-sandbox`` where the grading kernels would not get every layer of the sandbox."""
 
 
-class GradedRows(list):
-    """The rows ``grade`` wrote (a list of GradeRow), and what it was given but did not grade."""
+@dataclass(frozen=True)
+class Graded:
+    """What ``grade`` did: the rows it wrote, and what it was given but did not grade."""
 
-    def __init__(self, rows: list[GradeRow], not_graded: list[tuple[str, str]], skipped: list[str]) -> None:
-        super().__init__(rows)
-        self.not_graded = not_graded
-        """(student, lab) of each submission that could not be graded (nbgrader's log says why)."""
-        self.skipped = skipped
-        """The folders skipped because they are not named by a student id."""
+    rows: list[GradeRow]
+    not_graded: list[tuple[str, str]]
+    """(student, lab) of each submission that could not be graded (nbgrader's log says why)."""
+    skipped: list[str]
+    """The folders skipped because they are not named by a student id."""
 
     def problems(self) -> str:
         """One line that counts what was given and not graded, and why; empty when everything was graded."""
@@ -122,7 +123,7 @@ class GradedRows(list):
 
 
 def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, jobs: int | None = None,
-          shard: Shard | None = None, require_sandbox: bool = False) -> GradedRows:
+          shard: Shard | None = None, require_sandbox: bool = False) -> Graded:
     """Autograde ``submissions/<student>/<lab>/<lab>.ipynb`` in the course ``workdir``.
 
     Refuses to start unless this process can import the hidden tests and the reference, and skips
@@ -191,4 +192,4 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
         print(f"When every shard is done: `python -m autograder export --workdir {workdir}` writes the class's "
               "grades.csv and lists any submission not graded yet, and `python -m autograder report --workdir "
               f"{workdir}` the class report.")
-    return GradedRows(rows, [(s, lab_id) for lab_id, students in failures.items() for s in students], rejected)
+    return Graded(rows, [(s, lab_id) for lab_id, students in failures.items() for s in students], rejected)

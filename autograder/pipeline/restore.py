@@ -18,6 +18,8 @@ from __future__ import annotations
 import copy
 import hashlib
 import re
+from enum import StrEnum
+from typing import NamedTuple
 
 from nbformat import NotebookNode
 from nbformat.v4 import new_markdown_cell
@@ -27,11 +29,37 @@ from autograder import cells
 from autograder.labs import Lab
 
 NOTE_TITLE = "**Note from the grader.**"
-# The notes themselves, as plain text, are kept in the note cell's metadata under this key. Only a
-# cell carrying it is the grader's note: a student cannot forge one by typing the title.
+# The notes themselves, as plain text with their kind, are kept in the note cell's metadata under this key.
+# Only a cell carrying it is the grader's note: a student cannot forge one by typing the title, and intake
+# drops the key from every submitted cell (``forget_grader_notes``).
 NOTES_KEY = "autograder_notes"
 # CommonMark lets a backslash escape any ASCII punctuation character.
 MARKDOWN_PUNCTUATION = re.compile(r"([!-/:-@\[-`{-~])")
+
+
+class NoteKind(StrEnum):
+    """What a grader's note is about. Readers (the class report, the grades CSV) tell notes apart by
+    this, never by their text, which can quote a submission's file name or error."""
+
+    CAUSE = "cause"
+    """It explains errors: the earlier cell whose failure the failing test cells below follow from."""
+    CHANGE = "change"
+    """The grader changed something to grade the submission: a file renamed, cells restored, a cell stopped."""
+    FLAG = "flag"
+    """An integrity finding for the instructor to review (autograder/integrity/flag.py)."""
+
+
+HEADINGS = {
+    NoteKind.CAUSE: "Why the failing cells below failed:",
+    NoteKind.CHANGE: "Your notebook was graded with these changes:",
+    NoteKind.FLAG: "For your instructor to review:",
+}
+"""The heading of each kind's list in the note cell, in the order the lists are shown."""
+
+
+class GraderNote(NamedTuple):
+    kind: NoteKind
+    text: str
 
 
 def is_grader_note(cell: NotebookNode) -> bool:
@@ -39,10 +67,19 @@ def is_grader_note(cell: NotebookNode) -> bool:
     return cell.cell_type == "markdown" and NOTES_KEY in cell.metadata
 
 
-def grader_notes(nb: NotebookNode) -> list[str]:
-    """The notes, as plain text, in a notebook's grader's note (its first cell), if it has one."""
+def _read(entry: dict | str) -> GraderNote:
+    if isinstance(entry, str):
+        # a notebook graded before notes had kinds (2026-11-27) holds bare texts, and only flags began so
+        return GraderNote(NoteKind.FLAG if entry.startswith("Flagged for review:") else NoteKind.CHANGE, entry)
+    return GraderNote(NoteKind(entry["kind"]), entry["text"])
+
+
+def grader_notes(nb: NotebookNode) -> list[GraderNote]:
+    """The notes in a notebook's grader's note (its first cell), if it has one: each kind's in the order
+    ``HEADINGS`` shows them, so the cause of the errors leads."""
     if nb.cells and is_grader_note(nb.cells[0]):
-        return list(nb.cells[0].metadata[NOTES_KEY])
+        notes = [_read(entry) for entry in nb.cells[0].metadata[NOTES_KEY]]
+        return sorted(notes, key=lambda note: list(HEADINGS).index(note.kind))
     return []
 
 
@@ -59,8 +96,8 @@ def forget_grader_notes(nb: NotebookNode) -> None:
         cell.metadata.pop(NOTES_KEY, None)
 
 
-def add_grader_notes(nb: NotebookNode, notes: list[str]) -> None:
-    """Add notes to the notebook's grader's note, creating it as the first cell if needed.
+def add_grader_notes(nb: NotebookNode, notes: list[str], kind: NoteKind = NoteKind.CHANGE) -> None:
+    """Add notes of one kind to the notebook's grader's note, creating it as the first cell if needed.
 
     The notes are shown as written: code names such as ``__import__`` are not read as Markdown."""
     if not notes:
@@ -68,12 +105,18 @@ def add_grader_notes(nb: NotebookNode, notes: list[str]) -> None:
     existing = grader_notes(nb)
     if existing:
         nb.cells.pop(0)
-    body = "\n".join(f"- {as_markdown(note)}" for note in existing + notes)
+    every = existing + [GraderNote(kind, text) for text in notes]
+    every.sort(key=lambda note: list(HEADINGS).index(note.kind))
+    body = [NOTE_TITLE]
+    for heading_kind, heading in HEADINGS.items():
+        texts = [note.text for note in every if note.kind == heading_kind]
+        if texts:
+            body += ["", heading, *(f"- {as_markdown(text)}" for text in texts)]
+    stored = [{"kind": str(note.kind), "text": note.text} for note in every]
     # an id from the notes, not a random one: the graded notebook is then the same file every time the
     # same submission is graded, and so are its hidden cases (autograder/pipeline/grading_secret.py)
-    note_id = "grader-note-" + hashlib.sha256("\n".join(existing + notes).encode()).hexdigest()[:12]
-    nb.cells.insert(0, new_markdown_cell(f"{NOTE_TITLE} Your notebook was graded with these changes:\n{body}",
-                                         metadata={NOTES_KEY: existing + notes}, id=note_id))
+    digest = hashlib.sha256("\n".join(f"{note.kind}:{note.text}" for note in every).encode()).hexdigest()[:12]
+    nb.cells.insert(0, new_markdown_cell("\n".join(body), metadata={NOTES_KEY: stored}, id="grader-note-" + digest))
 
 
 def _has_id(cell: NotebookNode) -> bool:
@@ -102,7 +145,8 @@ class RestoreLabCells(NbGraderPreprocessor):
         lab = Lab(resources["nbgrader"]["assignment"])
         released = cells.read(lab.release_notebook)
         order = [cells.grade_id(c) for c in released.cells if _has_id(c)]
-        notes = grader_notes(nb)
+        note = [c for c in nb.cells[:1] if is_grader_note(c)]  # intake's, kept at the top
+        notes: list[str] = []
         students = [c for c in nb.cells if not is_grader_note(c)]
 
         for cell in students:
@@ -135,7 +179,7 @@ class RestoreLabCells(NbGraderPreprocessor):
         if retagged:
             notes.append(f"The nbgrader metadata of cells {', '.join(retagged)} was not as released; "
                          "it was graded as released.")
-        nb.cells = added[None] + [c for i in order for c in [mine.get(i, by_id[i]), *added.get(i, [])]]
+        nb.cells = note + added[None] + [c for i in order for c in [mine.get(i, by_id[i]), *added.get(i, [])]]
         _keep_cell_ids_unique(nb, restored=[by_id[i] for i in missing])
         add_grader_notes(nb, notes)
         return nb, resources

@@ -51,7 +51,7 @@ def format_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = N
         lines += line(row.student, row.lab, f"{row.auto_score:g}/{row.auto_max:g}", result)
         late = ([f"Late: a penalty of {row.late_penalty:g} points, so its total is {row.total:g} (grades.csv's total)."]
                 if row.late_penalty else [])
-        for text in [*late, *row.notes, *_lost_lines(row)]:
+        for text in [*late, *(note.text for note in row.notes), *_lost_lines(row)]:
             lines += textwrap.wrap(" ".join(text.split()), width, initial_indent=indent, subsequent_indent=indent + "  ",
                                    max_lines=3, placeholder=" ...", break_on_hyphens=False)
     for lab_id, students in (failures or {}).items():
