@@ -16,10 +16,13 @@ from __future__ import annotations
 
 import contextlib
 import functools
+import inspect
 import sys
 import types
 import warnings
 from typing import Callable, Iterable, Iterator
+
+import numpy as np
 
 
 def _named_blanks(reference: types.ModuleType, name: str, blanks: frozenset[str]) -> set[str]:
@@ -117,6 +120,56 @@ def warning_failure(name: str, category: str, message: str) -> str:
             f"{cause or 'Find the call that gives it and change it.'}")
 
 
+def changed_arguments_failure(name: str, changed: list[str]) -> str:
+    """Why a graded function that wrote into the arrays it was given fails."""
+    first = changed[0]
+    which = f"its argument {first}" if len(changed) == 1 else "its arguments " + ", ".join(changed)
+    return (f"{name} changed {which} in place (with {first} += ..., {first}[...] = ... or an in-place function). "
+            f"The code that calls {name} still needs what it passed in: a filter's loop that keeps it, or a check "
+            f"that uses it again. Leave the arrays you are given as they are and return new ones: write "
+            f"{first} = {first} + ..., or start from {first}.copy().")
+
+
+def global_random_failure(name: str) -> str:
+    """Why a graded function that drew from NumPy's global generator, when it was given one, fails."""
+    return (f"{name} drew random numbers from NumPy's global generator (np.random.standard_normal, np.random.choice, "
+            f"...), not from the rng it was given, so the same seed does not give the same result. Draw every random "
+            f"number with rng: rng.standard_normal, rng.random, rng.choice.")
+
+
+def _arrays(args: tuple, kwargs: dict) -> dict:
+    return {key: value for key, value in [*enumerate(args), *kwargs.items()] if isinstance(value, np.ndarray)}
+
+
+def _global_random_state() -> tuple:
+    state = np.random.get_state(legacy=False)["state"]
+    return int(state["pos"]), state["key"].tobytes()
+
+
+def _checked(function: Callable, name: str) -> Callable:
+    """``function``, failing as graded functions fail when it changes an array argument in place, or draws
+    from NumPy's global generator when it is given one (in grading, the kernel reports both:
+    autograder/kernel/side.py)."""
+    @functools.wraps(function)
+    def call(*args, **kwargs):
+        given = {key: value.copy() for key, value in _arrays(args, kwargs).items()}
+        drawn = _global_random_state()
+        result = function(*args, **kwargs)
+        names = inspect.signature(function).parameters
+        changed = [list(names)[key] if isinstance(key, int) and key < len(names) else str(key)
+                   for key, value in _arrays(args, kwargs).items()
+                   if not (value.shape == given[key].shape
+                           and np.array_equal(value, given[key], equal_nan=value.dtype.kind in "fc"))]
+        if changed:
+            raise AssertionError(changed_arguments_failure(name, changed))
+        generator = any(isinstance(v, np.random.Generator) for v in [*args, *kwargs.values()])
+        if generator and _global_random_state() != drawn:
+            raise AssertionError(global_random_failure(name))
+        return result
+
+    return call
+
+
 def _isolated(func: Callable, reference: types.ModuleType, blanks: Iterable[str], warnings_fail: bool) -> Callable:
     """``isolate``'s copy of ``func``, not yet observable."""
     compare = sys.modules.get("autograder.pipeline.compare")  # imported by the grader only, not in a kernel run by hand
@@ -125,7 +178,7 @@ def _isolated(func: Callable, reference: types.ModuleType, blanks: Iterable[str]
     if not isinstance(func, types.FunctionType):
         raise AssertionError(f"{func!r} should be a function defined with `def`.")
     others = {name: getattr(reference, name) for name in called_blanks(reference, func.__name__, blanks)}
-    copy = with_globals(func, others)
+    copy = _checked(with_globals(func, others), func.__name__)
     if not warnings_fail:
         return copy
 

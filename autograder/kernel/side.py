@@ -442,6 +442,8 @@ class Peer:
             self.wire.send({"op": "raise", "type": "RuntimeError", "message": f"nothing to call as {target!r}"}, [])
             return
         args, kwargs = self.codec.decode_arguments(header, buffers, self)
+        given = _arrays_given(args, kwargs)
+        drawn = _global_random_state()
         out, err = io.StringIO(), io.StringIO()
         with contextlib.ExitStack() as stack:
             caught = []
@@ -459,7 +461,9 @@ class Peer:
                 reply_buffers: list[bytes] = []
                 try:
                     reply = {"op": "return", "value": self.codec.encode(result, reply_buffers),
-                             "written": self._written(args, kwargs, reply_buffers)}
+                             "written": self._written(args, kwargs, reply_buffers),
+                             "changed": _changed_names(function, given, args, kwargs),
+                             "global_random": _uses_a_generator(args, kwargs) and _global_random_state() != drawn}
                 except Unsendable as error:
                     what = getattr(function, "__name__", "the function")
                     reply, reply_buffers = {"op": "raise", "type": "TypeError", "where": "", "message": (
@@ -497,6 +501,39 @@ class Peer:
             elif _is_axes(target) and isinstance(node, dict) and node.get("t") == "axes":
                 self.codec.decode(node, buffers, self)  # draws on the numbered Axes, which is target
         return self.codec.decode(header.get("value"), buffers, self)
+
+
+def _arrays_given(args: tuple, kwargs: dict) -> dict:
+    """A copy of each NumPy array argument of a call, by position or keyword, to see what the call wrote into."""
+    return {key: value.copy() for key, value in [*enumerate(args), *kwargs.items()] if isinstance(value, np.ndarray)}
+
+
+def _changed_names(function, given: dict, args: tuple, kwargs: dict) -> list[str]:
+    """The names of the array arguments that a call changed in place (a positional one by its parameter's name)."""
+    changed = []
+    for key, before in given.items():
+        after = args[key] if isinstance(key, int) else kwargs[key]
+        same = before.shape == after.shape and np.array_equal(before, after, equal_nan=before.dtype.kind in "fc")
+        if not same:
+            changed.append(_parameter_name(function, key) if isinstance(key, int) else str(key))
+    return changed
+
+
+def _parameter_name(function, position: int) -> str:
+    """The name of a function's positional parameter, or "argument <n>" if it has none."""
+    code = getattr(function, "__code__", None)
+    names = code.co_varnames[:code.co_argcount] if code is not None else ()
+    return names[position] if position < len(names) else f"argument {position + 1}"
+
+
+def _uses_a_generator(args: tuple, kwargs: dict) -> bool:
+    return any(isinstance(value, np.random.Generator) for value in [*args, *kwargs.values()])
+
+
+def _global_random_state() -> tuple:
+    """Where NumPy's global generator (np.random.standard_normal, np.random.choice, ...) stands."""
+    state = np.random.get_state(legacy=False)["state"]
+    return int(state["pos"]), state["key"].tobytes()
 
 
 def _target_json(target):

@@ -125,4 +125,8 @@ MISTAKES = (
     Mistake("ellipse_area", "det-not-sqrt", "uses det P (m^4) instead of its square root",
             "np.pi * n_sigma**2 * np.sqrt(np.linalg.det(P))", "np.pi * n_sigma**2 * np.linalg.det(P)",
             hint="Your ellipse_area behaves as if it used det P instead of its square root."),
+    # A review of the fairness of grading: writing into an argument kept the marks, and cost a correct run_rank4's check.
+    Mistake("kalman_step", "x-in-place", "writes the prediction into the x it was given (x[:] = A x + u)",
+            "x_pred = A @ x if u is None else A @ x + u", "x[:] = A @ x if u is None else A @ x + u\n    x_pred = x",
+            hint="Leave the arrays you are given as they are and return new ones: write x = x + ..., or start from x.copy()."),
 )

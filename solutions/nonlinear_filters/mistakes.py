@@ -137,4 +137,8 @@ MISTAKES = (
             "rng.standard_normal(X.shape) @ np.linalg.cholesky(Q).T", "rng.standard_normal(X.shape) @ np.linalg.cholesky(Q)",
             hint="Your bootstrap_pf_step behaves as if it drew the process noise as rows z @ L with Q = L L^T: their "
                  "covariance is L^T L, not Q. Rows of standard normals times L.T, z @ L.T, have covariance Q."),
+    # A review of the fairness of grading: drawing from NumPy's global generator kept the marks.
+    Mistake("bootstrap_pf_step", "global-random", "draws the process noise with np.random, not with rng",
+            "rng.standard_normal(X.shape) @", "np.random.standard_normal(X.shape) @",
+            hint="Draw every random number with rng: rng.standard_normal, rng.random, rng.choice."),
 )

@@ -115,4 +115,11 @@ MISTAKES = (
     Mistake("run_particle_filter", "ess-of-sum", "ESS as 1 / (sum w)^2, which is always 1",
             "1.0 / np.sum(w**2)", "1.0 / np.sum(w) ** 2",
             hint="Your run_particle_filter behaves as if the ESS were 1 / (sum w)^2, which is always 1: square each weight before summing."),
+    # A review of the fairness of grading: writing into an argument, or drawing from NumPy's global generator, kept the marks.
+    Mistake("pf_step", "x-in-place", "moves the cloud it was given (x += dt f(x)) instead of a new one",
+            "x_hat = x + DT * tracking_dynamics(0.0, x)", "x += DT * tracking_dynamics(0.0, x)\n    x_hat = x",
+            hint="Leave the arrays you are given as they are and return new ones: write x = x + ..., or start from x.copy()."),
+    Mistake("pf_step", "global-random", "draws the resampling's uniforms with np.random, not with rng",
+            "np.sort(rng.random(N))", "np.sort(np.random.random(N))",
+            hint="Draw every random number with rng: rng.standard_normal, rng.random, rng.choice."),
 )

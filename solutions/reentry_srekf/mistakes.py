@@ -121,4 +121,9 @@ MISTAKES = (
     Mistake("plot_ballistic_coefficient", "pyplot-truth", "draws the truth with plt.plot, on pyplot's current Axes instead of ax",
             "    ax.plot(t, c_true,", "    import matplotlib.pyplot as plt  # the notebook's set-up cell imports it\n    plt.plot(t, c_true,",
             hint="Your plot_ballistic_coefficient behaves as if it drew the truth with plt.plot, which draws on pyplot's current Axes, not on the ax it is given."),
+    # A review of the fairness of grading: writing into an argument kept the marks.
+    Mistake("conditional", "mu-in-place", "adds the correction into the mean it was given (mu[idx_a] += ...)",
+            'mu_c = mu[idx_a] + R2.T @ solve_triangular(R1, x_b - mu[idx_b], trans="T")',
+            'mu[idx_a] += R2.T @ solve_triangular(R1, x_b - mu[idx_b], trans="T")\n    mu_c = mu[idx_a]',
+            hint="Leave the arrays you are given as they are and return new ones: write mu = mu + ..., or start from mu.copy()."),
 )

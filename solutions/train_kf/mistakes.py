@@ -90,4 +90,11 @@ MISTAKES = (
             "return np.sum(errors * scaled, axis=1)", "return np.sum(errors * scaled, axis=1) / errors.shape[1]",
             hint="Your nees behaves as if it divided e^T B^-1 e by the state dimension n: the NEES is e^T B^-1 e itself, "
                  "normalised by the covariance, and for a consistent filter its mean is n."),
+    # A review of the fairness of grading: writing into an argument kept the marks, though the caller's array changes.
+    Mistake("predict", "B-in-place", "writes B_f into the B it was given (B[...] = A B A^T + Q) and returns it",
+            "B_f = A @ B @ A.T + Q\n    return x_f, B_f", "B[...] = A @ B @ A.T + Q\n    return x_f, B",
+            hint="Leave the arrays you are given as they are and return new ones: write B = B + ..., or start from B.copy()."),
+    Mistake("kupdate", "x_f-in-place", "adds the correction into the x_f it was given (x_f += K (y - H x_f))",
+            "x_a = x_f + K @ (y - H @ x_f)", "x_f += K @ (y - H @ x_f)\n    x_a = x_f",
+            hint="Leave the arrays you are given as they are and return new ones: write x_f = x_f + ..., or start from x_f.copy()."),
 )
