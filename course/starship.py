@@ -534,8 +534,8 @@ def check_upper_triangular(S: ArrayLike, name: str, hint: str = "") -> None:
     if below.size and float(np.max(below)) > 1e-12 * scale:
         i, j = np.unravel_index(int(np.argmax(below)), below.shape)
         raise AssertionError(
-            f"{name} should be upper triangular (zero below the diagonal), but {name}[{i}, {j}] = "
-            f"{S[i, j]:.3g}. The R factor of a QR decomposition is upper triangular: "
+            f"{name} should be upper triangular (zero below the diagonal), but its entry [{i}, {j}] (row {i}, "
+            f"column {j}, counted from 0) is {S[i, j]:.3g}. The R factor of a QR decomposition is upper triangular: "
             f"np.linalg.qr(A, mode='r'). {hint}".strip()
         )
 
@@ -614,7 +614,7 @@ def check_band_plot(
     Looks for: the Axes returned; a line through (t, truth) and one through (t, mean); one filled
     band (``fill_between``) from mean - n_sigma std to mean + n_sigma std; axis labels with units,
     seconds on the time axis and ``y_unit`` on the other, written any common way
-    (``course.checks.label_has_unit``); a legend with at least three entries.
+    (``course.checks.label_has_unit``); a legend with at least three entries; a title.
     """
     from matplotlib.collections import PolyCollection
 
@@ -670,6 +670,8 @@ def check_band_plot(
             f"{name}: add a legend that names the truth, the estimate and the 99.7% region: give each a "
             "label=... and call ax.legend()."
         )
+    if not ax.get_title().strip():
+        raise AssertionError(f"{name}: give the plot a title that says what it shows, with ax.set_title(...).")
 
 
 # =============================================================================================

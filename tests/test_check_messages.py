@@ -247,7 +247,7 @@ VISIBLE_MESSAGES = {
         "sqrt_measurement_update/noise-variance": ("S_R is the upper-triangular square root of R", "the residual is y - h(mu)"),
         "sqrt_measurement_update/noise-transposed": ("S_R is the upper-triangular square root of R", "not with 1"),
         # the name of the handout's S_I reads as a matrix, not as "S_I for idx = [2, 4, 0][2, 0]"
-        "marginal/no-qr": ("but S_I[2, 0] =", "[2, 4, 0]["),
+        "marginal/no-qr": ("but its entry [2, 0] (row 2, column 0", "[2, 4, 0]["),
     },
 }
 """Mistakes whose visible check must say a given phrase, the hint that points at the cause, and must not say

@@ -163,6 +163,8 @@ def add_to_message(error: BaseException, text: str) -> None:
     """Append ``text`` to the message that the traceback shows for ``error``, on the same line: the
     grades table and the notes column show a failure's message as one line."""
     if len(error.args) == 1 and isinstance(error.args[0], str) and type(error).__str__ is BaseException.__str__:
-        error.args = (f"{error.args[0].rstrip()} {text}",)
+        message = error.args[0].rstrip()
+        # NumPy's own messages end without a full stop ("Probabilities contain NaN")
+        error.args = (f"{message}{'' if message.endswith(('.', '!', '?', ':')) or not message else '.'} {text}",)
     else:
         error.add_note(text)

@@ -29,7 +29,7 @@ matches; several matches give no diagnosis rather than a guess. Stochastic blank
 the same way: the recorded generator states make the student's and the mistakes' draws the same
 whenever they draw in the reference's order, and a student who draws otherwise is simply not
 diagnosed. A plot blank is compared by what its Axes show (the data of its lines and filled
-regions, and whether it has a legend), not by colours or labels. Results that cannot be compared
+regions, and whether it has a legend and a title), not by colours or labels. Results that cannot be compared
 give no diagnosis.
 
 The diagnosis never changes a score: it edits the message of the exception the test raised, names
@@ -265,7 +265,7 @@ def _leaves(value) -> list:
         lines = [line.get_xydata() for line in value.get_lines()]
         regions = [np.concatenate([path.vertices for path in c.get_paths()] or [np.empty((0, 2))])
                    for c in value.collections]
-        return [("axes", len(lines), len(regions), value.get_legend() is not None)] + [
+        return [("axes", len(lines), len(regions), value.get_legend() is not None, bool(value.get_title().strip()))] + [
             leaf for data in lines + regions for leaf in _leaves(np.asarray(data, dtype=float))]
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         fields = [field.name for field in dataclasses.fields(value)]

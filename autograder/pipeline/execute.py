@@ -165,7 +165,7 @@ class GradingExecute(Execute):
                                "re-ran the cells above, and went on without this one.")
                     self._fail(cell, "the kernel died while it ran")
                 except CellTimeoutError:
-                    notes.append(f"Cell {_name(cell, index)} ran for more than {self.timeout} s and was stopped.")
+                    notes.append(self._stop_note(cell, index))
                     _add_error(cell, TIMEOUT_ERROR, stopped)
                     self._fail(cell, f"it ran for more than {self.timeout} s and was stopped")
                 else:
@@ -175,7 +175,7 @@ class GradingExecute(Execute):
                     # stopping it raised, are the grader's doing; an error that the kernel named so is not
                     cell.outputs = [o for o in cell.outputs if o.get("ename") not in (TIMEOUT_ERROR, "KeyboardInterrupt")]
                     _add_error(cell, TIMEOUT_ERROR, stopped)
-                    notes.append(f"Cell {_name(cell, index)} ran for more than {self.timeout} s and was stopped.")
+                    notes.append(self._stop_note(cell, index))
                     self._fail(cell, f"it ran for more than {self.timeout} s and was stopped")
                 failed.add(index)
                 restarts += 1
@@ -282,6 +282,14 @@ class GradingExecute(Execute):
         if getattr(self, "_served_reply", None) == msg_id:
             return
         self.wait_for_reply(msg_id)
+
+    def _stop_note(self, cell: NotebookNode, index: int) -> str:
+        """The grader's note on a cell it stopped, saying whether the stop cost marks (a review of issue 30: a
+        student read the note on a slow figure cell as a lost test)."""
+        note = f"Cell {_name(cell, index)} ran for more than {self.timeout} s and was stopped."
+        if cells.is_autograded_test(cell):
+            return note
+        return note + " It is not graded, so this cost no marks, but what it shows is missing from your feedback."
 
     async def _async_handle_timeout(self, timeout: int, cell: NotebookNode | None = None) -> dict | None:
         """nbclient's: interrupt the kernel, and reply with a CellTimeoutError. The cell is recorded as

@@ -122,4 +122,8 @@ MISTAKES = (
     Mistake("pf_step", "global-random", "draws the resampling's uniforms with np.random, not with rng",
             "np.sort(rng.random(N))", "np.sort(np.random.random(N))",
             hint="Draw every random number with rng: rng.standard_normal, rng.random, rng.choice."),
+    # A review of the fairness of grading: a float32 answer was told to check the drag and the signs.
+    Mistake("tracking_dynamics", "float32", "computes in single precision (float32)",
+            "h, v, beta = np.asarray(x, dtype=float)", "h, v, beta = np.asarray(x, dtype=np.float32)",
+            hint="It is in single precision (float32, about 7 significant digits): compute in float64, NumPy's default, and do not convert your arrays to float32."),
 )

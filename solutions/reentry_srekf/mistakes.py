@@ -126,4 +126,8 @@ MISTAKES = (
             'mu_c = mu[idx_a] + R2.T @ solve_triangular(R1, x_b - mu[idx_b], trans="T")',
             'mu[idx_a] += R2.T @ solve_triangular(R1, x_b - mu[idx_b], trans="T")\n    mu_c = mu[idx_a]',
             hint="Leave the arrays you are given as they are and return new ones: write mu = mu + ..., or start from mu.copy()."),
+    # A review of the fairness of grading: the text asks for a title, and a plot without one kept its marks.
+    Mistake("plot_ballistic_coefficient", "no-title", "no title",
+            'ax.set(title="Ballistic coefficient", xlabel=', "ax.set(xlabel=",
+            hint="Your plot_ballistic_coefficient has no title: give the plot one that says what it shows."),
 )

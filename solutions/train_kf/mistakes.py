@@ -97,4 +97,8 @@ MISTAKES = (
     Mistake("kupdate", "x_f-in-place", "adds the correction into the x_f it was given (x_f += K (y - H x_f))",
             "x_a = x_f + K @ (y - H @ x_f)", "x_f += K @ (y - H @ x_f)\n    x_a = x_f",
             hint="Leave the arrays you are given as they are and return new ones: write x_f = x_f + ..., or start from x_f.copy()."),
+    # A review of the fairness of grading: a float32 answer was told to look at the sizes of the cases.
+    Mistake("gain_information_form", "float32", "computes in single precision (float32)",
+            "    n = B.shape[0]\n", "    B, H, R = (np.asarray(a, dtype=np.float32) for a in (B, H, R))\n    n = B.shape[0]\n",
+            hint="It is in single precision (float32, about 7 significant digits): compute in float64, NumPy's default, and do not convert your arrays to float32."),
 )
