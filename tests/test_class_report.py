@@ -285,3 +285,19 @@ def test_only_what_the_grader_changed_counts_as_a_fault():
     flag = GraderNote(NoteKind.FLAG, "Flagged for review: it reads the reference. It costs no points.")
     assert class_report.count_lab(LAB, [row(quoting)]).faulted == ("s",)
     assert class_report.count_lab(LAB, [row(cause, flag)]).faulted == ()
+
+
+def test_a_blank_written_in_an_added_cell_or_diagnosed_is_not_counted_as_not_written():
+    """Adversarial review of issue 31: a student left the stub as released and defined kupdate, with a catalogued
+    mistake, in a cell added below it; the report counted the blank "not written" and hid the mistake. A blank
+    that another code cell defines is written, and the grader's diagnosis comes before anything read from cells."""
+    from autograder.pipeline.grades import _defined_names
+
+    added = [nbformat.v4.new_code_cell("def kupdate(x_f, B_f, y, H, R):\n    return x_f, B_f\nnees = None")]
+    assert _defined_names(added) == {"kupdate", "nees"}
+    assert _defined_names([nbformat.v4.new_code_cell("# def kupdate(\nnot python (")]) == set()
+    names = {"test_kupdate": 2.0}
+    row = GradeRow("s", LAB.id, {"test_kupdate": 0.0}, names, frozenset(names), not_written=frozenset(names),
+                   diagnosed={"test_kupdate": "innovation-sign"})
+    mistakes = {(m.blank, m.slug): m for m in catalogue(LAB)}
+    assert class_report.outcome(row, "test_kupdate", mistakes) == (class_report.MISTAKE, "innovation-sign")

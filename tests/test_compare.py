@@ -386,3 +386,36 @@ def test_the_codec_never_sends_code():
     buffers: list[bytes] = []
     node = Codec().encode((np.sin, lambda x: x), buffers)
     assert [item["t"] for item in node["items"]] == ["callable", "callable"] and buffers == []
+
+
+def test_a_call_that_writes_into_an_array_argument_or_uses_the_global_generator_fails_by_name(kernel):
+    """Fairness reviews of issue 30: kupdate's x_f += ... and pf_step's np.random.choice kept their marks. The
+    kernel reports both with the call's return, and the call fails with a message that names the argument."""
+    writes = kernel(_define("def kupdate(x_f, B_f):\n    x_f += 1.0\n    return x_f, B_f\n"), "kupdate")
+    with pytest.raises(AssertionError, match=r"kupdate changed its argument x_f in place.*x_f = x_f \+ \.\.\."):
+        writes(np.zeros(2), np.eye(2))
+    keyword = kernel(_define("def sort_it(w):\n    w.sort()\n    return w\n"), "sort_it")
+    with pytest.raises(AssertionError, match="its argument w in place"):
+        keyword(w=np.array([3.0, 1.0]))
+    own = kernel(_define("def own(x):\n    y = x.copy()\n    y += 1.0\n    y /= 2.0\n    return y\n"), "own")
+    assert own(np.zeros(2)).tolist() == [0.5, 0.5]
+    source = "def draw(n, rng):\n    return np.random.standard_normal(n)\n"
+    with pytest.raises(AssertionError, match="global generator .* not from the rng it was given"):
+        kernel(_define(source), "draw")(3, np.random.default_rng(1))
+    assert kernel(_define(source), "draw")(3, None).shape == (3,), "no rng given: the global generator is no mistake"
+
+
+def test_text_that_no_file_can_store_crosses_as_a_replacement_character(kernel):
+    """Adversarial review of issue 31: a lone surrogate printed or raised by the student's function during a
+    hidden test reached the graded notebook, which nbgrader then could not write: the submission went ungraded."""
+    student = kernel(_define("def f(x):\n    print('debug', chr(0xD800))\n    return 'a' + chr(0xDC00) + '\\U0001F600'\n"), "f")
+    import contextlib
+    import io
+    printed = io.StringIO()
+    with contextlib.redirect_stdout(printed):
+        value = student(1.0)
+    assert value == "a\ufffd\U0001F600" and printed.getvalue() == "debug \ufffd\n"
+    printed.getvalue().encode("utf-8")
+    raises = kernel(_define("def g(x):\n    raise ValueError('bad ' + chr(0xD800))\n"), "g")
+    with pytest.raises(ValueError, match="bad \ufffd"):
+        raises(1.0)

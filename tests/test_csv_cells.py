@@ -8,6 +8,7 @@ import re
 import pytest
 
 from autograder.csv_cells import cell
+from autograder.pipeline.restore import GraderNote, NoteKind
 from autograder.integrity import similarity
 from autograder.labs import ROOT
 from autograder.pipeline import grades
@@ -22,7 +23,8 @@ def read(path) -> list[dict[str, str]]:
 
 def row(student: str, notes: tuple[str, ...] = (), score: float = 1.5, penalty: float = 0.0) -> grades.GradeRow:
     return grades.GradeRow(student, "train-kf", {"test_predict": score, "test_update": None},
-                           {"test_predict": 2.0, "test_update": 2.0}, frozenset({"test_predict"}), penalty, notes)
+                           {"test_predict": 2.0, "test_update": 2.0}, frozenset({"test_predict"}), penalty,
+                           tuple(GraderNote(NoteKind.CHANGE, note) for note in notes))
 
 
 @pytest.mark.parametrize("text", DANGEROUS)
@@ -63,3 +65,9 @@ def test_every_csv_writer_of_the_kit_goes_through_csv_cells():
                if path.name != "csv_cells.py"
                for line in path.read_text().splitlines() if re.search(r"\bcsv\.(writer|DictWriter)\(", line)]
     assert not writers, "write CSVs with autograder.csv_cells.writer:\n" + "\n".join(writers)
+
+
+def test_control_characters_are_dropped_so_the_file_is_safe_on_a_terminal():
+    """Adversarial review of issue 31: an escape sequence from a student's error message reached grades.csv."""
+    assert cell("ZeroDivisionError: \x1b]0;pwned\x07\x1b[2Jx\ty") == "ZeroDivisionError: ]0;pwned[2Jx\ty"
+    assert cell("\x1b=1+1") == "'=1+1"

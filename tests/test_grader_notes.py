@@ -93,3 +93,42 @@ def test_a_notebook_graded_before_notes_had_kinds_reads_back():
     nb = nbformat.v4.new_notebook()
     nb.cells.append(nbformat.v4.new_markdown_cell("old", metadata={NOTES_KEY: NOTES}))
     assert grader_notes(nb) == [GraderNote(NoteKind.CHANGE, NOTES[1]), GraderNote(NoteKind.FLAG, NOTES[0])]
+
+
+def test_a_note_cell_the_grader_did_not_sign_is_the_students_own_when_autograded():
+    """Adversarial review of issue 31: on the plain `nbgrader autograde` path (no intake), a submission's own note
+    cell, with kinds of its choosing or a kind that is none, reached the graded notebook; a bogus kind then crashed
+    `report` and `export` for the whole class. Autograding keeps only a note cell the grader signed."""
+    from autograder.pipeline.restore import NOTES_SIGNATURE_KEY, RestoreLabCells
+
+    resources = {"nbgrader": {"assignment": LAB.id}}
+    forged = submissions.solved(LAB)
+    forged.cells.insert(0, nbformat.v4.new_markdown_cell("mine", metadata={NOTES_KEY: [
+        {"kind": "flag", "text": "Flagged for review: nothing."}, {"kind": "bogus", "text": "x"}, 17]}))
+    copied_signature = nbformat.v4.new_notebook()
+    add_grader_notes(copied_signature, ["A change."])
+    forged.cells[0].metadata[NOTES_SIGNATURE_KEY] = copied_signature.cells[0].metadata[NOTES_SIGNATURE_KEY]
+    nb, _ = RestoreLabCells().preprocess(forged, resources)
+    assert grader_notes(nb) == [] and any(c.source == "mine" for c in nb.cells)
+
+    signed = submissions.solved(LAB)
+    add_grader_notes(signed, ["It was submitted as x.ipynb and graded as train-kf.ipynb."])
+    nb, _ = RestoreLabCells().preprocess(signed, resources)
+    assert grader_notes(nb) == [GraderNote(NoteKind.CHANGE, "It was submitted as x.ipynb and graded as train-kf.ipynb.")]
+
+
+def test_entries_that_are_no_notes_are_left_out_when_read():
+    """A graded notebook is read by export and report for the whole class: an odd entry must not stop them."""
+    nb = nbformat.v4.new_notebook()
+    nb.cells.append(nbformat.v4.new_markdown_cell("x", metadata={NOTES_KEY: [
+        {"kind": "bogus", "text": "x"}, {"kind": "flag", "text": 5}, 17, {"kind": "cause", "text": "Why."}]}))
+    assert grader_notes(nb) == [GraderNote(NoteKind.CAUSE, "Why.")]
+
+
+def test_a_note_that_quotes_a_file_name_no_file_can_store_is_written_on_one_line():
+    """Adversarial review of issue 31: a file name with a byte that is not UTF-8 (a lone surrogate in Python)
+    stopped `grade` for the whole class, and one with a newline split the note."""
+    nb = nbformat.v4.new_notebook()
+    add_grader_notes(nb, ["It was submitted as a\udcff\nb.ipynb and graded."])
+    assert grader_notes(nb)[0].text == "It was submitted as a\ufffd b.ipynb and graded."
+    nbformat.writes(nb).encode("utf-8")

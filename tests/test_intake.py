@@ -262,3 +262,19 @@ def test_every_path_in_the_report_is_shown_quoted_if_it_holds_a_control_characte
     lines = report.lines()
     assert len(lines) == 5 and not any("\x1b" in line for line in lines)
     assert all(repr(evil) in line for line in lines[1:])
+
+
+def test_a_notebook_holding_text_no_file_can_store_is_graded_with_a_note(tmp_path):
+    """Adversarial review of issue 31: a lone surrogate in a cell (valid JSON, and nbformat validates it) stopped
+    `grade` for the whole class when intake wrote the notebook. It is replaced, and the note says so."""
+    from autograder.pipeline.restore import grader_notes
+
+    nb = submissions.solved(LAB)
+    nb.cells.append(nbformat.v4.new_markdown_cell("my note \ud800 here"))
+    folder = tmp_path / "subs" / "s001" / LAB.id
+    folder.mkdir(parents=True)
+    (folder / LAB.notebook_name).write_text(nbformat.writes(nb).replace("\ud800", "\\ud800"))
+    intake.import_submissions(tmp_path / "subs", tmp_path / "course", [LAB])
+    taken = nbformat.read(tmp_path / "course" / "submitted" / "s001" / LAB.id / LAB.notebook_name, as_version=4)
+    assert taken.cells[-1].source == "my note \ufffd here"
+    assert any("not valid Unicode" in note.text for note in grader_notes(taken))

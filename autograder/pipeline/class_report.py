@@ -111,11 +111,11 @@ def outcome(row: GradeRow, cell: str, mistakes: dict[tuple[str, str], Mistake]) 
     catalogue counts as lost another way)."""
     if (row.cells[cell] or 0.0) >= row.max_cells[cell]:
         return FULL, ""
-    if cell in row.not_written:
-        return NOT_WRITTEN, ""
     slug = row.diagnosed.get(cell)
     if slug is not None and (cell.removeprefix("test_"), slug) in mistakes:
-        return MISTAKE, slug
+        return MISTAKE, slug  # the grader's diagnosis, before anything read from the submission's cells
+    if cell in row.not_written:
+        return NOT_WRITTEN, ""
     if row.flags:  # the scan's flag zeroes the blanks a finding games: the error then says nothing of the cause
         return OTHER, FLAGGED_DETAIL
     if cell in row.wrong_only:

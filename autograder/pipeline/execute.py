@@ -160,12 +160,14 @@ class GradingExecute(Execute):
                 except DeadKernelError:
                     notes.append(f"The kernel died in cell {_name(cell, index)}; it was restarted and the cells "
                                  "above it were run again.")
+                    _shown_only(cell)
                     _add_error(cell, KERNEL_DIED, "The kernel died while running this cell (it crashed, "
                                "called os._exit, or went over the memory limit). The grader restarted it, "
                                "re-ran the cells above, and went on without this one.")
                     self._fail(cell, "the kernel died while it ran")
                 except CellTimeoutError:
                     notes.append(self._stop_note(cell, index))
+                    _shown_only(cell)
                     _add_error(cell, TIMEOUT_ERROR, stopped)
                     self._fail(cell, f"it ran for more than {self.timeout} s and was stopped")
                 else:
@@ -174,6 +176,7 @@ class GradingExecute(Execute):
                     # the grader stopped it (``_async_handle_timeout``): its error, and the KeyboardInterrupt that
                     # stopping it raised, are the grader's doing; an error that the kernel named so is not
                     cell.outputs = [o for o in cell.outputs if o.get("ename") not in (TIMEOUT_ERROR, "KeyboardInterrupt")]
+                    _shown_only(cell)
                     _add_error(cell, TIMEOUT_ERROR, stopped)
                     notes.append(self._stop_note(cell, index))
                     self._fail(cell, f"it ran for more than {self.timeout} s and was stopped")
@@ -439,6 +442,14 @@ def first_cause(nb: NotebookNode) -> list[str]:
                 "the failing line was never defined: the cells below that use it fail because of this error. "
                 "Fix it first."]
     return []
+
+
+def _shown_only(cell: NotebookNode) -> None:
+    """A stopped or killed test cell's outputs from the kernel, made unable to score or to be taken for the grader's
+    reason (``verdicts.display_only``), as a test cell's are when it runs to the end: the grader's error is then the
+    cell's only error (adversarial review of issue 31: a kernel's error text led the grades CSV's reason)."""
+    if cells.is_autograded_test(cell):
+        cell.outputs = [verdicts.display_only(o) for o in cell.outputs]
 
 
 def _cut_error(content: dict) -> dict:

@@ -3,6 +3,7 @@ grading environment beside it."""
 
 from __future__ import annotations
 
+import ast
 import functools
 import re
 from dataclasses import dataclass, field
@@ -138,6 +139,23 @@ def _stubs(lab_id: str) -> dict[str, str]:
             if cells.is_code_answer(c)}
 
 
+def _defined_names(code_cells: list) -> set[str]:
+    """The names that these code cells define with ``def`` or assign (a blank can be written in a cell the student
+    added below its stub: a review of issue 31 hid a diagnosed mistake as "not written" so)."""
+    names: set[str] = set()
+    for cell in code_cells:
+        try:
+            tree = ast.parse(cell.source)
+        except (SyntaxError, ValueError):
+            continue
+        for node in ast.walk(tree):
+            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+                names.add(node.name)
+            elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
+                names.add(node.id)
+    return names
+
+
 def _lines(source: str) -> str:
     return "\n".join(line.rstrip() for line in source.strip().splitlines() if line.strip())
 
@@ -148,7 +166,7 @@ def _read_autograded(autograded: Path, lab: Lab) -> tuple[tuple[str, ...], dict[
     cell its first error (the grader's reason for a failing verdict, the only error a test cell
     holds, autograder/pipeline/verdicts.py); test cell -> diagnosed mistake (``verdicts.diagnoses``), and
     -> the kind of case alone wrong;
-    the test cells of the blanks that still hold their stub as released (the stub's text inside written code,
+    the test cells of the blanks that still hold their stub as released and that no other code cell defines (the stub's text inside written code,
     a comment say, does not count: a review of issue 31 hid a diagnosed mistake so); and those of the blanks
     whose visible checks failed (``verdicts.visible_checks_failed``)."""
     nb = nbformat.read(autograded, as_version=4)
@@ -160,8 +178,10 @@ def _read_autograded(autograded: Path, lab: Lab) -> tuple[tuple[str, ...], dict[
         if errors:
             reasons[cells.grade_id(cell)] = ANSI.sub("", f"{errors[0].ename}: {errors[0].evalue}")
     stubs = _stubs(lab.id)
+    defined = _defined_names([c for c in nb.cells if c.cell_type == "code" and not cells.is_code_answer(c)])
     not_written = {f"test_{cells.grade_id(c)}" for c in nb.cells
-                   if cells.is_code_answer(c) and _lines(c.source) == stubs.get(cells.grade_id(c))}
+                   if cells.is_code_answer(c) and _lines(c.source) == stubs.get(cells.grade_id(c))
+                   and cells.grade_id(c) not in defined}
     return (tuple(grader_notes(nb)), reasons, verdicts.diagnoses(nb), verdicts.diagnoses(nb, verdicts.WRONG_ONLY_KEY),
             not_written, verdicts.visible_checks_failed(nb))
 

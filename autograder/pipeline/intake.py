@@ -107,6 +107,10 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
         for student in by_lab[lab.id]:
             folder = submissions / student / lab.id
             nb, notes = read_submission(folder, lab)
+            nb, replaced = _valid_unicode(nb)
+            if replaced:
+                notes.append(f"It held {replaced} character(s) that are not valid Unicode (lone UTF-16 surrogates), "
+                             "which no file can store; each was replaced by \ufffd.")
             stamp = _submission_time(folder / "timestamp.txt")
             if isinstance(stamp, str):
                 notes.append(stamp)
@@ -126,6 +130,17 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
             for name, data in files.items():
                 _replace(target / name, data)
     return by_lab
+
+
+def _valid_unicode(nb: NotebookNode) -> tuple[NotebookNode, int]:
+    """The notebook with every lone UTF-16 surrogate in its text replaced by U+FFFD, and how many there were.
+    JSON allows them, but nothing can write them as UTF-8: one in a cell stopped ``grade`` for the whole class
+    (adversarial review of issue 31)."""
+    text = nbformat.writes(nb)
+    count = sum(1 for ch in text if "\ud800" <= ch <= "\udfff")
+    if not count:
+        return nb, 0
+    return nbformat.reads("".join("\ufffd" if "\ud800" <= ch <= "\udfff" else ch for ch in text), as_version=4), count
 
 
 def _submission_time(path: Path) -> bytes | str | None:

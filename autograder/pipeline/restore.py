@@ -17,6 +17,8 @@ from __future__ import annotations
 
 import copy
 import hashlib
+import hmac
+import json
 import re
 from enum import StrEnum
 from typing import NamedTuple
@@ -27,13 +29,17 @@ from nbgrader.preprocessors import NbGraderPreprocessor
 
 from autograder import cells
 from autograder.labs import Lab
+from autograder.pipeline import grading_secret
 
 NOTE_TITLE = "**Note from the grader.**"
 # The notes themselves, as plain text with their kind, are kept in the note cell's metadata under this key.
 # Only a cell carrying it is the grader's note: a student cannot forge one by typing the title, and intake
 # drops the key from every submitted cell (``forget_grader_notes``).
 NOTES_KEY = "autograder_notes"
+NOTES_SIGNATURE_KEY = "autograder_notes_signature"
+"""The grader's signature of the notes (``forget_forged_notes``)."""
 # CommonMark lets a backslash escape any ASCII punctuation character.
+CONTROL = re.compile(r"[\x00-\x1f\x7f-\x9f]+")
 MARKDOWN_PUNCTUATION = re.compile(r"([!-/:-@\[-`{-~])")
 
 
@@ -67,20 +73,51 @@ def is_grader_note(cell: NotebookNode) -> bool:
     return cell.cell_type == "markdown" and NOTES_KEY in cell.metadata
 
 
-def _read(entry: dict | str) -> GraderNote:
+def _read(entry) -> GraderNote | None:
+    """A stored note, or None for an entry that is no note (the grader writes none such)."""
     if isinstance(entry, str):
         # a notebook graded before notes had kinds (2026-11-27) holds bare texts, and only flags began so
         return GraderNote(NoteKind.FLAG if entry.startswith("Flagged for review:") else NoteKind.CHANGE, entry)
-    return GraderNote(NoteKind(entry["kind"]), entry["text"])
+    if isinstance(entry, dict) and entry.get("kind") in set(NoteKind) and isinstance(entry.get("text"), str):
+        return GraderNote(NoteKind(entry["kind"]), entry["text"])
+    return None
 
 
 def grader_notes(nb: NotebookNode) -> list[GraderNote]:
     """The notes in a notebook's grader's note (its first cell), if it has one: each kind's in the order
     ``HEADINGS`` shows them, so the cause of the errors leads."""
-    if nb.cells and is_grader_note(nb.cells[0]):
-        notes = [_read(entry) for entry in nb.cells[0].metadata[NOTES_KEY]]
+    if nb.cells and is_grader_note(nb.cells[0]) and isinstance(nb.cells[0].metadata[NOTES_KEY], list):
+        notes = [note for note in map(_read, nb.cells[0].metadata[NOTES_KEY]) if note is not None]
         return sorted(notes, key=lambda note: list(HEADINGS).index(note.kind))
     return []
+
+
+def _signature(stored) -> str:
+    """HMAC-SHA256, under the course's grading secret, of a note cell's stored notes."""
+    text = json.dumps(stored, sort_keys=True, ensure_ascii=True).encode()
+    return hmac.new(grading_secret.secret(), text, hashlib.sha256).hexdigest()
+
+
+def forget_forged_notes(nb: NotebookNode) -> None:
+    """Make a note cell that the grader did not sign an ordinary cell of the student's.
+
+    ``grade``'s intake drops every note that arrives with a submission (``forget_grader_notes``), but plain
+    ``nbgrader autograde`` has no intake: there a submission's own note cell, with any kinds it likes, reached
+    the graded notebook and the class report (adversarial review of issue 31). The grader signs every note cell
+    it writes, so autograding keeps only those."""
+    first = nb.cells[0] if nb.cells else None
+    for cell in nb.cells[1:]:
+        cell.metadata.pop(NOTES_KEY, None)
+        cell.metadata.pop(NOTES_SIGNATURE_KEY, None)
+    if first is None or NOTES_KEY not in first.metadata:
+        return
+    try:
+        signed = hmac.compare_digest(str(first.metadata.get(NOTES_SIGNATURE_KEY, "")), _signature(first.metadata[NOTES_KEY]))
+    except (TypeError, ValueError, RecursionError):
+        signed = False
+    if not signed:
+        first.metadata.pop(NOTES_KEY, None)
+        first.metadata.pop(NOTES_SIGNATURE_KEY, None)
 
 
 def as_markdown(text: str) -> str:
@@ -94,6 +131,14 @@ def forget_grader_notes(nb: NotebookNode) -> None:
     Only the grader writes notes; one that arrives with the submission was made by hand."""
     for cell in nb.cells:
         cell.metadata.pop(NOTES_KEY, None)
+        cell.metadata.pop(NOTES_SIGNATURE_KEY, None)
+
+
+def _one_line(text: str) -> str:
+    """A note's text on one line, with what no file can store (a lone surrogate, from a file name that is not
+    UTF-8) replaced by U+FFFD and control characters (a newline in a file name) by spaces."""
+    text = "".join("\ufffd" if "\ud800" <= ch <= "\udfff" else ch for ch in text)
+    return CONTROL.sub(" ", text)
 
 
 def add_grader_notes(nb: NotebookNode, notes: list[str], kind: NoteKind = NoteKind.CHANGE) -> None:
@@ -105,7 +150,7 @@ def add_grader_notes(nb: NotebookNode, notes: list[str], kind: NoteKind = NoteKi
     existing = grader_notes(nb)
     if existing:
         nb.cells.pop(0)
-    every = existing + [GraderNote(kind, text) for text in notes]
+    every = existing + [GraderNote(kind, _one_line(text)) for text in notes]
     every.sort(key=lambda note: list(HEADINGS).index(note.kind))
     body = [NOTE_TITLE]
     for heading_kind, heading in HEADINGS.items():
@@ -116,7 +161,8 @@ def add_grader_notes(nb: NotebookNode, notes: list[str], kind: NoteKind = NoteKi
     # an id from the notes, not a random one: the graded notebook is then the same file every time the
     # same submission is graded, and so are its hidden cases (autograder/pipeline/grading_secret.py)
     digest = hashlib.sha256("\n".join(f"{note.kind}:{note.text}" for note in every).encode()).hexdigest()[:12]
-    nb.cells.insert(0, new_markdown_cell("\n".join(body), metadata={NOTES_KEY: stored}, id="grader-note-" + digest))
+    metadata = {NOTES_KEY: stored, NOTES_SIGNATURE_KEY: _signature(stored)}
+    nb.cells.insert(0, new_markdown_cell("\n".join(body), metadata=metadata, id="grader-note-" + digest))
 
 
 def _has_id(cell: NotebookNode) -> bool:
@@ -143,6 +189,7 @@ class RestoreLabCells(NbGraderPreprocessor):
 
     def preprocess(self, nb: NotebookNode, resources: dict) -> tuple[NotebookNode, dict]:
         lab = Lab(resources["nbgrader"]["assignment"])
+        forget_forged_notes(nb)
         released = cells.read(lab.release_notebook)
         order = [cells.grade_id(c) for c in released.cells if _has_id(c)]
         note = [c for c in nb.cells[:1] if is_grader_note(c)]  # intake's, kept at the top
