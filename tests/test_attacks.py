@@ -446,7 +446,7 @@ def test_a_symbolic_link_or_a_huge_file_in_the_submissions_is_graded_as_empty(tm
         nb = nbformat.read(work / "submitted" / student / TRAIN.id / TRAIN.notebook_name, as_version=4)
         assert [c.source for c in nb.cells if cells.is_code_answer(c)] == release
         [note] = grader_notes(nb)
-        assert why in note, note
+        assert why in note.text, note
 
 
 FORK_BOMB = '''import os, time

@@ -287,15 +287,25 @@ def test_only_what_the_grader_changed_counts_as_a_fault():
     assert class_report.count_lab(LAB, [row(cause, flag)]).faulted == ()
 
 
-def test_a_blank_written_in_an_added_cell_or_diagnosed_is_not_counted_as_not_written():
-    """Adversarial review of issue 31: a student left the stub as released and defined kupdate, with a catalogued
-    mistake, in a cell added below it; the report counted the blank "not written" and hid the mistake. A blank
-    that another code cell defines is written, and the grader's diagnosis comes before anything read from cells."""
-    from autograder.pipeline.grades import _defined_names
+def test_a_blank_the_grader_did_not_find_as_its_stub_or_diagnosed_is_not_counted_as_not_written(tmp_path):
+    """Adversarial reviews of issue 31: a student left the stub as released and bound kupdate, with a wrong answer,
+    in a cell added below it (by def, then by import or match, which a reading of the cells missed); the report
+    counted the blank "not written" and hid the mistake. A blank is not written only when the grader's hidden test
+    called its stub; and the grader's diagnosis comes before anything read from the cells."""
+    from autograder.pipeline.grades import _read_autograded
 
-    added = [nbformat.v4.new_code_cell("def kupdate(x_f, B_f, y, H, R):\n    return x_f, B_f\nnees = None")]
-    assert _defined_names(added) == {"kupdate", "nees"}
-    assert _defined_names([nbformat.v4.new_code_cell("# def kupdate(\nnot python (")]) == set()
+    nb = submissions.solved(LAB)
+    [stub] = [c for c in cells.read(LAB.release_notebook).cells if cells.is_code_answer(c) and cells.grade_id(c) == "kupdate"]
+    [answer] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == "kupdate"]
+    answer.source = stub.source
+    [test] = [c for c in nb.cells if cells.meta(c).get("grade_id") == "test_kupdate"]
+    path = tmp_path / "graded.ipynb"
+    for error, counted in ((f"{NOT_WRITTEN} It was raised on the case with a scalar state.", True),
+                           ("the analysis differs from the reference", False)):
+        ename = "NotImplementedError" if counted else "AssertionError"
+        test.outputs = [nbformat.v4.new_output("error", ename=ename, evalue=error, traceback=[])]
+        nbformat.write(nb, path)
+        assert ("test_kupdate" in _read_autograded(path, LAB)[4]) is counted, error
     names = {"test_kupdate": 2.0}
     row = GradeRow("s", LAB.id, {"test_kupdate": 0.0}, names, frozenset(names), not_written=frozenset(names),
                    diagnosed={"test_kupdate": "innovation-sign"})

@@ -125,7 +125,7 @@ def test_a_plot_blank_draws_on_the_axes_the_check_gave_it(kernel):
               "    ax.plot(t, truth, label='truth')\n"
               "    ax.plot(t, mean, label='estimate')\n"
               "    ax.fill_between(t, mean - 3 * std, mean + 3 * std, alpha=0.3, label='3 sigma')\n"
-              "    ax.set(xlabel='Time [s]', ylabel='c [m2/kg]')\n"
+              "    ax.set(xlabel='Time [s]', ylabel='c [m2/kg]', title='c')\n"
               "    ax.legend()\n"
               "    return ax\n")
     t, truth, mean, std = BAND_CASE
@@ -146,7 +146,7 @@ def test_a_legend_made_from_handles_and_labels_crosses_with_its_entries(kernel):
               "    truth_line, = ax.plot(t, truth)\n"
               "    mean_line, = ax.plot(t, mean)\n"
               "    band = ax.fill_between(t, mean + 3 * std, mean - 3 * std, alpha=0.3)\n"
-              "    ax.set(xlabel='t, sec', ylabel='c in m$^2$/kg')\n"
+              "    ax.set(xlabel='t, sec', ylabel='c in m$^2$/kg', title='c')\n"
               "    ax.legend([truth_line, mean_line, band], ['truth', 'estimate', '99.7% region'])\n"
               "    return ax\n")
     t, truth, mean, std = BAND_CASE

@@ -142,8 +142,9 @@ def _arrays(args: tuple, kwargs: dict) -> dict:
 
 
 def _global_random_state() -> tuple:
-    state = np.random.get_state(legacy=False)["state"]
-    return int(state["pos"]), state["key"].tobytes()
+    state = np.random.get_state(legacy=False)
+    # the position in the key, and the Gaussian that a legacy standard_normal keeps for its next call
+    return int(state["state"]["pos"]), state["state"]["key"].tobytes(), int(state["has_gauss"]), float(state["gauss"])
 
 
 def _checked(function: Callable, name: str) -> Callable:

@@ -557,8 +557,9 @@ def _uses_a_generator(args: tuple, kwargs: dict) -> bool:
 
 def _global_random_state() -> tuple:
     """Where NumPy's global generator (np.random.standard_normal, np.random.choice, ...) stands."""
-    state = np.random.get_state(legacy=False)["state"]
-    return int(state["pos"]), state["key"].tobytes()
+    state = np.random.get_state(legacy=False)
+    # the position in the key, and the Gaussian that a legacy standard_normal keeps for its next call
+    return int(state["state"]["pos"]), state["state"]["key"].tobytes(), int(state["has_gauss"]), float(state["gauss"])
 
 
 def _target_json(target):

@@ -3,7 +3,6 @@ grading environment beside it."""
 
 from __future__ import annotations
 
-import ast
 import functools
 import re
 from dataclasses import dataclass, field
@@ -19,6 +18,7 @@ from autograder.labs import ROOT, Lab
 from autograder.pipeline import verdicts, versions
 from autograder.pipeline.nbgrader_apps import course_config
 from autograder.pipeline.restore import GraderNote, NoteKind, grader_notes
+from course.checks import NOT_WRITTEN
 
 
 def all_graded_labs(workdir: Path) -> list[Lab]:
@@ -139,23 +139,6 @@ def _stubs(lab_id: str) -> dict[str, str]:
             if cells.is_code_answer(c)}
 
 
-def _defined_names(code_cells: list) -> set[str]:
-    """The names that these code cells define with ``def`` or assign (a blank can be written in a cell the student
-    added below its stub: a review of issue 31 hid a diagnosed mistake as "not written" so)."""
-    names: set[str] = set()
-    for cell in code_cells:
-        try:
-            tree = ast.parse(cell.source)
-        except (SyntaxError, ValueError):
-            continue
-        for node in ast.walk(tree):
-            if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-                names.add(node.name)
-            elif isinstance(node, ast.Name) and isinstance(node.ctx, ast.Store):
-                names.add(node.id)
-    return names
-
-
 def _lines(source: str) -> str:
     return "\n".join(line.rstrip() for line in source.strip().splitlines() if line.strip())
 
@@ -166,7 +149,7 @@ def _read_autograded(autograded: Path, lab: Lab) -> tuple[tuple[str, ...], dict[
     cell its first error (the grader's reason for a failing verdict, the only error a test cell
     holds, autograder/pipeline/verdicts.py); test cell -> diagnosed mistake (``verdicts.diagnoses``), and
     -> the kind of case alone wrong;
-    the test cells of the blanks that still hold their stub as released and that no other code cell defines (the stub's text inside written code,
+    the test cells of the blanks that still hold their stub as released and whose stub the hidden test called (the stub's text inside written code,
     a comment say, does not count: a review of issue 31 hid a diagnosed mistake so); and those of the blanks
     whose visible checks failed (``verdicts.visible_checks_failed``)."""
     nb = nbformat.read(autograded, as_version=4)
@@ -178,10 +161,12 @@ def _read_autograded(autograded: Path, lab: Lab) -> tuple[tuple[str, ...], dict[
         if errors:
             reasons[cells.grade_id(cell)] = ANSI.sub("", f"{errors[0].ename}: {errors[0].evalue}")
     stubs = _stubs(lab.id)
-    defined = _defined_names([c for c in nb.cells if c.cell_type == "code" and not cells.is_code_answer(c)])
+    # the grader called the stub: a blank defined in a cell added below its stub is the function called
+    # (an adversarial review of issue 31 hid a mistake so, with def, import or match), not the stub
+    stub_called = f"NotImplementedError: {NOT_WRITTEN}"
     not_written = {f"test_{cells.grade_id(c)}" for c in nb.cells
                    if cells.is_code_answer(c) and _lines(c.source) == stubs.get(cells.grade_id(c))
-                   and cells.grade_id(c) not in defined}
+                   and reasons.get(f"test_{cells.grade_id(c)}", "").startswith(stub_called)}
     return (tuple(grader_notes(nb)), reasons, verdicts.diagnoses(nb), verdicts.diagnoses(nb, verdicts.WRONG_ONLY_KEY),
             not_written, verdicts.visible_checks_failed(nb))
 

@@ -25,6 +25,7 @@ from autograder.hidden_tests import cases
 from autograder.hidden_tests.case_kinds import case
 from autograder.hidden_tests.diagnosis import diagnosed
 from autograder.hidden_tests.isolate import isolate
+from autograder.hidden_tests.rng_use import check_draws_from_rng
 from autograder.labs import lab_of
 from course import cut
 from course.air_traffic import symmetric_sqrt
@@ -451,6 +452,19 @@ def _check_pf_angles(func: Callable) -> None:
                         rtol=1e-7, atol=1e-6, show_expected=False)
 
 
+def _check_pf_generator(func: Callable) -> None:
+    """Exact: the step's draws come from the rng it is given (``rng_use``): the noise makes every result depend on them."""
+    rng = cases.rng(1580)
+    f, h = _pf_model(rng)
+    X = _pf_particles(rng, PF_N)
+    logw = _normalised(0.3 * rng.standard_normal(PF_N))
+    y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([1e8, 1e2])
+    label = "bootstrap_pf_step on one case, with generators in the same and in different states"
+    with _pf_case(False, _DIAGONAL):
+        check_draws_from_rng(lambda step_rng: _pf_call(func, X, logw, y, step_rng, f, h, TINY_Q, R, 0.7, label),
+                             "bootstrap_pf_step", 1581)
+
+
 def _check_pf_no_resampling(func: Callable) -> None:
     """Exact: when the effective sample size stays above the threshold, nothing is resampled."""
     rng = cases.rng(1506)
@@ -583,3 +597,4 @@ def check_bootstrap_pf_step(func: Callable) -> None:
     _check_pf_resampling(func)
     _check_pf_threshold(func)
     _check_pf_noise(func)
+    _check_pf_generator(func)

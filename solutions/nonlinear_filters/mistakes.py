@@ -141,4 +141,11 @@ MISTAKES = (
     Mistake("bootstrap_pf_step", "global-random", "draws the process noise with np.random, not with rng",
             "rng.standard_normal(X.shape) @", "np.random.standard_normal(X.shape) @",
             hint="Draw every random number with rng: rng.standard_normal, rng.random, rng.choice."),
+    # An adversarial review of issue 31: a step whose draws do not come from rng passed the statistical tests.
+    Mistake("bootstrap_pf_step", "own-generator", "draws from a generator of its own, np.random.default_rng(), not from rng",
+            "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng = np.random.default_rng()\n",
+            hint="Draw every random number with the rng it is given, so that the same seed gives the same result."),
+    Mistake("bootstrap_pf_step", "fixed-seed", "draws from a generator with a fixed seed, not from rng",
+            "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng = np.random.default_rng(0)\n",
+            hint="Draw every random number with rng."),
 )

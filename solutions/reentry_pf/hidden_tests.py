@@ -35,6 +35,7 @@ from autograder.hidden_tests import cases
 from autograder.hidden_tests.case_kinds import case
 from autograder.hidden_tests.diagnosis import diagnosed
 from autograder.hidden_tests.isolate import isolate, with_globals
+from autograder.hidden_tests.rng_use import check_draws_from_rng
 from autograder.labs import lab_of
 from course import falling_object
 from course.checks import check_array, check_close, check_pair, count
@@ -735,6 +736,9 @@ def statistical_checks(pf_step: PfStep) -> None:
         check_innovation(pf_step, OTHER_INNOVATION_STD)
     with case(part="the posterior after a whole run", innovation_std=default):
         check_posterior(pf_step)
+    with case(part="the generator it draws from", innovation_std=default):
+        near = near_case()
+        check_draws_from_rng(lambda rng: _run_step(pf_step, near, rng), "pf_step", PF_STEP_STREAM, 99)
 
 
 @diagnosed

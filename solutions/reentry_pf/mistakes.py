@@ -126,4 +126,11 @@ MISTAKES = (
     Mistake("tracking_dynamics", "float32", "computes in single precision (float32)",
             "h, v, beta = np.asarray(x, dtype=float)", "h, v, beta = np.asarray(x, dtype=np.float32)",
             hint="It is in single precision (float32, about 7 significant digits): compute in float64, NumPy's default, and do not convert your arrays to float32."),
+    # An adversarial review of issue 31: a step whose draws do not come from rng passed the statistical test.
+    Mistake("pf_step", "own-generator", "draws from a generator of its own, np.random.default_rng(), not from rng",
+            "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng = np.random.default_rng()\n",
+            hint="Draw every random number with the rng it is given, so that the same seed gives the same result."),
+    Mistake("pf_step", "fixed-seed", "draws from a generator with a fixed seed, not from rng",
+            "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng = np.random.default_rng(0)\n",
+            hint="Draw every random number with rng."),
 )

@@ -1,0 +1,47 @@
+"""Whether a random blank draws from the generator it is given, and only from it.
+
+A statistical hidden test accepts any step whose draws have the right distribution, wherever they come
+from. A step that draws from a generator of its own (``np.random.default_rng()``), or from NumPy's global
+generator with its state put back (``np.random.set_state``), passed such a test (adversarial review of
+issue 31), though the lab says to draw every random number from ``rng``. The check here says so by its
+consequence, whatever the route: two generators in the same state must give the same result, and two in
+different states different results.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any
+
+import numpy as np
+
+from autograder.hidden_tests import cases
+
+
+def _same(first: Any, second: Any) -> bool:
+    """Whether two results are equal, bit for bit where they are arrays (NaN equal to NaN)."""
+    if isinstance(first, (tuple, list)) and isinstance(second, (tuple, list)):
+        return len(first) == len(second) and all(_same(a, b) for a, b in zip(first, second))
+    if isinstance(first, dict) and isinstance(second, dict):
+        return first.keys() == second.keys() and all(_same(first[k], second[k]) for k in first)
+    try:
+        a, b = np.asarray(first), np.asarray(second)
+        return a.shape == b.shape and bool(np.array_equal(a, b, equal_nan=a.dtype.kind in "fc"))
+    except (TypeError, ValueError):
+        return first == second
+
+
+def check_draws_from_rng(call: Callable[[np.random.Generator], Any], name: str, *stream: int) -> None:
+    """Fail unless ``call(rng)``, a call of the blank ``name`` on one fixed case whose result depends on its
+    draws, gives the same result for two generators in the same state and another for a third."""
+    first, again, other = call(cases.rng(*stream, 0)), call(cases.rng(*stream, 0)), call(cases.rng(*stream, 1))
+    if not _same(first, again):
+        raise AssertionError(
+            f"{name} gave different results when it was given two generators in the same state: it draws from "
+            "a generator of its own (np.random.default_rng() inside the function) or from np.random. Draw every "
+            "random number with the rng it is given, so that the same seed gives the same result.")
+    if _same(first, other):
+        raise AssertionError(
+            f"{name} gave the same result for generators in different states: its draws do not come from the "
+            "rng it is given (np.random with its state put back, or a fixed seed). Draw every random number "
+            "with rng.")
