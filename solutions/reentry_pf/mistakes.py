@@ -126,4 +126,8 @@ MISTAKES = (
     Mistake("tracking_dynamics", "float32", "computes in single precision (float32)",
             "h, v, beta = np.asarray(x, dtype=float)", "h, v, beta = np.asarray(x, dtype=np.float32)",
             hint="It is in single precision (float32, about 7 significant digits): compute in float64, NumPy's default, and do not convert your arrays to float32."),
+    # A review of the fairness of the visible checks' messages: each was told of another cause.
+    Mistake("pf_step", "innovation-shared", "one draw of the innovation, shape (3, 1), shared by every new particle",
+            "rng.standard_normal((3, N))", "rng.standard_normal((3, 1))",
+            hint="Your pf_step behaves as if every new particle shared one draw of the innovation: each particle needs a draw of its own, a column of rng.standard_normal((3, N))."),
 )
