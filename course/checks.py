@@ -73,7 +73,8 @@ def check_array(value: Any, name: str, shape: tuple[int, ...], hint: str = "") -
             f"{' (a single number)' if array.shape == () else ''}. {hint}".strip()
         )
     if not np.all(np.isfinite(array)):
-        raise AssertionError(f"{name} contains NaN or infinite entries: {array}. {hint}".strip())
+        raise AssertionError(f"{name} {'contain' if is_plural(name) else 'contains'} NaN or infinite entries: {array}. "
+                             f"{hint}".strip())
     return array
 
 
@@ -467,8 +468,9 @@ _MEANINGS: list[tuple[str, str, str]] = [
      "matrix: give it shape (n, n), for example [[v]] for a single variance."),
     ("LinAlgError", "", "A linear-algebra routine failed on the matrix it was given: check that the matrix is the "
      "one the equation names, square and well conditioned (a sign error or a missing term can break it)."),
-    ("ValueError", r"^solve\w*:.*core dimension", "np.linalg.solve(A, b) got shapes that do not fit: A must be "
-     "(m, m) and b must have m rows, (m,) or (m, k). Check your transposes. With NumPy 2 a stack of vectors, "
+    # M, not A: in train-kf and castaway-bob, A is the name of the model's transition matrix
+    ("ValueError", r"^solve\w*:.*core dimension", "np.linalg.solve(M, b) got shapes that do not fit: it needs a "
+     "square M, (m, m), and a b with m rows, (m,) or (m, k). Check your transposes. With NumPy 2 a stack of vectors, "
      "shape (T, m), is read as one matrix, not as T vectors: solve with b[..., None] and take [..., 0] of "
      "the result."),
     ("ValueError", "matmul", "Two arrays in a matrix product (@) have shapes that do not fit. Check the "
@@ -491,6 +493,9 @@ _MEANINGS: list[tuple[str, str, str]] = [
      "a weight is never negative. Check the signs in your weights, or your log-weights before np.exp."),
     ("ValueError", "probabilities do not sum to 1", "The probabilities you drew with do not sum to 1: normalise "
      "the weights (w / np.sum(w)) after their last change and before you draw with them."),
+    ("ValueError", "truth value of an array", "An array of several entries was used where Python needs one True or "
+     "False, as in `if u:`: such an array is neither. To ask whether an optional argument such as u was given, write "
+     "`if u is not None:`; to ask something of the entries, use np.any(...) or np.all(...)."),
     ("ValueError", "", "A function got a value it cannot work with: compare the shapes and values of the "
      "inputs above with what the function expects."),
     ("IndexError", "", "An index is out of range. Check the range of your loop, and which axis holds time "

@@ -24,7 +24,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from course.checks import check_axis_label
+from course.checks import check_axis_label, is_plural
 
 if TYPE_CHECKING:  # pragma: no cover
     from matplotlib.axes import Axes
@@ -553,7 +553,8 @@ def check_square_root(
     if S.shape != P.shape:
         raise AssertionError(f"{name} should have shape {P.shape}, but it has shape {S.shape}. {hint}".strip())
     if not np.all(np.isfinite(S)):
-        raise AssertionError(f"{name} contains NaN or infinite entries: {S}. {hint}".strip())
+        raise AssertionError(f"{name} {'contain' if is_plural(name) else 'contains'} NaN or infinite entries: {S}. "
+                             f"{hint}".strip())
     check_upper_triangular(S, name, hint)
     scale = np.sqrt(np.outer(np.abs(np.diag(P)), np.abs(np.diag(P))))
     error = np.abs(S.T @ S - P)

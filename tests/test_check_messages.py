@@ -12,7 +12,8 @@ from autograder import cells
 from autograder.authoring.visible_checks import visible_verdicts
 from autograder.labs import Lab
 from autograder.catalogues.mistakes import catalogue
-from course.checks import count, explain, is_plural
+from course.checks import check_array, count, explain, is_plural
+from course.starship import check_square_root
 from over_labs import over_labs
 
 # "1 fixes", "1 random estimates": a count of one with a plural noun.
@@ -24,6 +25,8 @@ MANY_WITH_SINGULAR = re.compile(
 )
 # "the estimates ... is not right", "x_a ... are not right"
 VERDICT = re.compile(r"^(?:\w+: )?(.*?) (is|are) not right", re.MULTILINE)
+# "the estimates contains NaN", "x_a contain NaN"
+NAN_VERDICT = re.compile(r"^(?:\w+: )?(.*?) (contains|contain) NaN", re.MULTILINE)
 
 
 def grammar_problems(message: str) -> list[str]:
@@ -33,6 +36,9 @@ def grammar_problems(message: str) -> list[str]:
     for subject, verb in VERDICT.findall(message):
         if (verb == "are") != is_plural(subject):
             problems.append(f"'{subject} {verb} not right'")
+    for subject, verb in NAN_VERDICT.findall(message):
+        if (verb == "contain") != is_plural(subject):
+            problems.append(f"'{subject} {verb} NaN'")
     return problems
 
 
@@ -42,6 +48,8 @@ def test_the_grammar_checks_catch_what_they_claim_to():
     assert grammar_problems("x_a on 2 time is not right")
     assert grammar_problems("x_a for the fix y = [12 mi, 70 mph] is not right: expected [11. 69.]") == []
     assert grammar_problems("the variances after one and two fixes are not right") == []
+    assert grammar_problems("the estimates contains NaN or infinite entries: [nan]") == ["'the estimates contains NaN'"]
+    assert grammar_problems("x_a contains NaN or infinite entries: [nan]") == []
     assert count(1, "random fix") == "1 random fix" and count(3, "random fix") == "3 random fixes"
     assert count(2, "estimate") == "2 estimates" and is_plural("the estimates") and not is_plural("NEES of e")
 
@@ -84,6 +92,32 @@ def test_an_exception_inside_a_blank_names_the_call_its_inputs_and_a_likely_caus
         np.linalg.solve(np.zeros((2, 2)), np.ones(2))
     except np.linalg.LinAlgError as error:
         assert explain(error, error.__traceback__, ["gain_information_form"]) is None
+
+
+def test_a_nan_check_agrees_with_its_name_and_a_crash_is_explained_without_the_labs_names():
+    """A fairness review of the messages: "the estimates contains NaN"; the explanation of a solve whose shapes do not
+    fit spoke of solve(A, b), where A is train-kf's model matrix; `if u:` on an input of two entries was explained as
+    a value that the function cannot work with."""
+    for name, verb in (("the estimates", "contain"), ("x_a", "contains")):
+        for check in (lambda: check_array(np.array([[1.0, np.nan]]), name, (1, 2)),
+                      lambda: check_square_root(np.array([[1.0, np.nan], [0.0, 1.0]]), np.eye(2), name)):
+            with pytest.raises(AssertionError) as caught:
+                check()
+            assert str(caught.value).startswith(f"{name} {verb} NaN or infinite entries"), caught.value
+    namespace = {"__name__": "__main__", "np": np}
+    exec(compile(
+        "def gain(B, H, R):\n"
+        "    return np.linalg.solve(H @ B @ H.T + R, B @ H.T).T\n"
+        "def step(x, u=None):\n"
+        "    if u:\n"
+        "        x = x + u\n"
+        "    return x\n", "<cell-1>", "exec"), namespace)
+    for call, blank, said in (("gain(np.eye(2), np.eye(1, 2), np.eye(1))", "gain", "np.linalg.solve(M, b) got shapes"),
+                              ("step(np.zeros(2), np.ones(2))", "step", "write `if u is not None:`")):
+        with pytest.raises(ValueError) as raised:
+            exec(compile(call, "<cell-2>", "exec"), namespace)
+        message = " ".join(explain(raised.value, raised.value.__traceback__, [blank]).split())
+        assert said in message and "solve(A" not in message, message
 
 
 def _run_in_kernel(cells_source: list[str], folder) -> tuple:
@@ -206,7 +240,7 @@ VISIBLY_FAILED = {
     "castaway-bob": ("joseph_covariance/swapped-transposes", "run_rank2/restarts", "run_rank4/flow-at-new-time",
                      "run_rank4/handout-Q", "joseph_covariance/right-not-transposed", "kalman_step/input-inside-A",
                      "run_rank2/global-sigma-gps", "run_rank4/flow-at-fix", "run_rank4/flow-at-predicted-position",
-                     "run_rank4/position-noise"),
+                     "run_rank4/position-noise", "kalman_step/if-u"),
     "nonlinear-filters": ("moment_error/unweighted", "moment_error/degree-at-most", "bootstrap_pf_step/bearing-not-wrapped",
                           "bootstrap_pf_step/noise-before-f", "unscented_points/centre-weight-one-over-n-plus-kappa",
                           "ekf_update/angle-index-hard-coded", "ekf_update/wraps-every-component",
@@ -222,16 +256,26 @@ of nonlinear-filters passed them until the fairness review of that lab added a c
 places of the measurement (p = 1, and the bearing first of p = 2), and a 2-D process noise with a non-diagonal Q.
 The reentry ones passed them until the fairness review of those labs added a run with scripted parents (N = 3), a
 non-diagonal S_Q and a non-diagonal S_R. castaway-bob's run_rank4/position-noise passed them until the science review
-found case (d) too loose for it (8e-8 of the variance, under the default rtol of 1e-7)."""
+found case (d) too loose for it (8e-8 of the variance, under the default rtol of 1e-7). castaway-bob's kalman_step/if-u
+passed them, as every u they gave had one entry, until the fairness review of the messages added a u of two."""
 
 VISIBLE_MESSAGES = {
     "train-kf": {"nees/root": ("take no square root", None),
                  # n = 1: np.eye(2) in the Joseph form raises in a matrix product; the call's line says why
-                 "kupdate/joseph-eye-2": ("np.eye(len(x_f))", None)},
+                 "kupdate/joseph-eye-2": ("np.eye(len(x_f))", None),
+                 # the fairness review of the messages: an h in minutes was asked whether sigma was 15/60, and a predict that
+                 # adds a Q of its own was sent to the order of A @ B @ A.T (a case with B = 0 now comes first)
+                 "process_noise/hours-as-minutes": ("not the 1 minute of dt_min", "15/60 in place of 15"),
+                 "predict/global-Q": ("add the Q that predict is given as its argument", "order of the product")},
     "castaway-bob": {"joseph_covariance/right-not-transposed": ("symmetric by construction", None),
                      "run_rank4/flow-at-fix": ("not at the last fix", None),
                      "run_rank4/position-noise": ("drives Bob's own velocity w, not his position", None),
-                     "run_rank2/restarts": ("from the previous estimate and covariance", "expected 1 but got 0")},
+                     "run_rank2/restarts": ("from the previous estimate and covariance", "expected 1 but got 0"),
+                     # the fairness review of the messages: `if u:` passed every case (each u had one entry) and crashed
+                     # in run_rank4's check; run_rank4's last check named Q as the cause, whatever blank was wrong
+                     "kalman_step/if-u": ("write `if u is not None:`", None),
+                     "run_rank4/handout-Q": ("If your transition_matrix, kalman_gain, joseph_covariance and kalman_step "
+                                             "are right, look at Q", None)},
     "nonlinear-filters": {
         # the check of P_yy comes before the check of the mean, which a P_yy without R makes wrong as well
         "sigma_point_update/no-R": ("Did you add R to P_yy", None),
@@ -248,6 +292,16 @@ VISIBLE_MESSAGES = {
         "sqrt_measurement_update/noise-transposed": ("S_R is the upper-triangular square root of R", "not with 1"),
         # the name of the handout's S_I reads as a matrix, not as "S_I for idx = [2, 4, 0][2, 0]"
         "marginal/no-qr": ("but its entry [2, 0] (row 2, column 0", "[2, 4, 0]["),
+        # the fairness review of the messages: (H @ S).T for S @ H.T was told of the residual's sign (S is checked first)
+        "sqrt_measurement_update/H-S-transposed": ("not (H @ S).T = S.T @ H.T", "the residual is y - h(mu)"),
+    },
+    "reentry-pf": {
+        # the fairness review of the messages: the means of the copies of particle 0 were checked before their spread,
+        # which an innovation of the wrong size, or one draw for all, moves as well; and p as a fraction was told to
+        # carry the weights along (a case with equal weights now comes first)
+        "pf_step/variance-innovation": ("standard deviations, not variances", "Propagate before you resample"),
+        "pf_step/innovation-shared": ("its own draw of the innovation", "old weights w"),
+        "credibility_interval/percent-as-fraction": ("p is in percent", "Carry the weights along"),
     },
 }
 """Mistakes whose visible check must say a given phrase, the hint that points at the cause, and must not say
@@ -256,7 +310,8 @@ a square root leaves alone; a Joseph form without its right transpose told only 
 without R told to check the innovation's sign; yes/no checks that said "expected 1 but got 0"; a stacked R or S_R.T
 told of the residual's sign or of the blocks' sizes. The science review found a Joseph form with np.eye(2) whose hint
 never showed (with n = 1 a matrix product raises first, and its explanation pointed at the transposes), and an
-angle's hint that gave the line of code that wraps it."""
+angle's hint that gave the line of code that wraps it. The fairness review of the messages found eight more that named
+another cause than the one made (each entry of it says which)."""
 
 
 @pytest.mark.parametrize("lab", [Lab(lab_id) for lab_id in sorted(VISIBLE_MESSAGES)], ids=sorted(VISIBLE_MESSAGES))

@@ -35,6 +35,9 @@ CRASHES = {
               "B_inv + H.T @ RinvH, RinvH)", "K is n x m", "ValueError"),
         Crash("gain_covariance_form", "solves-for-K-not-its-transpose", "np.linalg.solve(S, H @ B).T",
               "np.linalg.solve(S, B @ H.T)", "K is n x m", "ValueError"),
+        # the fairness review of the messages: the explanation spoke of solve(A, b), and A is this lab's model matrix
+        Crash("gain_covariance_form", "solves-for-K-transposed-with-B-H-transposed", "np.linalg.solve(S, H @ B).T",
+              "np.linalg.solve(S, B @ H.T).T", "np.linalg.solve(M, b) got shapes that do not fit", "ValueError"),
         Crash("process_noise", "ragged-rows", "np.array([[h * h, h], [h, 1.0]])", "np.array([[h * h, h], [h]])",
               "the shape of the arrays beside it", "ValueError"),
         Crash("kupdate", "innovation-vector-on-the-left", "y - H @ x_f", "y - x_f @ H", "the order of the factors",

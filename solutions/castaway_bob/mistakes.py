@@ -129,4 +129,9 @@ MISTAKES = (
     Mistake("kalman_step", "x-in-place", "writes the prediction into the x it was given (x[:] = A x + u)",
             "x_pred = A @ x if u is None else A @ x + u", "x[:] = A @ x if u is None else A @ x + u\n    x_pred = x",
             hint="Leave the arrays you are given as they are and return new ones: write x = x + ..., or start from x.copy()."),
+    # A review of the fairness of the visible checks' messages: it passed them, and crashed in run_rank4's check.
+    Mistake("kalman_step", "if-u", "asks `if u:` whether the input was given, which an input of several entries cannot answer",
+            "x_pred = A @ x if u is None else A @ x + u", "x_pred = A @ x\n    if u:\n        x_pred = x_pred + u",
+            raises=ValueError,
+            hint="Your kalman_step asks `if u:` whether a known input was given: an array of several entries is neither true nor false. Write `if u is not None:`."),
 )

@@ -133,4 +133,8 @@ MISTAKES = (
     Mistake("pf_step", "fixed-seed", "draws from a generator with a fixed seed, not from rng",
             "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng = np.random.default_rng(0)\n",
             hint="Draw every random number with rng."),
+    # A review of the fairness of the visible checks' messages: each was told of another cause.
+    Mistake("pf_step", "innovation-shared", "one draw of the innovation, shape (3, 1), shared by every new particle",
+            "rng.standard_normal((3, N))", "rng.standard_normal((3, 1))",
+            hint="Your pf_step behaves as if every new particle shared one draw of the innovation: each particle needs a draw of its own, a column of rng.standard_normal((3, N))."),
 )

@@ -130,4 +130,8 @@ MISTAKES = (
     Mistake("plot_ballistic_coefficient", "no-title", "no title",
             'ax.set(title="Ballistic coefficient", xlabel=', "ax.set(xlabel=",
             hint="Your plot_ballistic_coefficient has no title: give the plot one that says what it shows."),
+    # A review of the fairness of the visible checks' messages: it was told of the residual's sign.
+    Mistake("sqrt_measurement_update", "H-S-transposed", "[(H S)^T, S]: the first block S^T H^T where S H^T belongs",
+            "[[S @ H.T, S], [S_R,", "[[(H @ S).T, S], [S_R,",
+            hint="Your sqrt_measurement_update behaves as if the first block of the stacked matrix were (H S)^T = S^T H^T: it is S H^T, which differs when S is not diagonal."),
 )

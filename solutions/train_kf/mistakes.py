@@ -101,4 +101,8 @@ MISTAKES = (
     Mistake("gain_information_form", "float32", "computes in single precision (float32)",
             "    n = B.shape[0]\n", "    B, H, R = (np.asarray(a, dtype=np.float32) for a in (B, H, R))\n    n = B.shape[0]\n",
             hint="It is in single precision (float32, about 7 significant digits): compute in float64, NumPy's default, and do not convert your arrays to float32."),
+    # A review of the fairness of the visible checks' messages: it was told of the order of the product.
+    Mistake("predict", "global-Q", "adds the notebook's process_noise(15.0) instead of the Q it is given",
+            "A @ B @ A.T + Q", "A @ B @ A.T + process_noise(15.0)",
+            hint="Your predict behaves as if it added a fixed process noise, the train's process_noise(15.0), instead of the argument Q."),
 )
