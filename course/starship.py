@@ -671,7 +671,7 @@ def check_band_plot(
             f"{name}: add a legend that names the truth, the estimate and the 99.7% region: give each a "
             "label=... and call ax.legend()."
         )
-    if not ax.get_title().strip():
+    if not any(ax.get_title(loc).strip() for loc in ("center", "left", "right")):
         raise AssertionError(f"{name}: give the plot a title that says what it shows, with ax.set_title(...).")
 
 

@@ -419,3 +419,13 @@ def test_text_that_no_file_can_store_crosses_as_a_replacement_character(kernel):
     raises = kernel(_define("def g(x):\n    raise ValueError('bad ' + chr(0xD800))\n"), "g")
     with pytest.raises(ValueError, match="bad \ufffd"):
         raises(1.0)
+
+
+def test_a_title_set_on_the_left_is_a_title(kernel):
+    """Fairness review of issue 30: ax.set_title(..., loc="left") lost the plot's marks, as only the centred title was read."""
+    ax, returned = _drawn(kernel, "def plot(ax, t, truth, mean, std):\n"
+                                  "    ax.fill_between(t, mean - 3 * std, mean + 3 * std, label='3 sigma')\n"
+                                  "    ax.plot(t, truth, label='truth')\n    ax.plot(t, mean, label='estimate')\n"
+                                  "    ax.set(xlabel='Time [s]', ylabel='c [m2/kg]')\n    ax.set_title('c', loc='left')\n"
+                                  "    ax.legend()\n    return ax\n")
+    check_band_plot(ax, returned, *BAND_CASE, "plot")

@@ -101,10 +101,16 @@ def diagnosed(check: Callable) -> Callable:
     def diagnosing_check(func: Callable, *args, **kwargs):
         start = time.monotonic()
         calls: list[tuple[tuple, Any]] = []
+        single: set[str] = set()
         try:
-            with isolate.observed(_recorder(calls)), case_kinds.labelled(blank):
+            with isolate.observed(_recorder(calls, single)), case_kinds.labelled(blank):
                 return check(func, *args, **kwargs)
         except Exception as error:
+            if (single and isinstance(error, AssertionError) and not isinstance(error, isolate.CallRuleBroken)
+                    and "single precision" not in str(error)):
+                # a fairness review of issue 30: a float32 answer was sent to a formula or to the kinds of case
+                add_to_message(error, f"Your {blank} returned {min(single)} (single precision, about 7 significant "
+                                      "digits): compute in float64, NumPy's default, and do not convert to float32.")
             mistake = _diagnosis(check, calls, _budget(time.monotonic() - start))
             if mistake is not None:
                 add_to_message(error, f"{LEAD.format(blank=blank)} {mistake.hint}")
@@ -137,7 +143,15 @@ def diagnose(func: Callable, check: Callable, args: tuple = (), kwargs: dict | N
     return _diagnosis(check, calls, budget_s)
 
 
-def _recorder(calls: list) -> Callable:
+def _single_precision(result) -> set[str]:
+    """The floating-point dtypes less precise than float64 in a result (arrays, NumPy scalars, in tuples and lists)."""
+    if isinstance(result, (tuple, list)):
+        return set().union(*(_single_precision(item) for item in result)) if result else set()
+    dtype = getattr(result, "dtype", None)
+    return {str(dtype)} if isinstance(dtype, np.dtype) and dtype.kind == "f" and dtype.itemsize < 8 else set()
+
+
+def _recorder(calls: list, single: set[str] | None = None) -> Callable:
     """An observer (isolate.observed) that makes each call and appends (a copy of its arguments
     taken before the call, its outcome) to ``calls``; an outcome it cannot compare is None."""
     def observe(function: Callable, args: tuple, kwargs: dict):
@@ -151,6 +165,8 @@ def _recorder(calls: list) -> Callable:
             if snapshot is not None:
                 calls.append((snapshot, ("raises", type(error))))
             raise
+        if single is not None:
+            single.update(_single_precision(result))
         if snapshot is not None:
             try:
                 calls.append((snapshot, _leaves((result, _written(args, kwargs)))))
@@ -265,7 +281,7 @@ def _leaves(value) -> list:
         lines = [line.get_xydata() for line in value.get_lines()]
         regions = [np.concatenate([path.vertices for path in c.get_paths()] or [np.empty((0, 2))])
                    for c in value.collections]
-        return [("axes", len(lines), len(regions), value.get_legend() is not None, bool(value.get_title().strip()))] + [
+        return [("axes", len(lines), len(regions), value.get_legend() is not None, any(value.get_title(loc).strip() for loc in ("center", "left", "right")))] + [
             leaf for data in lines + regions for leaf in _leaves(np.asarray(data, dtype=float))]
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         fields = [field.name for field in dataclasses.fields(value)]

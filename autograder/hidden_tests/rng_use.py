@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 
 from autograder.hidden_tests import cases
+from autograder.hidden_tests.isolate import CallRuleBroken
 
 
 def _same(first: Any, second: Any) -> bool:
@@ -36,12 +37,12 @@ def check_draws_from_rng(call: Callable[[np.random.Generator], Any], name: str, 
     draws, gives the same result for two generators in the same state and another for a third."""
     first, again, other = call(cases.rng(*stream, 0)), call(cases.rng(*stream, 0)), call(cases.rng(*stream, 1))
     if not _same(first, again):
-        raise AssertionError(
+        raise CallRuleBroken(
             f"{name} gave different results when it was given two generators in the same state: it draws from "
             "a generator of its own (np.random.default_rng() inside the function) or from np.random. Draw every "
             "random number with the rng it is given, so that the same seed gives the same result.")
     if _same(first, other):
-        raise AssertionError(
+        raise CallRuleBroken(
             f"{name} gave the same result for generators in different states: its draws do not come from the "
             "rng it is given (np.random with its state put back, or a fixed seed). Draw every random number "
             "with rng.")

@@ -340,7 +340,7 @@ def _drawing(ax, codec: Codec, buffers: list[bytes]) -> dict:
         "bands": [{"paths": [codec.encode(np.asarray(path.vertices, dtype=float), buffers) for path in band.get_paths()],
                    "label": str(band.get_label())}
                   for band in ax.collections if isinstance(band, PolyCollection)],
-        "xlabel": ax.get_xlabel(), "ylabel": ax.get_ylabel(), "title": ax.get_title(),
+        "xlabel": ax.get_xlabel(), "ylabel": ax.get_ylabel(), "title": _title(ax),
         "legend": None if legend is None else [text.get_text() for text in legend.get_texts()],
     }
 
@@ -560,6 +560,11 @@ def _global_random_state() -> tuple:
     state = np.random.get_state(legacy=False)
     # the position in the key, and the Gaussian that a legacy standard_normal keeps for its next call
     return int(state["state"]["pos"]), state["state"]["key"].tobytes(), int(state["has_gauss"]), float(state["gauss"])
+
+
+def _title(ax) -> str:
+    """An Axes' title, wherever it sits (ax.set_title(..., loc="left") is one too)."""
+    return next((title for title in (ax.get_title(loc) for loc in ("center", "left", "right")) if title.strip()), "")
 
 
 def _target_json(target):

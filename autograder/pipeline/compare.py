@@ -52,7 +52,8 @@ from nbformat.v4 import new_output
 from autograder import cells
 from autograder.hidden_tests.case_kinds import wrong_only
 from autograder.hidden_tests.diagnosis import diagnosed_mistake
-from autograder.hidden_tests.isolate import called_blanks, changed_arguments_failure, global_random_failure, warning_failure
+from autograder.hidden_tests.isolate import (CallRuleBroken, called_blanks, changed_arguments_failure, global_random_failure,
+                                              warning_failure)
 from autograder.kernel import side
 from autograder.kernel.side import Peer, PeerGone, PeerTimeout, ProtocolError, Wire, warning_class
 from autograder.pipeline import served_calls
@@ -215,9 +216,9 @@ class StudentFunction:
             # what the kernel reports that the call did besides returning (autograder/kernel/side.py)
             changed = [name[:40] for name in header.get("changed") or [] if isinstance(name, str)]
             if changed:
-                raise AssertionError(changed_arguments_failure(self.__name__, changed[:5]))
+                raise CallRuleBroken(changed_arguments_failure(self.__name__, changed[:5]))
             if header.get("global_random") is True:
-                raise AssertionError(global_random_failure(self.__name__))
+                raise CallRuleBroken(global_random_failure(self.__name__))
         for category, message in caught:
             warnings.warn(message, warning_class(category), stacklevel=2)
         return result

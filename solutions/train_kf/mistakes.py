@@ -105,4 +105,10 @@ MISTAKES = (
     Mistake("predict", "global-Q", "adds the notebook's process_noise(15.0) instead of the Q it is given",
             "A @ B @ A.T + Q", "A @ B @ A.T + process_noise(15.0)",
             hint="Your predict behaves as if it added a fixed process noise, the train's process_noise(15.0), instead of the argument Q."),
+    # A fairness review of issue 30: a float32 NEES was told only on which kinds of case it was wrong.
+    Mistake("nees", "float32", "computes in single precision (float32)",
+            "    scaled = np.linalg.solve(covariances, errors[:, :, None])[:, :, 0]\n",
+            "    errors, covariances = errors.astype(np.float32), covariances.astype(np.float32)\n"
+            "    scaled = np.linalg.solve(covariances, errors[:, :, None])[:, :, 0]\n",
+            hint="Your nees returned float32 (single precision, about 7 significant digits): compute in float64, NumPy's default, and do not convert to float32."),
 )
