@@ -82,7 +82,7 @@ def test_each_mistake_fails_its_blanks_hidden_tests_as_catalogued(lab, mistake):
     assert type(error) is mistake.raises, (
         f"{mistake.student_id(lab)} should fail with {mistake.raises.__name__} (its catalogue entry), "
         f"but the hidden test raised {described}")
-    if mistake.raises is AssertionError:
+    if issubclass(mistake.raises, AssertionError):  # the verdict, or a rule of the call (isolate.CallRuleBroken)
         assert where[-1] != answer_file(mistake.blank), f"the student's code raised it, not the hidden test: {described}"
         assert str(error).strip(), "the hidden test failed without a message for the student"
     else:

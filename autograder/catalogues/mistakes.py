@@ -30,7 +30,8 @@ class Mistake:
     replace: str
     raises: type[Exception] = AssertionError
     """How the hidden test fails it: AssertionError, the hidden test's verdict on a wrong answer
-    (the default); another exception: the student's function itself raises it (a crash)."""
+    (the default); CallRuleBroken, the grader's verdict on a call that broke a rule every lab states
+    (autograder/hidden_tests/isolate.py); another exception: the student's function itself raises it (a crash)."""
     hint: str = ""
     """What the student reads in the failing hidden test's message when their function behaves like
     this mistake on every hidden case (autograder/hidden_tests/diagnosis.py): whole sentences to the student,

@@ -1,6 +1,7 @@
 """Plausible mistakes in the castaway-bob blanks. Each one edits the model answer of one blank."""
 
 from autograder.catalogues.mistakes import Mistake
+from autograder.hidden_tests.isolate import CallRuleBroken
 
 _A_ROWS = (
     "[1.0, 0.0, dt, 0.0],\n        [0.0, 1.0, 0.0, dt],\n        [0.0, 0.0, alpha, 0.0],\n        [0.0, 0.0, 0.0, alpha],"
@@ -128,6 +129,7 @@ MISTAKES = (
     # A review of the fairness of grading: writing into an argument kept the marks, and cost a correct run_rank4's check.
     Mistake("kalman_step", "x-in-place", "writes the prediction into the x it was given (x[:] = A x + u)",
             "x_pred = A @ x if u is None else A @ x + u", "x[:] = A @ x if u is None else A @ x + u\n    x_pred = x",
+            raises=CallRuleBroken,
             hint="Leave the arrays you are given as they are and return new ones: write x = x + ..., or start from x.copy()."),
     # A review of the fairness of the visible checks' messages: it passed them, and crashed in run_rank4's check.
     Mistake("kalman_step", "if-u", "asks `if u:` whether the input was given, which an input of several entries cannot answer",

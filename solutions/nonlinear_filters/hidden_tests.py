@@ -452,13 +452,19 @@ def _check_pf_angles(func: Callable) -> None:
                         rtol=1e-7, atol=1e-6, show_expected=False)
 
 
-def _check_pf_generator(func: Callable) -> None:
-    """Exact: the step's draws come from the rng it is given (``rng_use``): the noise makes every result depend on them."""
-    rng = cases.rng(1580)
+def _moderate_case(rng: np.random.Generator) -> tuple:
+    """f, h, particles X (PF_N, n), normalised log-weights, y and a diagonal R of a case whose effective sample
+    size stays above 0.7 N."""
     f, h = _pf_model(rng)
     X = _pf_particles(rng, PF_N)
     logw = _normalised(0.3 * rng.standard_normal(PF_N))
-    y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([1e8, 1e2])
+    return f, h, X, logw, np.array([-1010.0, np.pi - 0.01]), np.diag([1e8, 1e2])
+
+
+def _check_pf_generator(func: Callable) -> None:
+    """Exact: the step's draws come from the rng it is given (``rng_use``): the noise makes every result depend on them."""
+    rng = cases.rng(1580)
+    f, h, X, logw, y, R = _moderate_case(rng)
     label = "bootstrap_pf_step on one case, with generators in the same and in different states"
     with _pf_case(False, _DIAGONAL):
         check_draws_from_rng(lambda step_rng: _pf_call(func, X, logw, y, step_rng, f, h, TINY_Q, R, 0.7, label),
@@ -469,10 +475,7 @@ def _check_pf_no_resampling(func: Callable) -> None:
     """Exact: when the effective sample size stays above the threshold, nothing is resampled."""
     rng = cases.rng(1506)
     step_seed = int(rng.integers(2**63))  # the seed of the generator the step draws from
-    f, h = _pf_model(rng)
-    X = _pf_particles(rng, PF_N)
-    logw = _normalised(0.3 * rng.standard_normal(PF_N))
-    y, R = np.array([-1010.0, np.pi - 0.01]), np.diag([1e8, 1e2])
+    f, h, X, logw, y, R = _moderate_case(rng)
     label = "bootstrap_pf_step with weights whose effective sample size stays above 0.7 N"
     with _pf_case(False, _DIAGONAL):
         X_new, logw_new = _pf_call(func, X, logw, y, np.random.default_rng(step_seed), f, h, TINY_Q, R, 0.7, label)

@@ -1,6 +1,7 @@
 """Plausible mistakes in the nonlinear-filters blanks. Each one edits the model answer of one blank."""
 
 from autograder.catalogues.mistakes import Mistake
+from autograder.hidden_tests.isolate import CallRuleBroken
 
 CHOLESKY_WHY = " A Cholesky factor L also has L L^T = P and its transpose gives an equally valid rule of the same degree, but with other points, so a nonlinear model gives another mean and covariance; this lab, like the authors' sqrtm, fixes the symmetric root so that answers can be compared."
 """Why a transposed Cholesky factor, a valid choice, loses the points in this lab."""
@@ -140,12 +141,15 @@ MISTAKES = (
     # A review of the fairness of grading: drawing from NumPy's global generator kept the marks.
     Mistake("bootstrap_pf_step", "global-random", "draws the process noise with np.random, not with rng",
             "rng.standard_normal(X.shape) @", "np.random.standard_normal(X.shape) @",
+            raises=CallRuleBroken,
             hint="Draw every random number with rng: rng.standard_normal, rng.random, rng.choice."),
     # An adversarial review of issue 31: a step whose draws do not come from rng passed the statistical tests.
     Mistake("bootstrap_pf_step", "own-generator", "draws from a generator of its own, np.random.default_rng(), not from rng",
             "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng = np.random.default_rng()\n",
+            raises=CallRuleBroken,
             hint="Draw every random number with the rng it is given, so that the same seed gives the same result."),
     Mistake("bootstrap_pf_step", "fixed-seed", "draws from a generator with a fixed seed, not from rng",
             "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng = np.random.default_rng(0)\n",
+            raises=CallRuleBroken,
             hint="Draw every random number with rng."),
 )

@@ -1,6 +1,7 @@
 """Plausible mistakes in the reentry-pf blanks. Each one edits the model answer of one blank."""
 
 from autograder.catalogues.mistakes import Mistake
+from autograder.hidden_tests.isolate import CallRuleBroken
 
 MISTAKES = (
     # tracking_dynamics
@@ -118,9 +119,11 @@ MISTAKES = (
     # A review of the fairness of grading: writing into an argument, or drawing from NumPy's global generator, kept the marks.
     Mistake("pf_step", "x-in-place", "moves the cloud it was given (x += dt f(x)) instead of a new one",
             "x_hat = x + DT * tracking_dynamics(0.0, x)", "x += DT * tracking_dynamics(0.0, x)\n    x_hat = x",
+            raises=CallRuleBroken,
             hint="Leave the arrays you are given as they are and return new ones: write x = x + ..., or start from x.copy()."),
     Mistake("pf_step", "global-random", "draws the resampling's uniforms with np.random, not with rng",
             "np.sort(rng.random(N))", "np.sort(np.random.random(N))",
+            raises=CallRuleBroken,
             hint="Draw every random number with rng: rng.standard_normal, rng.random, rng.choice."),
     # A review of the fairness of grading: a float32 answer was told to check the drag and the signs.
     Mistake("tracking_dynamics", "float32", "computes in single precision (float32)",
@@ -129,9 +132,11 @@ MISTAKES = (
     # An adversarial review of issue 31: a step whose draws do not come from rng passed the statistical test.
     Mistake("pf_step", "own-generator", "draws from a generator of its own, np.random.default_rng(), not from rng",
             "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng = np.random.default_rng()\n",
+            raises=CallRuleBroken,
             hint="Draw every random number with the rng it is given, so that the same seed gives the same result."),
     Mistake("pf_step", "fixed-seed", "draws from a generator with a fixed seed, not from rng",
             "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng = np.random.default_rng(0)\n",
+            raises=CallRuleBroken,
             hint="Draw every random number with rng."),
     # A review of the fairness of the visible checks' messages: each was told of another cause.
     Mistake("pf_step", "innovation-shared", "one draw of the innovation, shape (3, 1), shared by every new particle",

@@ -1,6 +1,7 @@
 """Plausible mistakes in the reentry-srekf blanks. Each one edits the model answer of one blank."""
 
 from autograder.catalogues.mistakes import Mistake
+from autograder.hidden_tests.isolate import CallRuleBroken
 
 MISTAKES = (
     # ballistic_dynamics
@@ -125,6 +126,7 @@ MISTAKES = (
     Mistake("conditional", "mu-in-place", "adds the correction into the mean it was given (mu[idx_a] += ...)",
             'mu_c = mu[idx_a] + R2.T @ solve_triangular(R1, x_b - mu[idx_b], trans="T")',
             'mu[idx_a] += R2.T @ solve_triangular(R1, x_b - mu[idx_b], trans="T")\n    mu_c = mu[idx_a]',
+            raises=CallRuleBroken,
             hint="Leave the arrays you are given as they are and return new ones: write mu = mu + ..., or start from mu.copy()."),
     # A review of the fairness of grading: the text asks for a title, and a plot without one kept its marks.
     Mistake("plot_ballistic_coefficient", "no-title", "no title",

@@ -1,6 +1,7 @@
 """Plausible mistakes in the train-kf blanks. Each one edits the model answer of one blank."""
 
 from autograder.catalogues.mistakes import Mistake
+from autograder.hidden_tests.isolate import CallRuleBroken
 
 MISTAKES = (
     Mistake("gain_information_form", "B-not-inverted", "uses B where the information form needs B^-1",
@@ -93,9 +94,11 @@ MISTAKES = (
     # A review of the fairness of grading: writing into an argument kept the marks, though the caller's array changes.
     Mistake("predict", "B-in-place", "writes B_f into the B it was given (B[...] = A B A^T + Q) and returns it",
             "B_f = A @ B @ A.T + Q\n    return x_f, B_f", "B[...] = A @ B @ A.T + Q\n    return x_f, B",
+            raises=CallRuleBroken,
             hint="Leave the arrays you are given as they are and return new ones: write B = B + ..., or start from B.copy()."),
     Mistake("kupdate", "x_f-in-place", "adds the correction into the x_f it was given (x_f += K (y - H x_f))",
             "x_a = x_f + K @ (y - H @ x_f)", "x_f += K @ (y - H @ x_f)\n    x_a = x_f",
+            raises=CallRuleBroken,
             hint="Leave the arrays you are given as they are and return new ones: write x_f = x_f + ..., or start from x_f.copy()."),
     # A review of the fairness of grading: a float32 answer was told to look at the sizes of the cases.
     Mistake("gain_information_form", "float32", "computes in single precision (float32)",
