@@ -306,6 +306,10 @@ def test_a_blank_the_grader_did_not_find_as_its_stub_or_diagnosed_is_not_counted
         test.outputs = [nbformat.v4.new_output("error", ename=ename, evalue=error, traceback=[])]
         nbformat.write(nb, path)
         assert ("test_kupdate" in _read_autograded(path, LAB)[4]) is counted, error
+    answer.source = "# I will do it later\n" + stub.source  # a final review: a stub with a comment is still the stub
+    test.outputs = [nbformat.v4.new_output("error", ename="NotImplementedError", evalue=NOT_WRITTEN, traceback=[])]
+    nbformat.write(nb, path)
+    assert "test_kupdate" in _read_autograded(path, LAB)[4]
     names = {"test_kupdate": 2.0}
     row = GradeRow("s", LAB.id, {"test_kupdate": 0.0}, names, frozenset(names), not_written=frozenset(names),
                    diagnosed={"test_kupdate": "innovation-sign"})

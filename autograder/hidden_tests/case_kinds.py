@@ -105,7 +105,7 @@ def labelled(blank: str) -> Iterator[None]:
     sentence = "" if isinstance(error, CallRuleBroken) else narrowing(blank, run.cases)
     if sentence:
         add_to_message(error, sentence)
-    split = _split(run.cases)
+    split = None if isinstance(error, CallRuleBroken) else _split(run.cases)
     if split is not None:
         with contextlib.suppress(AttributeError):  # an exception type that takes no attributes keeps its message only
             setattr(error, WRONG_ONLY_ATTRIBUTE, " or ".join(split[1]))

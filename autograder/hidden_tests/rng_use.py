@@ -34,12 +34,22 @@ def _same(first: Any, second: Any) -> bool:
 
 def check_draws_from_rng(call: Callable[[np.random.Generator], Any], name: str, *stream: int) -> None:
     """Fail unless ``call(rng)``, a call of the blank ``name`` on one fixed case whose result depends on its
-    draws, gives the same result for two generators in the same state and another for a third."""
-    first, again, other = call(cases.rng(*stream, 0)), call(cases.rng(*stream, 0)), call(cases.rng(*stream, 1))
+    draws, moves the generator it is given, gives the same result for two generators in the same state, and
+    another for a third (a final review of issue 30: a step that drew from copy.deepcopy(rng) kept its marks)."""
+    given = cases.rng(*stream, 0)
+    before = given.bit_generator.state
+    first = call(given)
+    if given.bit_generator.state == before:
+        raise CallRuleBroken(
+            f"{name} did not draw from the rng it was given: its state did not move. A copy of rng "
+            "(copy.deepcopy(rng)) or a generator of its own gives the same draws in every step of a filter. Draw "
+            "every random number with rng itself.")
+    again, other = call(cases.rng(*stream, 0)), call(cases.rng(*stream, 1))
     if not _same(first, again):
         raise CallRuleBroken(
             f"{name} gave different results when it was given two generators in the same state: it draws from "
-            "a generator of its own (np.random.default_rng() inside the function) or from np.random. Draw every "
+            "a generator of its own (np.random.default_rng() inside the function), from np.random or from Python's "
+            "random module. Draw every "
             "random number with the rng it is given, so that the same seed gives the same result.")
     if _same(first, other):
         raise CallRuleBroken(

@@ -205,7 +205,8 @@ class Codec:
             name = type(value.bit_generator).__name__
             if name not in GENERATORS:
                 raise Unsendable(f"a random generator with bit generator {name}")
-            return {"t": "generator", "bit_generator": name, "state": value.bit_generator.state}
+            return {"t": "generator", "bit_generator": name, "state": value.bit_generator.state,
+                    "seed_sequence": _seed_sequence_json(value.bit_generator.seed_seq)}
         if _is_axes(value):
             number = next((n for n, ax in self.axes.items() if ax is value), None)
             if number is not None:
@@ -302,11 +303,39 @@ def _buffer(buffers: list[bytes], index) -> bytes:
     return buffers[index]
 
 
+def _seed_sequence_json(seed_seq) -> dict | None:
+    """The seed sequence of a generator, which its spawn() and its children's seeds come from (a final review of
+    issue 30: without it, the generator rebuilt on the other side spawned other children on every call)."""
+    if not isinstance(seed_seq, np.random.SeedSequence):
+        return None
+    entropy = seed_seq.entropy
+    return {"entropy": [int(e) for e in np.atleast_1d(entropy)] if not isinstance(entropy, int) else int(entropy),
+            "spawn_key": [int(k) for k in seed_seq.spawn_key], "pool_size": int(seed_seq.pool_size),
+            "n_children_spawned": int(seed_seq.n_children_spawned)}
+
+
+def _seed_sequence(node) -> np.random.SeedSequence | None:
+    """A seed sequence sent by ``_seed_sequence_json``, checked (None: a fresh one)."""
+    if node is None:
+        return None
+    try:
+        entropy, key = node["entropy"], node["spawn_key"]
+        numbers = [entropy] if isinstance(entropy, int) else list(entropy)
+        if (len(numbers) > 64 or len(key) > 64 or not all(isinstance(n, int) and 0 <= n < 2**256 for n in [*numbers, *key])
+                or not isinstance(node["pool_size"], int) or not 4 <= node["pool_size"] <= 64
+                or not isinstance(node["n_children_spawned"], int) or not 0 <= node["n_children_spawned"] < 2**32):
+            raise ValueError("out of range")
+        return np.random.SeedSequence(entropy, spawn_key=tuple(key), pool_size=node["pool_size"],
+                                      n_children_spawned=node["n_children_spawned"])
+    except (TypeError, ValueError, KeyError) as error:
+        raise ProtocolError(f"a seed sequence that NumPy refuses ({error})") from None
+
+
 def _bit_generator(node: dict):
     name = node.get("bit_generator")
     if name not in GENERATORS:
         raise ProtocolError(f"a bit generator {name!r}")
-    bit_generator = getattr(np.random, name)()
+    bit_generator = getattr(np.random, name)(_seed_sequence(node.get("seed_sequence")))
     try:
         bit_generator.state = node["state"]
     except (TypeError, ValueError, KeyError) as error:

@@ -3,7 +3,6 @@ grading environment beside it."""
 
 from __future__ import annotations
 
-import functools
 import re
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -132,25 +131,14 @@ def read_grades(workdir: Path, labs: list[Lab], students: list[str] | None = Non
 ANSI = re.compile(r"\x1b\[[0-9;]*m")
 
 
-@functools.cache
-def _stubs(lab_id: str) -> dict[str, str]:
-    """Blank -> the code of its released stub, lines stripped and blank lines left out."""
-    return {cells.grade_id(c): _lines(c.source) for c in cells.read(Lab(lab_id).release_notebook).cells
-            if cells.is_code_answer(c)}
-
-
-def _lines(source: str) -> str:
-    return "\n".join(line.rstrip() for line in source.strip().splitlines() if line.strip())
-
-
 def _read_autograded(autograded: Path, lab: Lab) -> tuple[tuple[str, ...], dict[str, str], dict[str, str],
                                                           dict[str, str], set[str], set[str]]:
     """What an autograded notebook says beside the gradebook: the grader's notes; for each graded
     cell its first error (the grader's reason for a failing verdict, the only error a test cell
     holds, autograder/pipeline/verdicts.py); test cell -> diagnosed mistake (``verdicts.diagnoses``), and
     -> the kind of case alone wrong;
-    the test cells of the blanks that still hold their stub as released and whose stub the hidden test called (the stub's text inside written code,
-    a comment say, does not count: a review of issue 31 hid a diagnosed mistake so); and those of the blanks
+    the test cells of the blanks whose stub the hidden test called (as it ran: the cells' text can say otherwise,
+    as reviews of issue 31 showed); and those of the blanks
     whose visible checks failed (``verdicts.visible_checks_failed``)."""
     nb = nbformat.read(autograded, as_version=4)
     reasons = {}
@@ -160,13 +148,12 @@ def _read_autograded(autograded: Path, lab: Lab) -> tuple[tuple[str, ...], dict[
         errors = [o for o in cell.outputs if o.output_type == "error"]
         if errors:
             reasons[cells.grade_id(cell)] = ANSI.sub("", f"{errors[0].ename}: {errors[0].evalue}")
-    stubs = _stubs(lab.id)
-    # the grader called the stub: a blank defined in a cell added below its stub is the function called
-    # (an adversarial review of issue 31 hid a mistake so, with def, import or match), not the stub
+    # the grader's hidden test called the stub, whatever the cells say: a blank defined in a cell added below its
+    # untouched stub is the function called (an adversarial review of issue 31 hid a mistake so, with def, import
+    # or match), and a stub with a comment added is still the stub (a final review)
     stub_called = f"NotImplementedError: {NOT_WRITTEN}"
     not_written = {f"test_{cells.grade_id(c)}" for c in nb.cells
-                   if cells.is_code_answer(c) and _lines(c.source) == stubs.get(cells.grade_id(c))
-                   and reasons.get(f"test_{cells.grade_id(c)}", "").startswith(stub_called)}
+                   if cells.is_code_answer(c) and reasons.get(f"test_{cells.grade_id(c)}", "").startswith(stub_called)}
     return (tuple(grader_notes(nb)), reasons, verdicts.diagnoses(nb), verdicts.diagnoses(nb, verdicts.WRONG_ONLY_KEY),
             not_written, verdicts.visible_checks_failed(nb))
 

@@ -144,12 +144,16 @@ MISTAKES = (
             raises=CallRuleBroken,
             hint="Draw every random number with rng: rng.standard_normal, rng.random, rng.choice."),
     # An adversarial review of issue 31: a step whose draws do not come from rng passed the statistical tests.
-    Mistake("bootstrap_pf_step", "own-generator", "draws from a generator of its own, np.random.default_rng(), not from rng",
-            "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng = np.random.default_rng()\n",
+    Mistake("bootstrap_pf_step", "own-generator", "draws once from rng, then from a generator of its own, np.random.default_rng()",
+            "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng.random()\n    rng = np.random.default_rng()\n",
             raises=CallRuleBroken,
             hint="Draw every random number with the rng it is given, so that the same seed gives the same result."),
-    Mistake("bootstrap_pf_step", "fixed-seed", "draws from a generator with a fixed seed, not from rng",
-            "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng = np.random.default_rng(0)\n",
+    Mistake("bootstrap_pf_step", "fixed-seed", "draws once from rng, then from a generator with a fixed seed",
+            "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng.random()\n    rng = np.random.default_rng(0)\n",
             raises=CallRuleBroken,
             hint="Draw every random number with rng."),
+    # A final review of issue 30: a step that drew from a copy of rng kept its marks; the caller's rng never moved.
+    Mistake("bootstrap_pf_step", "rng-not-moved", "draws from a generator seeded with rng's state, so rng itself never moves",
+            "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng = np.random.default_rng(rng.bit_generator.state['state']['state'])\n",
+            raises=CallRuleBroken, hint="Draw every random number with rng itself."),
 )

@@ -130,16 +130,20 @@ MISTAKES = (
             "h, v, beta = np.asarray(x, dtype=float)", "h, v, beta = np.asarray(x, dtype=np.float32)",
             hint="It is in single precision (float32, about 7 significant digits): compute in float64, NumPy's default, and do not convert your arrays to float32."),
     # An adversarial review of issue 31: a step whose draws do not come from rng passed the statistical test.
-    Mistake("pf_step", "own-generator", "draws from a generator of its own, np.random.default_rng(), not from rng",
-            "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng = np.random.default_rng()\n",
+    Mistake("pf_step", "own-generator", "draws once from rng, then from a generator of its own, np.random.default_rng()",
+            "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng.random()\n    rng = np.random.default_rng()\n",
             raises=CallRuleBroken,
             hint="Draw every random number with the rng it is given, so that the same seed gives the same result."),
-    Mistake("pf_step", "fixed-seed", "draws from a generator with a fixed seed, not from rng",
-            "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng = np.random.default_rng(0)\n",
+    Mistake("pf_step", "fixed-seed", "draws once from rng, then from a generator with a fixed seed",
+            "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng.random()\n    rng = np.random.default_rng(0)\n",
             raises=CallRuleBroken,
             hint="Draw every random number with rng."),
     # A review of the fairness of the visible checks' messages: each was told of another cause.
     Mistake("pf_step", "innovation-shared", "one draw of the innovation, shape (3, 1), shared by every new particle",
             "rng.standard_normal((3, N))", "rng.standard_normal((3, 1))",
             hint="Your pf_step behaves as if every new particle shared one draw of the innovation: each particle needs a draw of its own, a column of rng.standard_normal((3, N))."),
+    # A final review of issue 30: a step that drew from a copy of rng kept its marks; the caller's rng never moved.
+    Mistake("pf_step", "rng-not-moved", "draws from a generator seeded with rng's state, so rng itself never moves",
+            "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng = np.random.default_rng(rng.bit_generator.state['state']['state'])\n",
+            raises=CallRuleBroken, hint="Draw every random number with rng itself."),
 )
