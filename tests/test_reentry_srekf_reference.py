@@ -733,7 +733,7 @@ def test_check_helpers_accept_right_and_reject_wrong_answers(seed: int) -> None:
         ax.fill_between(t, mean - k * std, mean + k * std, label="band")
         ax.plot(t, truth, label="truth")
         ax.plot(t, mean, label="estimate")
-        ax.set(xlabel=xlabel, ylabel="c [m²/kg]")
+        ax.set(xlabel=xlabel, ylabel="c [m²/kg]", title="Ballistic coefficient")
         if legend:
             ax.legend()
         return fig, ax
