@@ -49,18 +49,24 @@ def sandbox_line() -> str:
             "forged, but see README (The grading kernel's sandbox) for what a kernel can reach here.")
 
 
-def _grade_student(workdir: Path, lab_id: str, student: str) -> str:
+def _grade_student(workdir: Path, lab_id: str, student: str) -> tuple[str, bool, bool]:
     """Autograde, then write the feedback of, one student's submission of a lab, under that
-    submission's lock (another shard grading it waits); nbgrader's log."""
+    submission's lock (another shard grading it waits): nbgrader's log, and whether the graded notebook and the
+    feedback page were there when the lock was let go. (Read after it, they can be missing only because an
+    overlapping shard is grading the submission again: that is no failure of this run.)"""
     log = []
+    lab = Lab(lab_id)
     with shards.gradebook_lock(gradebook_url(workdir), shards.submission_lock_name(lab_id, student)):
         for app_class in (Autograde, GenerateFeedback):
-            result = run_app(app_class, workdir, Lab(lab_id), student)
+            result = run_app(app_class, workdir, lab, student)
             log.append(result.get("log", "") + result.get("error", ""))
-    return "".join(log)
+        graded = (workdir / "autograded" / student / lab_id / lab.notebook_name).exists()
+        page = feedback_page(workdir, lab_id, student).exists()
+    return "".join(log), graded, page
 
 
-def autograde(by_lab: dict[str, list[str]], workdir: Path, jobs: int | None = None) -> dict[str, str]:
+def autograde(by_lab: dict[str, list[str]], workdir: Path,
+              jobs: int | None = None) -> tuple[dict[str, str], set[tuple[str, str]], set[tuple[str, str]]]:
     """``nbgrader autograde`` and feedback for the submissions in ``workdir``: lab id -> students.
 
     With ``jobs > 1`` (default: one per core) the submissions are graded that many at a time in
@@ -68,24 +74,34 @@ def autograde(by_lab: dict[str, list[str]], workdir: Path, jobs: int | None = No
     server handles it natively). A progress bar (tqdm, on stderr) counts the graded submissions.
     nbgrader goes on past a submission it cannot grade; that is not raised here, so that one bad
     file does not stop a class: the caller finds the submissions missing from the gradebook.
-    Returns nbgrader's log of each lab.
+    Returns nbgrader's log of each lab, the (student, lab) graded, and those whose feedback page was written.
     """
     jobs = jobs or default_jobs()
     tasks = [(lab_id, student) for lab_id, students in by_lab.items() for student in students]
     logs: dict[tuple[str, str], str] = {}
+    graded: set[tuple[str, str]] = set()
+    pages: set[tuple[str, str]] = set()
+
+    def record(lab_id: str, student: str, outcome: tuple[str, bool, bool]) -> None:
+        logs[lab_id, student] = outcome[0]
+        if outcome[1]:
+            graded.add((student, lab_id))
+        if outcome[2]:
+            pages.add((student, lab_id))
     with tqdm(total=len(tasks), desc="Grading", unit="submission", file=sys.stderr, dynamic_ncols=True) as bar:
         if jobs <= 1 or len(tasks) <= 1:
             for lab_id, student in tasks:
-                logs[lab_id, student] = _grade_student(workdir, lab_id, student)
+                record(lab_id, student, _grade_student(workdir, lab_id, student))
                 bar.update()
         else:
             with ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn")) as pool:
                 futures = {pool.submit(_grade_student, workdir, lab_id, student): (lab_id, student)
                            for lab_id, student in tasks}
                 for future in as_completed(futures):
-                    logs[futures[future]] = future.result()
+                    record(*futures[future], future.result())
                     bar.update()
-    return {lab_id: "".join(logs[lab_id, student] for student in students) for lab_id, students in by_lab.items()}
+    return ({lab_id: "".join(logs[lab_id, student] for student in students) for lab_id, students in by_lab.items()},
+            graded, pages)
 
 
 def set_up(labs: list[Lab], workdir: Path, by_lab: dict[str, list[str]]) -> None:
@@ -161,15 +177,14 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     if shard is not None:
         print(f"Shard {shard} grades {count(sum(map(len, by_lab.values())), 'submission')} of the class's "
               f"{sum(map(len, whole_class.values()))}.")
-    logs = autograde(by_lab, workdir, jobs)
+    logs, graded, written = autograde(by_lab, workdir, jobs)
     if shard is None:
         rows = read_grades(workdir, all_graded_labs(workdir))
     else:
         rows = read_grades(workdir, labs, sorted({s for students in by_lab.values() for s in students}))
-    graded = {(row.student, row.lab) for row in rows}
     failures = {lab.id: [s for s in by_lab[lab.id] if (s, lab.id) not in graded] for lab in labs}
     for lab in labs:
-        pages = [s for s in by_lab[lab.id] if (s, lab.id) in graded and not feedback_page(workdir, lab.id, s).exists()]
+        pages = [s for s in by_lab[lab.id] if (s, lab.id) in graded and (s, lab.id) not in written]
         if failures[lab.id] or pages:
             log_path = workdir / f"autograde-{lab.id}{shard.suffix if shard else ''}.log"
             log_path.write_text(logs[lab.id])
