@@ -16,13 +16,12 @@ from __future__ import annotations
 
 import contextlib
 import functools
-import inspect
 import sys
 import types
 import warnings
 from typing import Callable, Iterable, Iterator
 
-import numpy as np
+from autograder.kernel import side
 
 
 def _named_blanks(reference: types.ModuleType, name: str, blanks: frozenset[str]) -> set[str]:
@@ -143,34 +142,19 @@ def global_random_failure(name: str) -> str:
             f"number with rng: rng.standard_normal, rng.random, rng.choice.")
 
 
-def _arrays(args: tuple, kwargs: dict) -> dict:
-    return {key: value for key, value in [*enumerate(args), *kwargs.items()] if isinstance(value, np.ndarray)}
-
-
-def _global_random_state() -> tuple:
-    state = np.random.get_state(legacy=False)
-    # the position in the key, and the Gaussian that a legacy standard_normal keeps for its next call
-    return int(state["state"]["pos"]), state["state"]["key"].tobytes(), int(state["has_gauss"]), float(state["gauss"])
-
-
 def _checked(function: Callable, name: str) -> Callable:
     """``function``, failing as graded functions fail when it changes an array argument in place, or draws
-    from NumPy's global generator when it is given one (in grading, the kernel reports both:
-    autograder/kernel/side.py)."""
+    from NumPy's global generator when it is given one: what the kernel reports of each call in grading
+    (autograder/kernel/side.py), found here with the same functions."""
     @functools.wraps(function)
     def call(*args, **kwargs):
-        given = {key: value.copy() for key, value in _arrays(args, kwargs).items()}
-        drawn = _global_random_state()
+        given = side.arrays_given(args, kwargs)
+        drawn = side.global_random_state()
         result = function(*args, **kwargs)
-        names = inspect.signature(function).parameters
-        changed = [list(names)[key] if isinstance(key, int) and key < len(names) else str(key)
-                   for key, value in _arrays(args, kwargs).items()
-                   if not (value.shape == given[key].shape
-                           and np.array_equal(value, given[key], equal_nan=value.dtype.kind in "fc"))]
+        changed = side.changed_names(function, given, args, kwargs)
         if changed:
             raise CallRuleBroken(changed_arguments_failure(name, changed))
-        generator = any(isinstance(v, np.random.Generator) for v in [*args, *kwargs.values()])
-        if generator and _global_random_state() != drawn:
+        if side.uses_a_generator(args, kwargs) and side.global_random_state() != drawn:
             raise CallRuleBroken(global_random_failure(name))
         return result
 

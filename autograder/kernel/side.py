@@ -496,8 +496,8 @@ class Peer:
             self.wire.send({"op": "raise", "type": "RuntimeError", "message": f"nothing to call as {target!r}"}, [])
             return
         args, kwargs = self.codec.decode_arguments(header, buffers, self)
-        given = _arrays_given(args, kwargs)
-        drawn = _global_random_state()
+        given = arrays_given(args, kwargs)
+        drawn = global_random_state()
         out, err = io.StringIO(), io.StringIO()
         with contextlib.ExitStack() as stack:
             caught = []
@@ -516,8 +516,8 @@ class Peer:
                 try:
                     reply = {"op": "return", "value": self.codec.encode(result, reply_buffers),
                              "written": self._written(args, kwargs, reply_buffers),
-                             "changed": _changed_names(function, given, args, kwargs),
-                             "global_random": _uses_a_generator(args, kwargs) and _global_random_state() != drawn}
+                             "changed": changed_names(function, given, args, kwargs),
+                             "global_random": uses_a_generator(args, kwargs) and global_random_state() != drawn}
                 except Unsendable as error:
                     what = getattr(function, "__name__", "the function")
                     reply, reply_buffers = {"op": "raise", "type": "TypeError", "where": "", "message": (
@@ -557,12 +557,12 @@ class Peer:
         return self.codec.decode(header.get("value"), buffers, self)
 
 
-def _arrays_given(args: tuple, kwargs: dict) -> dict:
+def arrays_given(args: tuple, kwargs: dict) -> dict:
     """A copy of each NumPy array argument of a call, by position or keyword, to see what the call wrote into."""
     return {key: value.copy() for key, value in [*enumerate(args), *kwargs.items()] if isinstance(value, np.ndarray)}
 
 
-def _changed_names(function, given: dict, args: tuple, kwargs: dict) -> list[str]:
+def changed_names(function, given: dict, args: tuple, kwargs: dict) -> list[str]:
     """The names of the array arguments that a call changed in place (a positional one by its parameter's name)."""
     changed = []
     for key, before in given.items():
@@ -580,11 +580,11 @@ def _parameter_name(function, position: int) -> str:
     return names[position] if position < len(names) else f"argument {position + 1}"
 
 
-def _uses_a_generator(args: tuple, kwargs: dict) -> bool:
+def uses_a_generator(args: tuple, kwargs: dict) -> bool:
     return any(isinstance(value, np.random.Generator) for value in [*args, *kwargs.values()])
 
 
-def _global_random_state() -> tuple:
+def global_random_state() -> tuple:
     """Where NumPy's global generator (np.random.standard_normal, np.random.choice, ...) stands."""
     state = np.random.get_state(legacy=False)
     # the position in the key, and the Gaussian that a legacy standard_normal keeps for its next call

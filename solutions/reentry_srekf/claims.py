@@ -51,7 +51,7 @@ def _other_sets() -> tuple[starship.MonteCarloRun, ...]:
     """The sets of OTHER_SETS, simulated and filtered with the reference's model (``fall_sets``, all at once), once
     ``fall_sets`` has reproduced the shipped falls and the reference filter's run on them."""
     seeds = [*ref.FALL_SEEDS, *(seed for seeds in OTHER_SETS for seed in seeds)]
-    simulated = fall_sets.simulate(seeds)
+    simulated = fall_sets.simulate_sets(seeds)
     shipped = starship.load_falls()
     # measured: 2.3e-16 relative in the truth; ranges and initial means identical
     assert np.allclose(simulated.truth[:40], shipped.truth, rtol=1e-12, atol=0), "fall_sets simulates other falls"

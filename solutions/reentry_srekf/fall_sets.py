@@ -79,7 +79,7 @@ def _rk4_step_with_jacobian(X: Array, dt: float) -> tuple[Array, Array]:
     return X + dt * (k1 + 2 * k2 + 2 * k3 + k4) / 6, dx + dt * (dk1 + 2 * dk2 + 2 * dk3 + dk4) / 6 + dw
 
 
-def simulate(seeds: Sequence[int]) -> starship.SimulatedFalls:
+def simulate_sets(seeds: Sequence[int]) -> starship.SimulatedFalls:
     """``course.starship.simulate_falls(seeds, ...)`` with the reference model, all falls at once."""
     N, substeps, dt = starship.N_ROWS, starship.SUBSTEPS, starship.DT
     B = len(seeds)
