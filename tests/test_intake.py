@@ -240,7 +240,10 @@ def test_grade_skips_a_folder_not_named_by_a_student_id_and_grades_the_rest(tmp_
     seen = {}
     monkeypatch.setattr(grading, "check_reference_available", lambda labs: None)
     monkeypatch.setattr(grading, "set_up", lambda labs, workdir, by_lab: seen.setdefault("registered", by_lab))
-    monkeypatch.setattr(grading, "autograde", lambda by_lab, workdir, jobs=None: dict.fromkeys(seen.setdefault("graded", by_lab), ""))
+    def autograde(by_lab, workdir, jobs=None):
+        given = {(s, lab_id) for lab_id, students in seen.setdefault("graded", by_lab).items() for s in students}
+        return dict.fromkeys(by_lab, ""), given, given
+    monkeypatch.setattr(grading, "autograde", autograde)
     monkeypatch.setattr(grading, "read_grades", lambda workdir, labs, students=None: [])
     grading.grade(klass, tmp_path / "course", tmp_path / "grades.csv", jobs=1)
     assert seen == {"registered": {"train-kf": ["s001"]}, "graded": {"train-kf": ["s001"]}}
