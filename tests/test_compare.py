@@ -436,7 +436,10 @@ def test_a_title_set_on_the_left_is_a_title(kernel):
 def test_a_generator_spawns_the_same_children_on_both_sides(kernel, seed):
     """A final review of issue 30: rng.spawn in the kernel gave other children on every call, since the generator
     was rebuilt there without its seed sequence, and an honest step that spawned lost its marks."""
-    student = kernel(_define("def draw(rng):\n    return rng.spawn(1)[0].random(3)\n"), "draw")
-    local = np.random.default_rng([seed, 4]).spawn(1)[0].random(3)
-    assert (student(np.random.default_rng([seed, 4])).tolist() == student(np.random.default_rng([seed, 4])).tolist()
-            == local.tolist())
+    student = kernel(_define("def draw(rng):\n    return rng.spawn(1)[0].random(3), rng.bit_generator.seed_seq.entropy\n"), "draw")
+    given = np.random.default_rng([seed, 4])
+    (first, entropy), (second, _) = student(given), student(given)
+    assert student(np.random.default_rng([seed, 4]))[0].tolist() == first.tolist() != second.tolist(), (
+        "the same state gives the same child, and the next call a new one, as with the student's own generator")
+    assert given.bit_generator.seed_seq.n_children_spawned == 2
+    assert seed not in np.atleast_1d(entropy).tolist(), "the kernel never learns the seed: a one-way digest stands in"

@@ -26,6 +26,7 @@ from __future__ import annotations
 import builtins
 import contextlib
 import dataclasses
+import hashlib
 import io
 import json
 import keyword
@@ -303,15 +304,29 @@ def _buffer(buffers: list[bytes], index) -> bytes:
     return buffers[index]
 
 
+MAX_SPAWNED = 1 << 20
+"""The most children a generator that crosses the wire may have spawned (NumPy 2.4 hangs spawning near 2**32)."""
+
+
 def _seed_sequence_json(seed_seq) -> dict | None:
     """The seed sequence of a generator, which its spawn() and its children's seeds come from (a final review of
-    issue 30: without it, the generator rebuilt on the other side spawned other children on every call)."""
+    issue 30: without it, the generator rebuilt on the other side spawned other children on every call). Its
+    entropy travels as a one-way digest: the same generator gives the same children on the other side, which
+    never learns the seed (the grader's is the submission's seed: autograder/hidden_tests/cases.py)."""
     if not isinstance(seed_seq, np.random.SeedSequence):
         return None
-    entropy = seed_seq.entropy
-    return {"entropy": [int(e) for e in np.atleast_1d(entropy)] if not isinstance(entropy, int) else int(entropy),
-            "spawn_key": [int(k) for k in seed_seq.spawn_key], "pool_size": int(seed_seq.pool_size),
+    digest = hashlib.sha256(repr((seed_seq.entropy, tuple(seed_seq.spawn_key))).encode()).digest()
+    return {"entropy": int.from_bytes(digest[:16], "big"), "spawn_key": [], "pool_size": int(seed_seq.pool_size),
             "n_children_spawned": int(seed_seq.n_children_spawned)}
+
+
+def _spawn_as_many(seed_seq, rebuilt) -> None:
+    """Count on ``seed_seq`` the children the call spawned from its copy ``rebuilt`` (at most MAX_SPAWNED in all),
+    so that the next call spawns new ones, as the student's own generator does."""
+    if isinstance(seed_seq, np.random.SeedSequence) and isinstance(rebuilt, np.random.SeedSequence):
+        more = min(rebuilt.n_children_spawned, MAX_SPAWNED) - seed_seq.n_children_spawned
+        if more > 0:
+            seed_seq.spawn(more)
 
 
 def _seed_sequence(node) -> np.random.SeedSequence | None:
@@ -323,7 +338,7 @@ def _seed_sequence(node) -> np.random.SeedSequence | None:
         numbers = [entropy] if isinstance(entropy, int) else list(entropy)
         if (len(numbers) > 64 or len(key) > 64 or not all(isinstance(n, int) and 0 <= n < 2**256 for n in [*numbers, *key])
                 or not isinstance(node["pool_size"], int) or not 4 <= node["pool_size"] <= 64
-                or not isinstance(node["n_children_spawned"], int) or not 0 <= node["n_children_spawned"] < 2**32):
+                or not isinstance(node["n_children_spawned"], int) or not 0 <= node["n_children_spawned"] <= MAX_SPAWNED):
             raise ValueError("out of range")
         return np.random.SeedSequence(entropy, spawn_key=tuple(key), pool_size=node["pool_size"],
                                       n_children_spawned=node["n_children_spawned"])
@@ -551,7 +566,9 @@ class Peer:
                 target.clear()
                 target.update(value)
             elif isinstance(target, np.random.Generator) and isinstance(node, dict) and node.get("t") == "generator":
-                target.bit_generator.state = _bit_generator(node).state
+                rebuilt = _bit_generator(node)
+                target.bit_generator.state = rebuilt.state
+                _spawn_as_many(target.bit_generator.seed_seq, rebuilt.seed_seq)
             elif _is_axes(target) and isinstance(node, dict) and node.get("t") == "axes":
                 self.codec.decode(node, buffers, self)  # draws on the numbered Axes, which is target
         return self.codec.decode(header.get("value"), buffers, self)

@@ -148,10 +148,6 @@ MISTAKES = (
             "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng.random()\n    rng = np.random.default_rng()\n",
             raises=CallRuleBroken,
             hint="Draw every random number with the rng it is given, so that the same seed gives the same result."),
-    Mistake("bootstrap_pf_step", "fixed-seed", "draws once from rng, then from a generator with a fixed seed",
-            "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng.random()\n    rng = np.random.default_rng(0)\n",
-            raises=CallRuleBroken,
-            hint="Draw every random number with rng."),
     # A final review of issue 30: a step that drew from a copy of rng kept its marks; the caller's rng never moved.
     Mistake("bootstrap_pf_step", "rng-not-moved", "draws from a generator seeded with rng's state, so rng itself never moves",
             "    N = X.shape[-2]\n", "    N = X.shape[-2]\n    rng = np.random.default_rng(rng.bit_generator.state['state']['state'])\n",

@@ -134,10 +134,6 @@ MISTAKES = (
             "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng.random()\n    rng = np.random.default_rng()\n",
             raises=CallRuleBroken,
             hint="Draw every random number with the rng it is given, so that the same seed gives the same result."),
-    Mistake("pf_step", "fixed-seed", "draws once from rng, then from a generator with a fixed seed",
-            "    N = x.shape[1]\n", "    N = x.shape[1]\n    rng.random()\n    rng = np.random.default_rng(0)\n",
-            raises=CallRuleBroken,
-            hint="Draw every random number with rng."),
     # A review of the fairness of the visible checks' messages: each was told of another cause.
     Mistake("pf_step", "innovation-shared", "one draw of the innovation, shape (3, 1), shared by every new particle",
             "rng.standard_normal((3, N))", "rng.standard_normal((3, 1))",
