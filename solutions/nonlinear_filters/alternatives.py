@@ -288,4 +288,18 @@ def sigma_point_update(m, P, y, h, R, Z, w, angles=()):
         logw_new = np.full(N, -np.log(N))
     return X_new, logw_new
 '''),
+    Alternative("bootstrap_pf_step", "spawned-streams", "one child generator of rng for the noise and another for the resampling (rng.spawn)",
+                '''def bootstrap_pf_step(X, logw, y, rng, f, h, Q, R, angles=(), ess_fraction=0.7):
+    noise_rng, resample_rng = rng.spawn(2)
+    N = X.shape[0]
+    X = f(X) + noise_rng.standard_normal(X.shape) @ np.linalg.cholesky(Q).T
+    E = y - h(X)
+    E[:, list(angles)] = wrap_angle(E[:, list(angles)])
+    logw = logw - 0.5 * np.sum(E * np.linalg.solve(R, E.T).T, axis=1)
+    logw = logw - scipy.special.logsumexp(logw)
+    if 1.0 / np.sum(np.exp(2 * logw)) < ess_fraction * N:
+        X = X[systematic_resample(np.exp(logw), resample_rng)]
+        logw = np.full(N, -np.log(N))
+    return X, logw
+'''),
 )

@@ -146,6 +146,25 @@ ALTERNATIVES = (
         info["parents"] = k
     return x_new, w_new
 '''),
+    Alternative("pf_step", "spawned-streams", "one child generator of rng for the resampling and another for the innovation (rng.spawn)",
+                '''def pf_step(x, w, b_next, rng, *, innovation_std=INNOVATION_STD, info=None):
+    """Steps (a)-(d): cloud x (3, N), weights w (N,), reading b_next [m] -> new (x, w)."""
+    resample_rng, noise_rng = rng.spawn(2)
+    N = x.shape[1]
+    x_hat = x + DT * tracking_dynamics(0.0, x)
+    with np.errstate(divide="ignore"):
+        log_w_hat = np.log(w) - (x_hat[0] - b_next) ** 2 / (2 * SIGMA**2)
+    w_hat = np.exp(log_w_hat - log_w_hat.max())
+    w_hat = w_hat / w_hat.sum()
+    k = resample_rng.choice(N, size=N, p=w_hat)
+    x_new = x_hat[:, k] + np.asarray(innovation_std)[:, None] * noise_rng.standard_normal((3, N))
+    log_w = -((x_new[0] - b_next) ** 2 - (x_hat[0, k] - b_next) ** 2) / (2 * SIGMA**2)
+    w_new = np.exp(log_w - log_w.max())
+    if info is not None:
+        info["ess"] = 1.0 / np.sum(w_hat**2)
+        info["parents"] = k
+    return x_new, w_new / w_new.sum()
+'''),
     # credibility_interval
     Alternative("credibility_interval", "normalised-first", "the weights normalised before they are accumulated (the last cumulative weight can round below 1)",
                 '''def credibility_interval(samples, weights, p):
