@@ -59,6 +59,14 @@ def _require_written(functions: tuple[Callable, ...]) -> None:
         )
 
 
+def _not_written_message(caller: str | None, stub: str, here: str) -> str:
+    """What a cell says when the stub of the blank ``stub`` raised inside it, called by the blank ``caller`` (None:
+    by the cell itself): a student review found the whole crash report of a stub, blamed as a failing blank."""
+    needs = f"{caller}() calls {stub}()" if caller and caller != stub else f"{here[0].upper()}{here[1:]} needs {stub}()"
+    return wrap(f"NotWrittenYet: {needs}, which you have not written yet. Write it in its cell above (replace the line "
+                f"that raises NotImplementedError), run it, then run {here} again.")
+
+
 def check_array(value: Any, name: str, shape: tuple[int, ...], hint: str = "") -> np.ndarray:
     """Check that ``value`` is a finite NumPy array of the given shape, and return it as one."""
     if isinstance(value, tuple):
@@ -158,14 +166,17 @@ def check_close(
     raise AssertionError(f"{name} {'are' if is_plural(name) else 'is'} not right: {detail}. {hint}".strip())
 
 
-_DETERMINERS = {"the", "your", "its", "their", "both", "all", "these", "those"}
+_DETERMINERS = {"the", "your", "its", "their", "both", "all", "these", "those", "first", "last", "next", "two",
+                "three", "four", "five", "six", "seven", "eight", "nine", "ten"}
+"""Words before the head of a noun phrase: determiners, and the counts and orders that precede it ("the first four
+estimates"): a student review found "the first four estimates ... is not right"."""
 _SINGULAR_ENDINGS = ("ss", "us", "is", "ics")
 
 
 def is_plural(name: str) -> bool:
     """Whether a check's name such as "the estimates of a constant" is a plural noun phrase.
 
-    The head is the first word after a determiner; it is plural if it is a lower-case English
+    The head is the first word after determiners, counts and orders; it is plural if it is a lower-case English
     plural ("estimates", "variances"), and singular for symbols and acronyms ("x_a", "NEES").
     """
     words = name.replace(",", " ").split()
@@ -336,7 +347,14 @@ def check_axis_label(label: str, unit: str, name: str, axis: str, example: str) 
 
 
 def passed(name: str) -> None:
-    """Report that a blank passed its visible checks (``validate`` remembers it for this definition)."""
+    """Report that a blank passed its visible checks (``validate`` remembers it for this definition), or fail
+    if a call of it in this check cell broke a rule that every lab states (see ``_RuleWatch``)."""
+    watch = _watch["now"]
+    if watch is not None and (watch.changed or watch.global_random):
+        sys.setprofile(None)
+        _watch["now"] = None
+        raise AssertionError(changed_arguments_failure(name, list(dict.fromkeys(watch.changed))) if watch.changed
+                             else global_random_failure(name))
     function = sys._getframe(1).f_globals.get(name)
     if function is not None:
         _passed[name] = function
@@ -363,9 +381,10 @@ GRADING = "autograde"
 
 _passed: dict[str, Callable] = {}
 """Blank name -> the function object that last passed its visible checks."""
-_failed: dict[str, tuple[Callable, str, bool, tuple[str, ...]]] = {}
-"""Blank name -> the function that last failed its visible checks, what they said, whether it failed by
-raising an error of its own (a crash) rather than by a wrong result, and the other blanks its check blamed."""
+_failed: dict[str, tuple[Callable, str, bool, tuple[str, ...], bool]] = {}
+"""Blank name -> the function that last failed its visible checks, what they said (without blaming another
+blank), whether it failed by raising an error of its own (a crash) rather than by a wrong result, the other
+blanks its check blamed, and whether the error was raised inside one of those."""
 _cell: dict[str, Any] = {"checks": None, "uses": []}
 """The running cell: the blank whose checks it runs (or None), and the blanks it requires."""
 
@@ -392,6 +411,32 @@ def wrap(text: str, first_line_taken: int = 0) -> str:
         paragraphs.append(textwrap.fill(paragraph, LINE_WIDTH, initial_indent=indent, break_long_words=False,
                                         break_on_hyphens=False)[len(indent):])
     return "\n".join(paragraphs)
+
+
+HEADLINE_CHARS = 320
+"""How much of a check's message ``headline`` keeps."""
+_NUMBERS = re.compile(r": expected .*? but got .*?(?=\. [A-Z(`]|\.?$)")
+"""check_close's numbers ("...: expected [[0. 1.]] but got [[0. 2.]]"), which the notebook shows under the check."""
+_SENTENCE_END = re.compile(r"(?<=[a-z0-9)\]'`])\. (?=[A-Z(`])")
+
+
+def headline(message: str) -> str:
+    """What a check's message says first, on one line: its verdict and the sentence after it (the check's hint),
+    without the numbers, the inputs or the error's type when it is an AssertionError (the check's own words);
+    at most HEADLINE_CHARS long, cut between words."""
+    text = re.sub(r"^AssertionError: ", "", " ".join(message.split()))
+    # a crash (explain): its first line, without where it was raised and the inputs
+    text = _NUMBERS.sub("", text.split(" It was raised ")[0].split(" got these inputs:")[0])
+    first, *rest = [sentence.rstrip(".") for sentence in _SENTENCE_END.split(text)]
+    if len(first) > HEADLINE_CHARS:
+        return first[: HEADLINE_CHARS - 3].rsplit(" ", 1)[0] + "..."
+    for i, sentence in enumerate(rest):  # the hint: its first sentence always, the others as far as they fit whole
+        if len(first) + 2 + len(sentence) > HEADLINE_CHARS:
+            if i == 0:
+                first = f"{first}. {sentence}"[: HEADLINE_CHARS - 3].rsplit(" ", 1)[0] + "..."
+            break
+        first = f"{first}. {sentence}"
+    return first
 
 
 def _current(name: str) -> Callable | None:
@@ -446,7 +491,21 @@ def validate(function: Callable) -> None:
         return
     failed = _failed.get(name)
     if failed is not None and failed[0] is function:
-        message = f"{name} does not pass its visible checks yet. Its check cell says:\n{failed[1]}"
+        # the first sentence of what the check cell says, not all of it again (a student review: Validate
+        # listed every message twice over, nested)
+        message = f"{name} does not pass its visible checks yet. Its check cell above says: {headline(failed[1])}."
+        if failed[1].startswith(f"{NotWrittenYet.__name__}: "):
+            needs = _SENTENCE_END.split(" ".join(failed[1].split()))[0].split(": ", 1)[1]
+            message = f"{name} does not pass its visible checks yet: {needs[0].lower()}{needs[1:]}."
+        if failed[3]:
+            w = _upstream(list(failed[3]))
+            failing = f"{w['does']} not pass {w['its']} own visible checks yet"
+            if failed[4]:  # the certain cause first
+                message = (f"{name} does not pass its visible checks yet: its check stopped with an error raised "
+                           f"inside {w['your']}, which {failing}. Fix {w['it']} first. The error: {headline(failed[1])}.")
+            else:
+                user = name if set(failed[3]) <= set(_calls(name)) else "its check"
+                message += f" This may come from {w['your']}, which {user} uses: {w['they']} {failing}."
     else:
         message = (f"{name} has not passed its visible checks since you last defined it: run the check "
                    f"cell below {name} and fix what its message says.")
@@ -493,13 +552,17 @@ _MEANINGS: list[tuple[str, str, str]] = [
      "a weight is never negative. Check the signs in your weights, or your log-weights before np.exp."),
     ("ValueError", "probabilities do not sum to 1", "The probabilities you drew with do not sum to 1: normalise "
      "the weights (w / np.sum(w)) after their last change and before you draw with them."),
+    # a student review: `if h > 0:` on an array of altitudes got only the advice on optional arguments
     ("ValueError", "truth value of an array", "An array of several entries was used where Python needs one True or "
-     "False, as in `if u:`: such an array is neither. To ask whether an optional argument such as u was given, write "
-     "`if u is not None:`; to ask something of the entries, use np.any(...) or np.all(...)."),
+     "False (an if, a while, and, or): such an array is neither. For a condition on each entry, as in `if h > 0:` "
+     "with an array h, compute both branches with np.where(h > 0, a, b) or use a mask; to ask whether an optional "
+     "argument such as u was given, write `if u is not None:`; np.any(...) and np.all(...) ask about all entries."),
     ("ValueError", "", "A function got a value it cannot work with: compare the shapes and values of the "
      "inputs above with what the function expects."),
-    ("IndexError", "", "An index is out of range. Check the range of your loop, and which axis holds time "
-     "and which holds the state."),
+    # a student review: a percentage p read as a fraction got only the advice on loops
+    ("IndexError", "", "An index is out of range: it is too large for its axis. Check how each index is computed, "
+     "and the units of what it comes from (a percentage from 0 to 100, a fraction from 0 to 1?), the range of your "
+     "loop, and which axis holds time and which holds the state."),
     ("TypeError", "", "A function got arguments it does not accept, or a value of the wrong type. Check "
      "the arguments of each call, and that you call functions and index arrays, not the other way round."),
     ("NameError", "", "A name is not defined: a typo, or a variable that exists only in another cell. A "
@@ -514,6 +577,10 @@ _MEANINGS: list[tuple[str, str, str]] = [
      "you meant another function?"),
     ("NotImplementedError", "", "A blank that this one calls is not written yet: write it first."),
 ]
+
+
+_SHAPE_ERROR = re.compile(r"shape|matmul|broadcast|aligned|dimension|inhomogeneous|axis|size|index")
+"""What the message of an error about the shapes of arrays says."""
 
 
 def _meaning(error: BaseException) -> str:
@@ -592,11 +659,12 @@ def _tokens(lines: list[str]) -> list[tokenize.TokenInfo]:
         return []
 
 
-def _check_hints(cell: Any, line: int) -> list[str]:
+def _check_hints(cell: Any, line: int, about_shapes: bool = True) -> list[str]:
     """What a check cell says to do about the call of a blank at ``line`` of the cell that ``cell`` (a
     frame) runs: a comment on that line, else the hints of the checks in the statement that makes the
-    call, else those of the later shape checks (check_array) of what that statement assigned, until it
-    is assigned again: a check of the values says what a wrong value means, not what a crash does.
+    call, else, for an error ``about_shapes``, those of the later shape checks (check_array) of what that
+    statement assigned, until it is assigned again: a check of the values says what a wrong value means, not
+    what a crash does.
 
     A check cell thus keeps its hints in one place, its checks, and a crash shows them too."""
     lines = linecache.getlines(cell.f_code.co_filename, cell.f_globals)
@@ -614,7 +682,9 @@ def _check_hints(cell: Any, line: int) -> list[str]:
     hints = _hints_in(at, cell.f_globals)
     if hints:
         return list(dict.fromkeys(hints))
-    names = _assigned(at)
+    # the shapes that the results should have speak to an error about shapes only (a student review: a shape hint
+    # under an error about NaN probabilities)
+    names = _assigned(at) if about_shapes else set()
     for later in statements[statements.index(at) + 1:]:
         if not names:
             break
@@ -659,7 +729,8 @@ def explain(error: BaseException, tb: Any, blanks: list[str], here: str = "this 
         place = here if _in_cell(frame) else f"{frame.f_code.co_name} ({frame.f_globals.get('__name__')})"
         during = f", during the line `{caller}` of {place}"
     cell = next(((frame, entry) for frame, entry in calls[:inside[0]] if _in_cell(frame)), None)
-    hints = " ".join(_check_hints(cell[0], cell[1].lineno) if cell is not None else [])
+    hints = " ".join(_check_hints(cell[0], cell[1].lineno, _SHAPE_ERROR.search(str(error).lower()) is not None)
+                     if cell is not None else [])
     # a sentence of the meaning that the check's hint says too is said once, in the hint
     meaning = " ".join(s for s in re.split(r"(?<=\.) ", _meaning(error)) if s not in hints)
     return "\n".join([
@@ -680,10 +751,77 @@ def _shell() -> Any:
     return ipython.get_ipython() if ipython is not None else None
 
 
+def changed_arguments_failure(name: str, changed: list[str]) -> str:
+    """Why a function that wrote into the arrays it was given fails (its check here, its hidden test when graded)."""
+    first = changed[0]
+    which = f"its argument {first}" if len(changed) == 1 else "its arguments " + ", ".join(changed)
+    return (f"{name} changed {which} in place (with {first} += ..., {first}[...] = ... or an in-place function). "
+            f"The code that calls {name} still needs what it passed in: a filter's loop that keeps it, or a check "
+            f"that uses it again. Leave the arrays you are given as they are and return new ones: write "
+            f"{first} = {first} + ..., or start from {first}.copy(). (np.asarray({first}) and "
+            f"{first}.astype(float, copy=False) give back the very array you were given, not a copy.)")
+
+
+def global_random_failure(name: str) -> str:
+    """Why a function that drew from NumPy's global generator, when it was given one, fails."""
+    return (f"{name} drew random numbers from NumPy's global generator (np.random.standard_normal, np.random.choice, "
+            f"...), not from the rng it was given, so the same seed does not give the same result. Draw every random "
+            f"number with rng: rng.standard_normal, rng.random, rng.choice.")
+
+
+class _RuleWatch:
+    """While a blank's check cell runs, what each call of that blank does that the rules every lab states forbid:
+    writing into an array it was given, or drawing from NumPy's global generator when it was given a generator.
+    A student review: a kalman_step that wrote into y passed its own checks, and the check of run_rank4, which
+    calls it, then blamed run_rank4. ``passed`` reports what was found, once the check's own checks have passed."""
+
+    def __init__(self, code: Any) -> None:
+        self.code = code
+        self.calls: list[tuple[Any, list[tuple[str, np.ndarray, np.ndarray]], Any]] = []
+        self.changed: list[str] = []
+        self.global_random = False
+
+    def __call__(self, frame: Any, event: str, arg: Any) -> None:
+        if frame.f_code is not self.code:
+            return
+        if event == "call":
+            names = self.code.co_varnames[: self.code.co_argcount + self.code.co_kwonlyargcount]
+            given = [frame.f_locals.get(n) for n in names]
+            arrays = [(n, v, v.copy()) for n, v in zip(names, given) if isinstance(v, np.ndarray)]
+            generator = any(isinstance(v, np.random.Generator) for v in given)
+            self.calls.append((frame, arrays, _global_random_state() if generator else None))
+        elif event == "return" and self.calls and self.calls[-1][0] is frame:
+            _, arrays, state = self.calls.pop()
+            for n, after, before in arrays:
+                if not (before.shape == after.shape and np.array_equal(before, after, equal_nan=before.dtype.kind in "fc")):
+                    self.changed.append(n)
+            self.global_random |= state is not None and state != _global_random_state()
+
+
+def _global_random_state() -> tuple:
+    """Where NumPy's global generator stands (its position, key and the Gaussian a legacy call keeps)."""
+    state = np.random.get_state(legacy=False)
+    return int(state["state"]["pos"]), state["state"]["key"].tobytes(), int(state["has_gauss"]), float(state["gauss"])
+
+
+_watch: dict[str, _RuleWatch | None] = {"now": None}
+
+
 def _before_cell(info: Any) -> None:
     found = _CHECK_CELL.search(getattr(info, "raw_cell", "") or "")
     _cell["checks"] = found.group(1) if found else None
     _cell["uses"] = []
+    function = _current(_cell["checks"]) if _cell["checks"] and not _grading() else None
+    code = getattr(function, "__code__", None)
+    if code is not None and NOT_WRITTEN not in code.co_consts:
+        _watch["now"] = _RuleWatch(code)
+        sys.setprofile(_watch["now"])
+
+
+def _after_cell(result: Any = None) -> None:
+    if _watch["now"] is not None:
+        sys.setprofile(None)
+        _watch["now"] = None
 
 
 def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_offset: int | None = None) -> list[str]:
@@ -697,6 +835,16 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     if checked is None and _grading():
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []
+    stub = _stub_that_raised(value, tb)
+    if stub is not None:
+        caller, unwritten = stub
+        if checked is not None:
+            _passed.pop(checked, None)
+            _failed[checked] = (_current(checked), _not_written_message(caller, unwritten, "the check cell"), False, (),
+                                False)
+        stb = _not_written_message(caller, unwritten, "this cell").splitlines()
+        shell._showtraceback(etype, value, stb)
+        return stb
     # the blanks this cell uses: those it requires and, in a blank's check cell, the blanks that blank calls
     others = [n for n in dict.fromkeys(required + (_calls(checked) if checked else [])) if n != checked]
     calls, inside = _calls_through(tb, others)
@@ -709,13 +857,19 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
         # a blank whose own check saw it crash did not crash here: only a wrong result of it could be the cause
         blamed = [n for n in _not_passing(others) if not _crashed(n)]
 
-    def composed(here: str) -> str | None:
-        """The message, for a reader who knows the cell that raised it as ``here``."""
+    def own(here: str) -> str | None:
+        """What this cell's own error says, without blaming another blank (None: Python's traceback says it)."""
         message = explain(value, tb, ([checked] if checked else []) + others, here)
         if message is None and isinstance(value, NameError):
             message = _set_by_a_cell_that_failed(value, shell)
-        if message is None and isinstance(value, AssertionError) and not isinstance(value, NotPassingYet):
-            message = wrap(f"{etype.__name__}: {value}")  # a check that fails: its message, wrapped for Validate
+        if message is None and isinstance(value, (AssertionError, NotWrittenYet)) and not isinstance(value, NotPassingYet):
+            # a check that fails, or a blank not written yet: its message, wrapped (Validate cuts longer lines mid-word)
+            message = wrap(f"{etype.__name__}: {value}")
+        return message
+
+    def composed(here: str) -> str | None:
+        """The message, for a reader who knows the cell that raised it as ``here``."""
+        message = own(here)
         if not blamed:
             return message
         said = message or f"{etype.__name__}: {value}"
@@ -730,14 +884,23 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
         # validate() quotes it under the graded cell, where "this cell" would be the wrong one; a check that stopped
         # because another blank is not written yet says so there too (not "run the check cell", which was run)
         said = (f"{etype.__name__}: {str(value).replace('This cell needs', 'The check cell needs', 1)}"
-                if isinstance(value, NotWrittenYet) else composed("the check cell") or f"{etype.__name__}: {value}")
-        _failed[checked] = (_current(checked), said, crashed, tuple(blamed))
+                if isinstance(value, NotWrittenYet) else own("the check cell") or f"{etype.__name__}: {value}")
+        _failed[checked] = (_current(checked), said, crashed, tuple(blamed), raised_in is not None)
     if message is None:
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []
     stb = message.splitlines()
     shell._showtraceback(etype, value, stb)
     return stb
+
+
+def _stub_that_raised(error: BaseException, tb: Any) -> tuple[str, str] | None:
+    """(the blank the cell called, the blank whose stub raised ``error``) when a stub raised it, else None."""
+    if not (type(error) is NotImplementedError and str(error) == NOT_WRITTEN):
+        return None
+    functions = [frame.f_code.co_name for frame, _ in traceback.walk_tb(tb)
+                 if frame.f_globals.get("__name__") == "__main__" and not _in_cell(frame)]
+    return (functions[0], functions[-1]) if functions else None
 
 
 def _set_by_a_cell_that_failed(error: NameError, shell: Any) -> str | None:
@@ -767,7 +930,9 @@ def _blame(blamed: list[str], checked: str | None, raised_inside: bool, here: st
     if raised_inside:
         subject = f"The error was raised inside {w['your']}, which {failing}"
     else:
-        subject = f"This may come from {w['your']}, which {checked or 'this cell'} uses: {w['they']} {failing}"
+        # the check cell itself, not the blank it checks, uses a blank that the checked one does not call
+        user = checked if checked and set(blamed) <= set(_calls(checked)) else "this check" if checked else "this cell"
+        subject = f"This may come from {w['your']}, which {user} uses: {w['they']} {failing}"
     says = "says" if len(blamed) == 1 else "say"
     # one step further back: the blanks that the blamed ones' own checks blamed (tracking_dynamics, when pf_step's
     # check failed because of it and this error was raised inside pf_step)
@@ -807,6 +972,7 @@ def _install() -> None:
     if shell is None or getattr(shell, "_course_checks_installed", False):
         return
     shell.events.register("pre_run_cell", _before_cell)
+    shell.events.register("post_run_cell", _after_cell)
     shell.set_custom_exc((Exception,), _explain_failure)
     shell._course_checks_installed = True
 

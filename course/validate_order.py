@@ -48,10 +48,31 @@ def question_of(nb: NotebookNode, index: int) -> str:
     return nb.cells[index].metadata.get("nbgrader", {}).get("grade_id", "a written answer")
 
 
+SHOWN_ERROR_LINES = 8
+"""The most lines of a failing graded cell's error that Validate shows: its first paragraph, which names the blank
+and what to fix first (the notebook, under the cell, keeps the whole message)."""
+MORE = "(The notebook shows the whole message under this cell and under its check cell.)"
+
+
+def first_paragraph(traceback: list[str]) -> list[str]:
+    """The lines of an error's first paragraph, at most SHOWN_ERROR_LINES, and a line that says where the rest is."""
+    lines = "\n".join(traceback).split("\n")
+    shown = []
+    for line in lines:
+        if not line.strip():
+            break
+        shown.append(line)
+    shown = shown[:SHOWN_ERROR_LINES]
+    return shown + [MORE] if len(shown) < len([line for line in lines if line.strip()]) else shown
+
+
 def ordered_for_validate(nb: NotebookNode) -> NotebookNode:
     """``nb`` (Validate's executed copy) with its graded code cells first, then its written answers, then
     the rest, each group in its own order. An empty written answer (its checksum unchanged, which is how
-    nbgrader tells) is shown by its question, and keeps counting as empty."""
+    nbgrader tells) is shown by its question, and keeps counting as empty. A graded code cell that fails is
+    shown by the first line of its comment (which names its blank and points), not its whole source, and
+    with the first paragraph of its error (a student review: Validate printed each message whole, with
+    the cell's source); a graded cell that a student changed keeps its source, so that Validate says so."""
     from nbgrader.utils import compute_checksum
 
     for index, cell in enumerate(nb.cells):
@@ -59,6 +80,14 @@ def ordered_for_validate(nb: NotebookNode) -> NotebookNode:
         if _is_graded(cell, "markdown") and nbgrader.get("checksum") == compute_checksum(cell):
             cell.source = f"{question_of(nb, index)}\n(Your answer to this is still empty.)"
             nbgrader["checksum"] = compute_checksum(cell)
+        errors = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
+        if _is_graded(cell, "code") and errors and nbgrader.get("checksum") == compute_checksum(cell):
+            for error in errors:
+                error["traceback"] = first_paragraph(error.get("traceback", []))
+            label = cell.source.lstrip().split("\n", 1)[0]
+            if label.startswith("#"):
+                cell.source = label
+                nbgrader["checksum"] = compute_checksum(cell)
     rank = [0 if _is_graded(c, "code") else 1 if _is_graded(c, "markdown") else 2 for c in nb.cells]
     nb.cells = [cell for _, _, cell in sorted(zip(rank, range(len(nb.cells)), nb.cells), key=lambda t: t[:2])]
     return nb

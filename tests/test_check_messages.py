@@ -50,6 +50,8 @@ def test_the_grammar_checks_catch_what_they_claim_to():
     assert grammar_problems("the variances after one and two fixes are not right") == []
     assert grammar_problems("the estimates contains NaN or infinite entries: [nan]") == ["'the estimates contains NaN'"]
     assert grammar_problems("x_a contains NaN or infinite entries: [nan]") == []
+    assert is_plural("the first four estimates after changing the last fix"), "a student review: '... fix is not right'"
+    assert not is_plural("the first estimate") and is_plural("the last two covariances")
     assert count(1, "random fix") == "1 random fix" and count(3, "random fix") == "3 random fixes"
     assert count(2, "estimate") == "2 estimates" and is_plural("the estimates") and not is_plural("NEES of e")
 
@@ -92,6 +94,28 @@ def test_an_exception_inside_a_blank_names_the_call_its_inputs_and_a_likely_caus
         np.linalg.solve(np.zeros((2, 2)), np.ones(2))
     except np.linalg.LinAlgError as error:
         assert explain(error, error.__traceback__, ["gain_information_form"]) is None
+
+
+def test_the_shapes_a_check_wants_are_said_for_an_error_about_shapes_only():
+    """A student review: an error about NaN probabilities was followed by the check's hint on the result's shape.
+    The later shape checks of a call's result speak to a crash about shapes, not to another one."""
+    import linecache
+
+    namespace = {"__name__": "__main__", "np": np, "check_array": check_array}
+    exec(compile("def draw(w, rng):\n    return rng.choice(len(w), size=len(w), p=w / w.sum())\n", "<cell-3>", "exec"),
+         namespace)
+    cell = ('k = draw(W, np.random.default_rng(0))\n'
+            'check_array(k, "the parents", (3,), "One parent index per particle.")\n')
+    linecache.cache["<cell-4>"] = (len(cell), None, cell.splitlines(True), "<cell-4>")
+
+    def message(weights) -> str:
+        namespace["W"] = weights
+        with pytest.raises(ValueError) as raised:
+            exec(compile(cell, "<cell-4>", "exec"), namespace)
+        return " ".join(explain(raised.value, raised.value.__traceback__, ["draw"]).split())
+
+    assert "One parent index per particle" not in message(np.array([np.nan, 1.0, 1.0])), "NaN probabilities: not shapes"
+    assert "What the check says for this case: One parent index per particle." in message(np.ones((3, 2)))
 
 
 def test_a_nan_check_agrees_with_its_name_and_a_crash_is_explained_without_the_labs_names():
@@ -190,9 +214,9 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
                         "outcome got its value. Run it again and fix its error first: this cell needs what it makes."), text[26]
     # a check that stopped because another blank is not written: Validate says that, not "run the check cell"
     # (the student review of issue 34: it said "has not passed its visible checks since you last defined it")
-    assert text[24] == ("NotPassingYet: user does not pass its visible checks yet. Its check cell says: NotWrittenYet: "
-                        "The check cell needs needed(), which you have not written yet. Write it in its cell above "
-                        "(replace the line that raises NotImplementedError), run it, then run this cell again."), text[24]
+    # once, and shortly (a student review: Validate quoted the check cell's whole message, nested)
+    assert text[24] == ("NotPassingYet: user does not pass its visible checks yet: the check cell needs needed(), which "
+                        "you have not written yet."), text[24]
     assert text[2].startswith("LinAlgError in your gain: Singular matrix"), text[2]
     assert "`K = gain(np.diag([4.0, 9.0]), np.eye(2), np.diag([4.0, 1.0]))` of this cell" in text[2]
     assert "B = array of shape (2, 2), [[4., 0.], [0., 9.]]" in text[2]
@@ -200,12 +224,13 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
     assert text[4].startswith("The error was raised inside your gain, which does not pass its own visible checks "
                               "yet. Make it pass its checks first"), text[4]
     assert "LinAlgError in your update (raised inside your gain): Singular matrix It was raised at the line" in text[4], text[4]
-    assert errors[5].ename == "NotPassingYet" and text[5].startswith(
-        "NotPassingYet: update does not pass its visible checks yet. Its check cell says: The error was raised "
-        "inside your gain"), text[5]
-    # quoted under the graded cell, the message names the check cell, not "this cell"
-    assert "then run the check cell again" in text[5] and "of the check cell" in text[5] and "this cell" not in text[5]
-    assert "gain does not pass its visible checks yet. Its check cell says: LinAlgError in your gain" in text[6]
+    # the certain cause first, then the first line of the check's error, once (not its whole message again)
+    assert errors[5].ename == "NotPassingYet" and text[5] == (
+        "NotPassingYet: update does not pass its visible checks yet: its check stopped with an error raised inside "
+        "your gain, which does not pass its own visible checks yet. Fix it first. The error: LinAlgError in your "
+        "update (raised inside your gain): Singular matrix."), text[5]
+    assert text[6] == ("NotPassingYet: gain does not pass its visible checks yet. Its check cell above says: LinAlgError "
+                       "in your gain: Singular matrix."), text[6]
     assert errors[7].ename == "ZeroDivisionError" and "in your" not in text[7]
     # twice's own error first, then scale, once
     assert text[11].startswith("ValueError in your twice: matmul"), text[11]
@@ -323,7 +348,7 @@ def test_the_visible_checks_name_the_cause(lab: Lab):
     verdicts = visible_verdicts(lab, [(f"{m.blank}/{m.slug}", m.blank, m.apply(model[m.blank])) for m in listed])
     problems = []
     for key, (said, unsaid) in VISIBLE_MESSAGES[lab.id].items():
-        message = "" if verdicts[key] is None else _message(verdicts[key], key.split("/")[0])
+        message = "" if verdicts[key] is None else " ".join(_message(verdicts[key], key.split("/")[0]).split())
         if said not in message or (unsaid is not None and unsaid in message):
             problems.append(f"{key}: {message or 'passes the visible checks'}")
     assert not problems, "\n".join(problems)

@@ -124,3 +124,33 @@ def test_units_parse_to_their_base_units():
     assert parse_unit("m^2kg^-1") == parse_unit("kg^-1m^2") == {"m": 2, "kg": -1} and parse_unit("m2kg") is None
     assert parse_unit("seconds") == {"s": 1} and parse_unit("m/m") == {}
     assert parse_unit("min") is None and parse_unit("ms") is None and parse_unit("") is None
+
+
+@random_draws(false_fail=0.0, why="whether a call wrote into an argument or drew from np.random does not depend on the draws")
+def test_the_rule_watch_sees_writes_into_arguments_and_draws_from_numpys_global_generator(seed):
+    """What a blank's check cell reports at passed() (course.checks._RuleWatch): each array argument a call wrote into,
+    and a draw from np.random when the call was given a generator; an honest call, nothing."""
+    import sys
+
+    from course.checks import _RuleWatch
+
+    def step(x, y, rng=None, *, scale=1.0):
+        if rng is None:
+            x += y  # writes into x
+            return x
+        if scale < 0:
+            return x + np.random.standard_normal(x.shape)  # draws from the global generator
+        return x + scale * rng.standard_normal(x.shape) + y
+
+    def watched(*args, **kwargs):
+        watch = _RuleWatch(step.__code__)
+        sys.setprofile(watch)
+        try:
+            step(*args, **kwargs)
+        finally:
+            sys.setprofile(None)
+        return watch.changed, watch.global_random
+
+    assert watched(np.zeros(2), np.ones(2)) == (["x"], False)
+    assert watched(np.zeros(2), np.ones(2), np.random.default_rng(seed), scale=-1.0) == ([], True)
+    assert watched(np.zeros(2), np.ones(2), np.random.default_rng(seed)) == ([], False)

@@ -18,14 +18,28 @@ from autograder.release.bundle import write_jupyter_config
 from over_labs import over_labs
 
 
-def _failed_code_cells(nb: nbformat.NotebookNode, tmp_path, name: str) -> dict[str, str]:
-    """grade_id -> error of each graded code cell that Validate reports as failed."""
+def _failed_code_cells(nb: nbformat.NotebookNode, tmp_path, name: str, config=None) -> dict[str, str]:
+    """grade_id -> error of each graded code cell that Validate (with ``config``) reports as failed."""
     path = tmp_path / name
     nbformat.write(nb, path)
-    results = Validator().validate(str(path))
+    results = Validator(config=config).validate(str(path))
     assert "changed" not in results and "type_changed" not in results, results
-    by_source = {c.source.strip(): cells.grade_id(c) for c in nb.cells if cells.is_autograded_test(c)}
+    by_source = {source: cells.grade_id(c) for c in nb.cells if cells.is_autograded_test(c)
+                 for source in (c.source.strip(), _label(c))}
     return {by_source[f["source"]]: f["raw_error"] for f in results.get("failed", []) if f["source"] in by_source}
+
+
+def _bundle_config(tmp_path, monkeypatch):
+    """The student bundle's nbgrader configuration, loaded as the Validate button loads it; Validator is put back
+    after the test."""
+    monkeypatch.setattr(Validator, "_preprocess", Validator._preprocess)
+    write_jupyter_config(tmp_path / "jupyter_config")
+    return PyFileConfigLoader("nbgrader_config.py", path=str(tmp_path / "jupyter_config")).load_config()
+
+
+def _label(cell: nbformat.NotebookNode) -> str:
+    """How Validate shows a graded code cell that fails: the first line of its comment (course/validate_order.py)."""
+    return cell.source.strip().split("\n")[0]
 
 
 def _half_written(lab: Lab) -> tuple[nbformat.NotebookNode, list[str], list[str]]:
@@ -46,19 +60,21 @@ def test_validate_fails_on_the_blank_release_and_names_every_blank(lab, tmp_path
     button loads it), Validate lists every code blank first, in the notebook's order, then every written
     answer, each shown by its question (issue 34: the written answers came first where they sit first,
     and each read 'YOUR ANSWER HERE')."""
-    monkeypatch.setattr(Validator, "_preprocess", Validator._preprocess)  # put back after the test
-    write_jupyter_config(tmp_path / "jupyter_config")
-    config = PyFileConfigLoader("nbgrader_config.py", path=str(tmp_path / "jupyter_config")).load_config()
+    config = _bundle_config(tmp_path, monkeypatch)
     nb = cells.read(lab.release_notebook)
     blanks = [cells.grade_id(c) for c in nb.cells if cells.is_code_answer(c)]
     path = tmp_path / lab.notebook_name
     nbformat.write(nb, path)
     results = Validator(config=config).validate(str(path))
-    tests = {c.source.strip(): cells.grade_id(c) for c in nb.cells if cells.is_autograded_test(c)}
+    tests = {_label(c): cells.grade_id(c) for c in nb.cells if cells.is_autograded_test(c)}
     listed = [tests.get(f["source"], f["source"]) for f in results["failed"]]
     assert listed[: len(blanks)] == [f"test_{name}" for name in blanks], listed
     for name, failure in zip(blanks, results["failed"]):
         assert "NotWrittenYet" in failure["raw_error"] and f"{name}()" in failure["raw_error"], failure["raw_error"]
+        # a student review: Validate cut the one long line of NotWrittenYet mid-word (nbgrader cuts at width - 3)
+        shown = re.sub(r"\x1b\[[0-9;]*m", "", failure["raw_error"])  # Validate measures lines without colours
+        too_long = [line for line in shown.splitlines() if len(line) > Validator().width - 3 - len(Validator().indent)]
+        assert not too_long, too_long
     written = [c for c in nb.cells if c.cell_type == "markdown" and cells.meta(c).get("grade")]
     assert len(listed) == len(blanks) + len(written), listed
     for answer in listed[len(blanks):]:
@@ -89,3 +105,78 @@ def test_validate_blames_the_blank_that_fails_its_checks_not_the_one_that_uses_i
     assert "Check the sign of the innovation" in " ".join(failed["test_kupdate"].split())
     assert "This may come from your kupdate, which run_filter uses: it does not pass its own visible checks yet" in " ".join(
         failed["test_run_filter"].split())
+
+
+def _written(lab: Lab, blanks: list[str], mistake: str = "") -> nbformat.NotebookNode:
+    """The release with ``blanks`` written (model answers; the first with the catalogued ``mistake``)."""
+    nb = cells.read(lab.release_notebook)
+    answers = cells.model_answers(cells.read(lab.source_notebook))
+    if mistake:
+        [wrong] = [m for m in catalogue(lab) if m.slug == mistake and m.blank == blanks[0]]
+        answers[blanks[0]] = wrong.apply(answers[blanks[0]])
+    for cell in nb.cells:
+        if cells.is_code_answer(cell) and cells.grade_id(cell) in blanks:
+            cell.source = answers[cells.grade_id(cell)]
+    return nb
+
+
+def test_validate_names_the_unwritten_blank_that_a_written_one_calls(tmp_path, monkeypatch):
+    """A student review: a written kalman_step whose kalman_gain was still a stub got the whole crash report of the
+    stub, twice over (the check cell's, nested in the graded cell's), blaming kalman_gain as failing its checks."""
+    lab = get_lab("castaway-bob")
+    failed = _failed_code_cells(_written(lab, ["kalman_step", "joseph_covariance"]), tmp_path, lab.notebook_name,
+                                _bundle_config(tmp_path, monkeypatch))
+    error = " ".join(failed["test_kalman_step"].split())
+    assert "kalman_step() calls kalman_gain(), which you have not written yet" in error, error
+    assert "NotImplementedError in your" not in error and "got these inputs" not in error, error
+    assert "the check cell" not in error, "Validate's message says once what to write, not what the check cell said"
+
+
+def test_validate_gives_the_first_sentences_of_a_failing_check_once(tmp_path, monkeypatch):
+    """A student review: Validate printed the check cell's whole message again under the graded cell, numbers and
+    all. It now gives the verdict and the check's hint, on a few lines, and says where the rest is."""
+    from course.validate_order import MORE, SHOWN_ERROR_LINES
+
+    lab = get_lab("castaway-bob")
+    nb = _written(lab, [])
+    [blank] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == "trailing_mean"]
+    # the student's answer: it averages in place, from the last fix back, and so writes into y
+    blank.source = ("def trailing_mean(y, order=3):\n    for n in range(len(y) - 1, -1, -1):\n"
+                    "        y[n] = y[max(0, n - order + 1):n + 1].mean(axis=0)\n    return y\n")
+    failed = _failed_code_cells(nb, tmp_path, lab.notebook_name, _bundle_config(tmp_path, monkeypatch))
+    error = failed["test_trailing_mean"]
+    flat = " ".join(error.split())
+    assert ("trailing_mean does not pass its visible checks yet. Its check cell above says: the first four estimates "
+            "after changing the last fix are not right. An estimate must not use fixes that come after it.") in flat, flat
+    assert "expected" not in flat and "but got" not in flat, flat
+    assert len(error.strip().splitlines()) <= SHOWN_ERROR_LINES + 1 and MORE not in error, error
+
+
+def test_a_blank_that_writes_into_its_arguments_fails_its_own_check(tmp_path, monkeypatch):
+    """A student review: a kalman_step that wrote into y (y -= H @ x) passed its own visible checks, and the check of
+    run_rank4, which calls it, then failed and pointed at run_rank4's current term. Its own check says so now."""
+    lab = get_lab("castaway-bob")
+    model = cells.model_answers(cells.read(lab.source_notebook))["kalman_step"]
+    nb = _written(lab, ["kalman_gain", "joseph_covariance", "transition_matrix", "observation_matrix"])
+    [blank] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == "kalman_step"]
+    blank.source = ("def kalman_step(x, P, y, A, H, Q, R, u=None):\n    x_f = A @ x if u is None else A @ x + u\n"
+                    "    P_f = A @ P @ A.T + Q\n    K = kalman_gain(P_f, H, R)\n    y -= H @ x_f\n"
+                    "    return x_f + K @ y, joseph_covariance(P_f, K, H, R)\n")
+    failed = _failed_code_cells(nb, tmp_path, lab.notebook_name, _bundle_config(tmp_path, monkeypatch))
+    flat = " ".join(failed.get("test_kalman_step", "").split())
+    assert "kalman_step changed its argument y in place" in flat, (flat, model)
+
+
+def test_a_step_that_draws_from_numpys_global_generator_fails_its_own_check(tmp_path, monkeypatch):
+    """The rule that a random blank draws only from the rng it is given: its visible check says so, with its hint,
+    in Validate too (the hint was dropped from a headline that ran long)."""
+    lab = get_lab("reentry-pf")
+    model = cells.model_answers(cells.read(lab.source_notebook))
+    nb = _written(lab, [name for name in model if name != "pf_step"])
+    [blank] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == "pf_step"]
+    assert "rng.standard_normal(" in model["pf_step"]
+    blank.source = model["pf_step"].replace("rng.standard_normal(", "np.random.standard_normal(")
+    failed = _failed_code_cells(nb, tmp_path, lab.notebook_name, _bundle_config(tmp_path, monkeypatch))
+    flat = " ".join(failed.get("test_pf_step", "").split())
+    # its check of two generators of one seed stops it first, and says so with its hint
+    assert "gave different steps. Draw every random number from the rng argument" in flat and "never from np.random" in flat, flat

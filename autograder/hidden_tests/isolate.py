@@ -22,6 +22,7 @@ import warnings
 from typing import Callable, Iterable, Iterator
 
 from autograder.kernel import side
+from course.checks import changed_arguments_failure, global_random_failure
 
 
 def _named_blanks(reference: types.ModuleType, name: str, blanks: frozenset[str]) -> set[str]:
@@ -122,24 +123,6 @@ def warning_failure(name: str, category: str, message: str) -> str:
 class CallRuleBroken(AssertionError):
     """A call that broke one of the rules every lab states (no writes into arguments, draws only from rng): its
     numbers may be right, so no sentence on the cases where they are right or wrong is added to it."""
-
-
-def changed_arguments_failure(name: str, changed: list[str]) -> str:
-    """Why a graded function that wrote into the arrays it was given fails."""
-    first = changed[0]
-    which = f"its argument {first}" if len(changed) == 1 else "its arguments " + ", ".join(changed)
-    return (f"{name} changed {which} in place (with {first} += ..., {first}[...] = ... or an in-place function). "
-            f"The code that calls {name} still needs what it passed in: a filter's loop that keeps it, or a check "
-            f"that uses it again. Leave the arrays you are given as they are and return new ones: write "
-            f"{first} = {first} + ..., or start from {first}.copy(). (np.asarray({first}) and "
-            f"{first}.astype(float, copy=False) give back the very array you were given, not a copy.)")
-
-
-def global_random_failure(name: str) -> str:
-    """Why a graded function that drew from NumPy's global generator, when it was given one, fails."""
-    return (f"{name} drew random numbers from NumPy's global generator (np.random.standard_normal, np.random.choice, "
-            f"...), not from the rng it was given, so the same seed does not give the same result. Draw every random "
-            f"number with rng: rng.standard_normal, rng.random, rng.choice.")
 
 
 def _checked(function: Callable, name: str) -> Callable:

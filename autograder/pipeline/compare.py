@@ -52,11 +52,11 @@ from nbformat.v4 import new_output
 from autograder import cells
 from autograder.hidden_tests.case_kinds import wrong_only
 from autograder.hidden_tests.diagnosis import diagnosed_mistake
-from autograder.hidden_tests.isolate import (CallRuleBroken, called_blanks, changed_arguments_failure, global_random_failure,
-                                              warning_failure)
+from autograder.hidden_tests.isolate import CallRuleBroken, called_blanks, warning_failure
 from autograder.kernel import side
 from autograder.kernel.side import Peer, PeerGone, PeerTimeout, ProtocolError, Wire, warning_class
 from autograder.pipeline import served_calls
+from course.checks import changed_arguments_failure, global_random_failure
 
 BEGIN, END = "### BEGIN HIDDEN TESTS", "### END HIDDEN TESTS"
 HIDDEN_MODULE = re.compile(r"solutions\.[a-z0-9_]+\.hidden_tests")
