@@ -44,14 +44,14 @@ def check_draws_from_rng(call: Callable[[np.random.Generator], Any], name: str, 
         raise CallRuleBroken(
             f"{name} gave the same result when it was called twice with one generator, as a filter's next step "
             "would be: it does not draw from that generator as it goes (a copy of rng, a generator seeded from it "
-            "or a fixed seed, np.random with its state put back), so every step would draw the same numbers. Draw "
-            "every random number with rng itself.")
+            "or a fixed seed, np.random with its state put back, draws made once and kept for later calls), so every "
+            "step would draw the same numbers. Draw every random number with rng itself.")
     if not _same(first, call(cases.rng(*stream, 0))):
         raise CallRuleBroken(
             f"{name} gave different results when it was given two generators in the same state: it draws from "
-            "a generator of its own (np.random.default_rng() inside the function), from np.random or from Python's "
-            "random module. Draw every random number with the rng it is given, so that the same seed gives the "
-            "same result.")
+            "a generator of its own (np.random.default_rng() inside the function, or one kept from an earlier call), "
+            "from np.random or from Python's random module. Draw every random number with the rng it is given, so "
+            "that the same seed gives the same result.")
     if _same(first, call(cases.rng(*stream, 1))):
         raise CallRuleBroken(
             f"{name} gave the same result for generators in different states: its draws do not come from the "

@@ -304,29 +304,39 @@ def _buffer(buffers: list[bytes], index) -> bytes:
     return buffers[index]
 
 
-MAX_SPAWNED = 1 << 20
+MAX_SPAWNED = 1 << 30
 """The most children a generator that crosses the wire may have spawned (NumPy 2.4 hangs spawning near 2**32)."""
+_spawned_elsewhere: dict[int, tuple[np.random.SeedSequence, int]] = {}
+"""id of a seed sequence -> (it, how many children the other side has spawned from it in all): counted here, not
+spawned, since the other side says the number (an adversarial review: a kernel that said 2**20 made the grader spawn
+that many children, 13 s and 441 MB a call). The seed sequence is kept, so that its id is not reused."""
+
+
+def _children_spawned(seed_seq: np.random.SeedSequence) -> int:
+    """How many children ``seed_seq`` has spawned, here or, from a copy sent there, on the other side."""
+    elsewhere = _spawned_elsewhere.get(id(seed_seq))
+    return max(seed_seq.n_children_spawned, elsewhere[1] if elsewhere is not None and elsewhere[0] is seed_seq else 0)
 
 
 def _seed_sequence_json(seed_seq) -> dict | None:
     """The seed sequence of a generator, which its spawn() and its children's seeds come from (a final review of
     issue 30: without it, the generator rebuilt on the other side spawned other children on every call). Its
     entropy travels as a one-way digest: the same generator gives the same children on the other side, which
-    never learns the seed (the grader's is the submission's seed: autograder/hidden_tests/cases.py)."""
+    does not learn the entropy (the grader's is a digest of the submission's seed: autograder/hidden_tests/cases.py)."""
     if not isinstance(seed_seq, np.random.SeedSequence):
         return None
     digest = hashlib.sha256(repr((seed_seq.entropy, tuple(seed_seq.spawn_key))).encode()).digest()
     return {"entropy": int.from_bytes(digest[:16], "big"), "spawn_key": [], "pool_size": int(seed_seq.pool_size),
-            "n_children_spawned": int(seed_seq.n_children_spawned)}
+            "n_children_spawned": _children_spawned(seed_seq)}
 
 
 def _spawn_as_many(seed_seq, rebuilt) -> None:
-    """Count on ``seed_seq`` the children the call spawned from its copy ``rebuilt`` (at most MAX_SPAWNED in all),
+    """Count for ``seed_seq`` the children the call spawned from its copy ``rebuilt`` (at most MAX_SPAWNED in all),
     so that the next call spawns new ones, as the student's own generator does."""
     if isinstance(seed_seq, np.random.SeedSequence) and isinstance(rebuilt, np.random.SeedSequence):
-        more = min(rebuilt.n_children_spawned, MAX_SPAWNED) - seed_seq.n_children_spawned
-        if more > 0:
-            seed_seq.spawn(more)
+        count = min(rebuilt.n_children_spawned, MAX_SPAWNED)
+        if count > _children_spawned(seed_seq):
+            _spawned_elsewhere[id(seed_seq)] = (seed_seq, count)
 
 
 def _seed_sequence(node) -> np.random.SeedSequence | None:
