@@ -28,6 +28,10 @@ class NotWrittenYet(Exception):
     """A cell needs a blank that still holds its stub."""
 
 
+class RuleBroken(AssertionError):
+    """A check cell's call of a blank broke a rule every lab states (``_RuleWatch``); its message names the blank."""
+
+
 class NotPassingYet(AssertionError):
     """``validate``: a blank does not pass its visible checks yet (its message already says why, once)."""
 
@@ -76,13 +80,19 @@ def check_array(value: Any, name: str, shape: tuple[int, ...], hint: str = "") -
         )
     array = _as_array(value, name, f"one array of shape {shape}", hint)
     if array.shape != shape:
+        # a student review: a column vector (n, 1) for a vector (n,) got no hint
+        column = len(shape) == 1 and array.ndim == 2 and sorted(array.shape) == [1, shape[0]]
+        vector = ("A column (n, 1) or a row (1, n) is not a vector (n,): keep vectors 1-D (x = A @ x, not "
+                  "A @ x[:, None]), or flatten with .ravel(). " if column else "")
         raise AssertionError(
             f"{name} should have shape {shape}, but it has shape {array.shape}"
-            f"{' (a single number)' if array.shape == () else ''}. {hint}".strip()
+            f"{' (a single number)' if array.shape == () else ''}. {vector}{hint}".strip()
         )
     if not np.all(np.isfinite(array)):
+        # a student review: an empty window's NaN got only the hint on the shape
         raise AssertionError(f"{name} {'contain' if is_plural(name) else 'contains'} NaN or infinite entries: {array}. "
-                             f"{hint}".strip())
+                             "NaN comes from 0 / 0, the mean of an empty slice or the square root of a negative number; "
+                             f"inf from a division by zero. {hint}".strip())
     return array
 
 
@@ -109,9 +119,10 @@ def _as_array(value: Any, name: str, wanted: str, hint: str) -> np.ndarray:
 def check_pair(value: Any, name: str, first: str, second: str) -> tuple[Any, Any]:
     """Check that a function returned a pair, such as ``(x_f, B_f)``, and unpack it."""
     if not isinstance(value, (tuple, list)) or len(value) != 2:
+        returned = _returned(value)  # a student review: "does it end with a return?."
         raise AssertionError(
             f"{name} should return two things, ({first}, {second}), for example "
-            f"`return {first}, {second}`. It returned {_returned(value)}."
+            f"`return {first}, {second}`. It returned {returned}{'' if returned.endswith('?') else '.'}"
         )
     return value[0], value[1]
 
@@ -350,11 +361,10 @@ def passed(name: str) -> None:
     """Report that a blank passed its visible checks (``validate`` remembers it for this definition), or fail
     if a call of it in this check cell broke a rule that every lab states (see ``_RuleWatch``)."""
     watch = _watch["now"]
-    if watch is not None and (watch.changed or watch.global_random):
-        sys.setprofile(None)
-        _watch["now"] = None
-        raise AssertionError(changed_arguments_failure(name, list(dict.fromkeys(watch.changed))) if watch.changed
-                             else global_random_failure(name))
+    broken = watch.broken(name) if watch is not None else None
+    if broken is not None:
+        _after_cell()
+        raise RuleBroken(broken)
     function = sys._getframe(1).f_globals.get(name)
     if function is not None:
         _passed[name] = function
@@ -413,11 +423,21 @@ def wrap(text: str, first_line_taken: int = 0) -> str:
     return "\n".join(paragraphs)
 
 
-HEADLINE_CHARS = 320
+HEADLINE_CHARS = 400
 """How much of a check's message ``headline`` keeps."""
-_NUMBERS = re.compile(r": expected .*? but got .*?(?=\. [A-Z(`]|\.?$)")
+_NUMBERS = re.compile(r": expected .*? but got .*?(?=\. (?!nan\b|inf\b)[A-Za-z(`]|\.?$)")
 """check_close's numbers ("...: expected [[0. 1.]] but got [[0. 2.]]"), which the notebook shows under the check."""
 _SENTENCE_END = re.compile(r"(?<=[a-z0-9)\]'`])\. (?=[A-Z(`])")
+
+
+def _cut(text: str) -> str:
+    """``text`` cut between words to HEADLINE_CHARS, with "..." (not "...." after a full stop)."""
+    return text[: HEADLINE_CHARS - 3].rsplit(" ", 1)[0].rstrip(".,;:") + "..."
+
+
+def _ended(sentence: str) -> str:
+    """``sentence`` with a full stop, unless it ends with its own ("Did you invert B and R?", not "R?.")."""
+    return sentence if sentence.endswith((".", "?", "!")) else f"{sentence}."
 
 
 def headline(message: str) -> str:
@@ -429,11 +449,11 @@ def headline(message: str) -> str:
     text = _NUMBERS.sub("", text.split(" It was raised ")[0].split(" got these inputs:")[0])
     first, *rest = [sentence.rstrip(".") for sentence in _SENTENCE_END.split(text)]
     if len(first) > HEADLINE_CHARS:
-        return first[: HEADLINE_CHARS - 3].rsplit(" ", 1)[0] + "..."
+        return _cut(first)
     for i, sentence in enumerate(rest):  # the hint: its first sentence always, the others as far as they fit whole
         if len(first) + 2 + len(sentence) > HEADLINE_CHARS:
             if i == 0:
-                first = f"{first}. {sentence}"[: HEADLINE_CHARS - 3].rsplit(" ", 1)[0] + "..."
+                first = _cut(f"{first}. {sentence}")
             break
         first = f"{first}. {sentence}"
     return first
@@ -493,7 +513,8 @@ def validate(function: Callable) -> None:
     if failed is not None and failed[0] is function:
         # the first sentence of what the check cell says, not all of it again (a student review: Validate
         # listed every message twice over, nested)
-        message = f"{name} does not pass its visible checks yet. Its check cell above says: {headline(failed[1])}."
+        said = headline(failed[1])
+        message = f"{name} does not pass its visible checks yet. Its check cell above says: {_ended(said)}"
         if failed[1].startswith(f"{NotWrittenYet.__name__}: "):
             needs = _SENTENCE_END.split(" ".join(failed[1].split()))[0].split(": ", 1)[1]
             message = f"{name} does not pass its visible checks yet: {needs[0].lower()}{needs[1:]}."
@@ -502,7 +523,7 @@ def validate(function: Callable) -> None:
             failing = f"{w['does']} not pass {w['its']} own visible checks yet"
             if failed[4]:  # the certain cause first
                 message = (f"{name} does not pass its visible checks yet: its check stopped with an error raised "
-                           f"inside {w['your']}, which {failing}. Fix {w['it']} first. The error: {headline(failed[1])}.")
+                           f"inside {w['your']}, which {failing}. Fix {w['it']} first. The error: {_ended(said)}")
             else:
                 user = name if set(failed[3]) <= set(_calls(name)) else "its check"
                 message += f" This may come from {w['your']}, which {user} uses: {w['they']} {failing}."
@@ -770,32 +791,48 @@ def global_random_failure(name: str) -> str:
 
 
 class _RuleWatch:
-    """While a blank's check cell runs, what each call of that blank does that the rules every lab states forbid:
-    writing into an array it was given, or drawing from NumPy's global generator when it was given a generator.
-    A student review: a kalman_step that wrote into y passed its own checks, and the check of run_rank4, which
-    calls it, then blamed run_rank4. ``passed`` reports what was found, once the check's own checks have passed."""
+    """While a blank's check cell runs, what each call of that blank, or of a blank it calls, does that the rules
+    every lab states forbid: writing into an array it was given, or drawing from NumPy's global generator when it
+    was given a generator. A student review: a kalman_step that wrote into y passed its own checks, and the check
+    of run_rank4, which calls it, then blamed run_rank4; one that wrote into P made its own check show a wrong
+    "expected" value (the check had passed the same array as P and Q). ``passed`` reports what was found, and so
+    does a check that fails, first."""
 
-    def __init__(self, code: Any) -> None:
-        self.code = code
+    def __init__(self, codes: dict[Any, str]) -> None:
+        self.codes = codes
         self.calls: list[tuple[Any, list[tuple[str, np.ndarray, np.ndarray]], Any]] = []
-        self.changed: list[str] = []
-        self.global_random = False
+        self.changed: list[tuple[str, str]] = []
+        self.global_random: list[str] = []
 
     def __call__(self, frame: Any, event: str, arg: Any) -> None:
-        if frame.f_code is not self.code:
+        code = frame.f_code
+        if code not in self.codes:
             return
         if event == "call":
-            names = self.code.co_varnames[: self.code.co_argcount + self.code.co_kwonlyargcount]
+            names = code.co_varnames[: code.co_argcount + code.co_kwonlyargcount]
             given = [frame.f_locals.get(n) for n in names]
             arrays = [(n, v, v.copy()) for n, v in zip(names, given) if isinstance(v, np.ndarray)]
             generator = any(isinstance(v, np.random.Generator) for v in given)
             self.calls.append((frame, arrays, _global_random_state() if generator else None))
         elif event == "return" and self.calls and self.calls[-1][0] is frame:
             _, arrays, state = self.calls.pop()
+            name = self.codes[code]
             for n, after, before in arrays:
                 if not (before.shape == after.shape and np.array_equal(before, after, equal_nan=before.dtype.kind in "fc")):
-                    self.changed.append(n)
-            self.global_random |= state is not None and state != _global_random_state()
+                    self.changed.append((name, n))
+            if state is not None and state != _global_random_state():
+                self.global_random.append(name)
+
+    def broken(self, checked: str) -> str | None:
+        """What a call broke, said of the blank that broke it (a blank that ``checked`` calls before ``checked``,
+        whose argument may have been changed through it), or None."""
+        culprits = [name for name, _ in self.changed] + self.global_random
+        if not culprits:
+            return None
+        name = next((n for n in culprits if n != checked), checked)
+        arguments = list(dict.fromkeys(a for n, a in self.changed if n == name))
+        said = changed_arguments_failure(name, arguments) if arguments else global_random_failure(name)
+        return said if name == checked else f"{said} ({checked} calls {name}: fix {name} first.)"
 
 
 def _global_random_state() -> tuple:
@@ -811,11 +848,13 @@ def _before_cell(info: Any) -> None:
     found = _CHECK_CELL.search(getattr(info, "raw_cell", "") or "")
     _cell["checks"] = found.group(1) if found else None
     _cell["uses"] = []
-    function = _current(_cell["checks"]) if _cell["checks"] and not _grading() else None
-    code = getattr(function, "__code__", None)
-    if code is not None and NOT_WRITTEN not in code.co_consts:
-        _watch["now"] = _RuleWatch(code)
-        sys.setprofile(_watch["now"])
+    checked = _cell["checks"]
+    if checked and not _grading():
+        codes = {getattr(_current(name), "__code__", None): name for name in [checked, *_calls(checked)]}
+        codes = {code: name for code, name in codes.items() if code is not None and NOT_WRITTEN not in code.co_consts}
+        if codes:
+            _watch["now"] = _RuleWatch(codes)
+            sys.setprofile(_watch["now"])
 
 
 def _after_cell(result: Any = None) -> None:
@@ -849,13 +888,16 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
     others = [n for n in dict.fromkeys(required + (_calls(checked) if checked else [])) if n != checked]
     calls, inside = _calls_through(tb, others)
     raised_in = calls[inside[-1]][0].f_code.co_name if inside else None
-    if isinstance(value, (NotWrittenYet, NotPassingYet)):
-        blamed = []
-    elif raised_in is not None:
-        blamed = _not_passing([raised_in])  # raised inside another blank: it alone, if it fails its own checks
+    if isinstance(value, (NotWrittenYet, NotPassingYet, RuleBroken)):
+        blamed = []  # the message names the blank at fault
+    elif raised_in is not None and _not_passing([raised_in]):
+        blamed = [raised_in]  # raised inside another blank that fails its own checks: it alone
     else:
-        # a blank whose own check saw it crash did not crash here: only a wrong result of it could be the cause
+        # raised here, or inside a blank that passes its checks (a student review: a wrong observation_matrix
+        # crashed kalman_gain inside run_rank4, and nothing named it): the failing blanks that may have given it,
+        # by a wrong result (a blank whose own check saw it crash did not crash here)
         blamed = [n for n in _not_passing(others) if not _crashed(n)]
+    cause_inside = raised_in is not None and blamed == [raised_in]
 
     def own(here: str) -> str | None:
         """What this cell's own error says, without blaming another blank (None: Python's traceback says it)."""
@@ -873,19 +915,28 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
         if not blamed:
             return message
         said = message or f"{etype.__name__}: {value}"
-        blame = wrap(_blame(blamed, checked, raised_in is not None, here))
+        blame = wrap(_blame(blamed, checked, cause_inside, here))
         # the certain cause first; a possible one after what this cell's own error says
-        return f"{blame}\n\n{said}" if raised_in else f"{said}\n\n{blame}"
+        return f"{blame}\n\n{said}" if cause_inside else f"{said}\n\n{blame}"
 
     message = composed("this cell")
+    watch = _watch["now"] if checked is not None else None
+    broken = watch.broken(checked) if watch is not None else None
+    _after_cell()
+    if broken is not None and not isinstance(value, (NotWrittenYet, NotPassingYet)):
+        # the rule a call broke comes first: a write can change what the check compares with, or what it gave
+        also = " That can also change what this check compares with." if watch.changed else ""
+        rule = wrap(f"{etype.__name__}: {broken}{also}")
+        message = f"{rule}\n\nWhat the check said after that:\n{message or wrap(f'{etype.__name__}: {value}')}"
     if checked is not None:
         _passed.pop(checked, None)
         crashed = raised_in is None and explain(value, tb, [checked]) is not None
         # validate() quotes it under the graded cell, where "this cell" would be the wrong one; a check that stopped
         # because another blank is not written yet says so there too (not "run the check cell", which was run)
         said = (f"{etype.__name__}: {str(value).replace('This cell needs', 'The check cell needs', 1)}"
-                if isinstance(value, NotWrittenYet) else own("the check cell") or f"{etype.__name__}: {value}")
-        _failed[checked] = (_current(checked), said, crashed, tuple(blamed), raised_in is not None)
+                if isinstance(value, NotWrittenYet) else f"{etype.__name__}: {broken}" if broken is not None
+                else own("the check cell") or f"{etype.__name__}: {value}")
+        _failed[checked] = (_current(checked), said, crashed, tuple(blamed), cause_inside)
     if message is None:
         shell.showtraceback((etype, value, tb), running_compiled_code=True)
         return []

@@ -22,6 +22,8 @@ QUESTION = re.compile(r"(?:\*\*|<strong>|<b>)((?:Question|Derivation|Written ans
                       re.DOTALL)
 """A written answer's question: its bold lead ("Question 9 (0.5 points).") and the text after it, in Markdown
 or, in a graded notebook whose Markdown the grader has rendered, in HTML."""
+VALIDATED = re.compile(r"^validate\((\w+)\)", re.MULTILINE)
+"""The line of a graded code cell that names its blank."""
 SHOWN_CHARS = 160
 """How much of a question Validate shows for an empty answer."""
 
@@ -44,7 +46,7 @@ def question_of(nb: NotebookNode, index: int) -> str:
         rest = " ".join(html.unescape(re.sub(r"<[^>]*>", "", found[-1].group(2))).split())
         sentence = re.split(r"(?<=[.?])\s", rest, maxsplit=1)[0]
         text = f"{lead} {sentence}".strip()
-        return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 3].rstrip() + "..."
+        return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 3].rsplit(" ", 1)[0] + "..."
     return nb.cells[index].metadata.get("nbgrader", {}).get("grade_id", "a written answer")
 
 
@@ -70,23 +72,25 @@ def ordered_for_validate(nb: NotebookNode) -> NotebookNode:
     """``nb`` (Validate's executed copy) with its graded code cells first, then its written answers, then
     the rest, each group in its own order. An empty written answer (its checksum unchanged, which is how
     nbgrader tells) is shown by its question, and keeps counting as empty. A graded code cell that fails is
-    shown by the first line of its comment (which names its blank and points), not its whole source, and
-    with the first paragraph of its error (a student review: Validate printed each message whole, with
+    shown by its blank and points, not its source (a student review: its comment, "Hidden tests of ...",
+    read as if the hidden tests had run), and with the first paragraph of its error (a student review: Validate printed each message whole, with
     the cell's source); a graded cell that a student changed keeps its source, so that Validate says so."""
     from nbgrader.utils import compute_checksum
 
     for index, cell in enumerate(nb.cells):
         nbgrader = cell.metadata.get("nbgrader", {})
         if _is_graded(cell, "markdown") and nbgrader.get("checksum") == compute_checksum(cell):
-            cell.source = f"{question_of(nb, index)}\n(Your answer to this is still empty.)"
+            cell.source = question_of(nb, index)  # nbgrader adds "You did not provide a response."
             nbgrader["checksum"] = compute_checksum(cell)
         errors = [o for o in cell.get("outputs", []) if o.get("output_type") == "error"]
         if _is_graded(cell, "code") and errors and nbgrader.get("checksum") == compute_checksum(cell):
             for error in errors:
                 error["traceback"] = first_paragraph(error.get("traceback", []))
-            label = cell.source.lstrip().split("\n", 1)[0]
-            if label.startswith("#"):
-                cell.source = label
+            blank = VALIDATED.search(cell.source)
+            if blank is not None:
+                points = nbgrader.get("points", 0)
+                cell.source = (f"The graded cell of {blank.group(1)} ({points:g} point{'s' if points != 1 else ''}).\n"
+                               "Validate runs its visible checks only; its hidden tests run when you are graded.")
                 nbgrader["checksum"] = compute_checksum(cell)
     rank = [0 if _is_graded(c, "code") else 1 if _is_graded(c, "markdown") else 2 for c in nb.cells]
     nb.cells = [cell for _, _, cell in sorted(zip(rank, range(len(nb.cells)), nb.cells), key=lambda t: t[:2])]

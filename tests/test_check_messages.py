@@ -385,3 +385,39 @@ def test_while_grading_only_a_check_cells_crash_is_explained_and_validate_does_n
     assert text[2].startswith("ValueError in your grow: matmul") and "Size the identity from B." in text[2], text[2]
     assert "B = array of shape (3, 3)" in text[2]
     assert "in your grow" not in text[3] and "B = array" not in text[3], text[3]
+
+
+def test_in_a_kernel_a_write_into_an_argument_is_said_first_and_of_the_blank_that_made_it(tmp_path):
+    """A student review: a kalman_step that wrote into P made its own check show a wrong "expected" value (the check
+    had passed one array as P and Q), and the write was said only once every check had passed; a kalman_step that
+    wrote into the y that run_rank2 gave it made run_rank2's check fail. The write is said first, and of the blank
+    that made it. A blank that crashes inside one that passes its checks names the failing blank that fed it."""
+    cells_source = [
+        "%xmode Minimal\nimport numpy as np\nfrom course.checks import check_close, passed, require, validate",
+        "def kstep(x, P, Q):\n    P += Q\n    return x, P",
+        'require(kstep)\none, Q1 = np.eye(1), 2 * np.eye(1)\nx, P = kstep(np.zeros(1), one, Q1)\n'
+        'check_close(P, one + Q1, "P", "Predict P- = P + Q.")\npassed("kstep")',
+        "def inner(y):\n    y -= 1.0\n    return y",
+        'require(inner)\ncheck_close(inner(np.ones(2)), [0.0, 0.0], "inner(1)")\npassed("inner")',
+        "def outer(Y):\n    return inner(Y[0])",
+        'require(outer)\ncheck_close(outer(np.ones((2, 2))), [0.0, 0.0], "outer(1)")\npassed("outer")',
+        "validate(outer)",
+        "def shape():\n    return np.eye(2, 3)",
+        'require(shape)\ncheck_close(shape(), np.eye(3, 2), "shape()")\npassed("shape")',
+        "def apply(H, x):\n    return H @ x",
+        'require(apply)\ncheck_close(apply(np.eye(2), np.ones(2)), [1.0, 1.0], "apply")\npassed("apply")',
+        "def run(x):\n    return apply(shape(), x)",
+        'require(run)\ncheck_close(run(np.ones(2)), [1.0, 1.0], "run")\npassed("run")',
+    ]
+    nb, errors, text = _run_in_kernel(cells_source, tmp_path)
+    assert text[2].startswith("AssertionError: kstep changed its argument P in place"), text[2]
+    assert "That can also change what this check compares with. What the check said after that: AssertionError: P is " \
+           "not right" in text[2], text[2]
+    assert text[4].startswith("RuleBroken: inner changed its argument y in place"), text[4]
+    assert text[6].startswith("RuleBroken: inner changed its argument y in place") and text[6].endswith(
+        "(outer calls inner: fix inner first.)"), text[6]
+    assert text[7].startswith("NotPassingYet: outer does not pass its visible checks yet. Its check cell above says: "
+                              "RuleBroken: inner changed its argument y in place"), text[7]
+    # raised inside apply, which passes its checks: shape, which fails its own and gave apply its H, is named
+    assert text[13].startswith("ValueError in your run (raised inside your apply): matmul"), text[13]
+    assert "This may come from your shape, which run uses: it does not pass its own visible checks yet" in text[13]

@@ -143,7 +143,7 @@ def test_the_rule_watch_sees_writes_into_arguments_and_draws_from_numpys_global_
         return x + scale * rng.standard_normal(x.shape) + y
 
     def watched(*args, **kwargs):
-        watch = _RuleWatch(step.__code__)
+        watch = _RuleWatch({step.__code__: "step"})
         sys.setprofile(watch)
         try:
             step(*args, **kwargs)
@@ -151,6 +151,6 @@ def test_the_rule_watch_sees_writes_into_arguments_and_draws_from_numpys_global_
             sys.setprofile(None)
         return watch.changed, watch.global_random
 
-    assert watched(np.zeros(2), np.ones(2)) == (["x"], False)
-    assert watched(np.zeros(2), np.ones(2), np.random.default_rng(seed), scale=-1.0) == ([], True)
-    assert watched(np.zeros(2), np.ones(2), np.random.default_rng(seed)) == ([], False)
+    assert watched(np.zeros(2), np.ones(2)) == ([("step", "x")], [])
+    assert watched(np.zeros(2), np.ones(2), np.random.default_rng(seed), scale=-1.0) == ([], ["step"])
+    assert watched(np.zeros(2), np.ones(2), np.random.default_rng(seed)) == ([], [])

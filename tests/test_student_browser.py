@@ -199,12 +199,12 @@ def test_validate_fails_and_names_each_blank_to_fix(page: Page, jupyterlab: Jupy
     unnamed = [name for name in cells.blank_names(cells.read(LAB.source_notebook)) if name not in text]
     assert not unnamed, f"Validate's dialog does not name the blanks {unnamed}:\n{text}"
     # the code blanks first, then each empty written answer by its question (issue 34; course/validate_order.py)
-    first_written = text.find("(Your answer to this is still empty.)")
+    first_written = text.find("You did not provide a response.")
     assert first_written > 0, f"Validate's dialog does not show the empty written answers by their question:\n{text}"
-    late = [name for name in cells.blank_names(cells.read(LAB.source_notebook)) if text.index(f"tests of {name}") > first_written]
+    late = [name for name in cells.blank_names(cells.read(LAB.source_notebook)) if text.index(f"graded cell of {name}") > first_written]
     assert not late, f"Validate's dialog lists the blanks {late} after a written answer:\n{text}"
     questions = [c for c in cells.read(LAB.release_notebook).cells if c.cell_type == "markdown" and cells.meta(c).get("grade")]
-    assert text.count("(Your answer to this is still empty.)") == len(questions), text
+    assert text.count("You did not provide a response.") == len(questions), text  # said once each, by nbgrader
     assert "Derivation 1." in text and "YOUR ANSWER HERE" not in text, text
 
 

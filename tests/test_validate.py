@@ -38,8 +38,11 @@ def _bundle_config(tmp_path, monkeypatch):
 
 
 def _label(cell: nbformat.NotebookNode) -> str:
-    """How Validate shows a graded code cell that fails: the first line of its comment (course/validate_order.py)."""
-    return cell.source.strip().split("\n")[0]
+    """How Validate shows a graded code cell that fails: its blank and points (course/validate_order.py)."""
+    [blank] = re.findall(r"^validate\((\w+)\)", cell.source, re.MULTILINE)
+    points = cells.meta(cell)["points"]
+    return (f"The graded cell of {blank} ({points:g} point{'s' if points != 1 else ''}).\nValidate runs its visible "
+            "checks only; its hidden tests run when you are graded.")
 
 
 def _half_written(lab: Lab) -> tuple[nbformat.NotebookNode, list[str], list[str]]:
@@ -77,9 +80,10 @@ def test_validate_fails_on_the_blank_release_and_names_every_blank(lab, tmp_path
         assert not too_long, too_long
     written = [c for c in nb.cells if c.cell_type == "markdown" and cells.meta(c).get("grade")]
     assert len(listed) == len(blanks) + len(written), listed
-    for answer in listed[len(blanks):]:
-        assert re.match(r"(Question|Derivation|Written answer)\b", answer) and answer.endswith(
-            "(Your answer to this is still empty.)"), answer
+    for answer, failure in zip(listed[len(blanks):], results["failed"][len(blanks):]):
+        # said once, by nbgrader (a student review: ours and nbgrader's said it twice)
+        assert re.match(r"(Question|Derivation|Written answer)\b", answer) and "still empty" not in answer, answer
+        assert failure["raw_error"].strip() == "You did not provide a response.", failure
     assert len(set(listed[len(blanks):])) == len(written), "two written answers read the same"
 
 
@@ -138,12 +142,9 @@ def test_validate_gives_the_first_sentences_of_a_failing_check_once(tmp_path, mo
     from course.validate_order import MORE, SHOWN_ERROR_LINES
 
     lab = get_lab("castaway-bob")
-    nb = _written(lab, [])
-    [blank] = [c for c in nb.cells if cells.is_code_answer(c) and cells.grade_id(c) == "trailing_mean"]
-    # the student's answer: it averages in place, from the last fix back, and so writes into y
-    blank.source = ("def trailing_mean(y, order=3):\n    for n in range(len(y) - 1, -1, -1):\n"
-                    "        y[n] = y[max(0, n - order + 1):n + 1].mean(axis=0)\n    return y\n")
-    failed = _failed_code_cells(nb, tmp_path, lab.notebook_name, _bundle_config(tmp_path, monkeypatch))
+    # a centred window: it uses a later fix (the student review: told first to fix its start; now checked first)
+    failed = _failed_code_cells(_written(lab, ["trailing_mean"], "includes-future"), tmp_path, lab.notebook_name,
+                                _bundle_config(tmp_path, monkeypatch))
     error = failed["test_trailing_mean"]
     flat = " ".join(error.split())
     assert ("trailing_mean does not pass its visible checks yet. Its check cell above says: the first four estimates "
@@ -168,8 +169,8 @@ def test_a_blank_that_writes_into_its_arguments_fails_its_own_check(tmp_path, mo
 
 
 def test_a_step_that_draws_from_numpys_global_generator_fails_its_own_check(tmp_path, monkeypatch):
-    """The rule that a random blank draws only from the rng it is given: its visible check says so, with its hint,
-    in Validate too (the hint was dropped from a headline that ran long)."""
+    """The rule that a random blank draws only from the rng it is given: its visible check says so, first, and
+    Validate too."""
     lab = get_lab("reentry-pf")
     model = cells.model_answers(cells.read(lab.source_notebook))
     nb = _written(lab, [name for name in model if name != "pf_step"])
@@ -178,5 +179,4 @@ def test_a_step_that_draws_from_numpys_global_generator_fails_its_own_check(tmp_
     blank.source = model["pf_step"].replace("rng.standard_normal(", "np.random.standard_normal(")
     failed = _failed_code_cells(nb, tmp_path, lab.notebook_name, _bundle_config(tmp_path, monkeypatch))
     flat = " ".join(failed.get("test_pf_step", "").split())
-    # its check of two generators of one seed stops it first, and says so with its hint
-    assert "gave different steps. Draw every random number from the rng argument" in flat and "never from np.random" in flat, flat
+    assert "pf_step drew random numbers from NumPy's global generator" in flat and "Draw every random number with rng" in flat, flat
