@@ -21,6 +21,7 @@ import numpy as np
 import pytest
 from matplotlib.figure import Figure
 
+from autograder import cells
 from autograder.pipeline import compare, served_calls
 from autograder.hidden_tests import diagnosis
 from autograder.kernel import side
@@ -446,3 +447,35 @@ def test_a_generator_spawns_the_same_children_for_the_same_state_and_new_ones_on
         "the same state gives the same child, and the next call a new one, as with the student's own generator")
     assert side._children_spawned(given.bit_generator.seed_seq) == 2
     assert seed not in np.atleast_1d(entropy).tolist(), "the kernel never learns the seed: a one-way digest stands in"
+
+
+@pytest.mark.parametrize("lab_id, blank", [("reentry-pf", "pf_step"), ("nonlinear-filters", "bootstrap_pf_step")])
+@random_draws(false_fail=0.0, why="every correct step passes its hidden check on every submission seed (test_alternatives)")
+def test_every_correct_random_step_passes_its_hidden_check_across_the_wire(kernel, lab_id, blank, seed):
+    """A review of issue 30: the steps that spawn children of rng were graded in this process only (test_alternatives)
+    or not at all through `grade` (test_alternatives_graded grades the first three of each blank), while spawn counting
+    happens on the wire. Every alternative and the model answer, in a kernel, through the whole hidden check."""
+    from autograder.catalogues.alternatives import catalogue as alternatives
+    from autograder.hidden_tests import cases
+    from autograder.labs import get_lab
+
+    lab = get_lab(lab_id)
+    model = cells.model_answers(cells.read(lab.source_notebook))[blank]
+    blanks = lab.blanks()
+    check = getattr(lab.hidden_module("hidden_tests"), f"check_{blank}")
+    for code in [model, *(a.code for a in alternatives(lab) if a.blank == blank)]:
+        namespace = dict(vars(lab.reference()))
+        exec(compile(code, f"<answer {blank}>", "exec"), namespace)
+        with cases.seeded(seed):
+            check(kernel(namespace, blank, frozenset(blanks[: blanks.index(blank)])))
+
+
+def test_a_generator_whose_state_cannot_cross_is_refused_and_the_kernel_goes_on(kernel):
+    """A review of issue 30: an MT19937, Philox or SFC64 generator returned from the kernel ended its connection (their
+    state holds arrays, which JSON does not take), and the student was told that their own code had ended it."""
+    student = kernel(_define("def make(kind):\n    return np.random.Generator(getattr(np.random, kind)(1))\n"), "make")
+    for kind in ("MT19937", "Philox", "SFC64"):
+        with pytest.raises(Exception) as raised:
+            student(kind)
+        assert f"a random generator with bit generator {kind}" in str(raised.value), raised.value
+    assert isinstance(student("PCG64"), np.random.Generator)

@@ -6,6 +6,12 @@ generator with its state put back (``np.random.set_state``), passed such a test 
 issue 31), though the lab says to draw every random number from ``rng``. The check here says so by its
 consequence, whatever the route: two generators in the same state must give the same result, and two in
 different states different results.
+
+What a check by consequence cannot see (two adversarial reviews of issue 30, which stated it as a limit): a step
+that derives its own generator from the one it is given (from its state, or through a table kept from call to call)
+and moves the given one, so that its results follow the given generator's state as honest draws do. Its draws are
+right in distribution and reproducible from the seed, like those of a generator seeded with rng.integers(...), which
+the lab allows; it wins back no more than this rule's own marks.
 """
 
 from __future__ import annotations

@@ -45,7 +45,10 @@ FILENAME = "<estimation-lab-kit grading>"
 """The file name the kernel gives this module's code (its frames are left out of a student's traceback)."""
 MAX_MESSAGE_BYTES = 1 << 30
 """The largest message either side accepts (1 GiB): a larger one is a protocol error."""
-GENERATORS = ("PCG64", "PCG64DXSM", "MT19937", "Philox", "SFC64")
+GENERATORS = ("PCG64", "PCG64DXSM")
+"""The bit generators whose state crosses the wire: those whose state holds only numbers. MT19937, Philox and SFC64
+keep arrays in theirs, which JSON does not take (a review of issue 30: one returned from the kernel ended its
+connection, and the student was told that their code had); they are refused as unsendable, with a message."""
 """The bit generators a random generator may travel with."""
 EXCEPTIONS_BY_NAME = {"LinAlgError": np.linalg.LinAlgError}
 """Exceptions outside ``builtins`` that the receiving side re-raises as themselves."""
@@ -363,7 +366,7 @@ def _bit_generator(node: dict):
     bit_generator = getattr(np.random, name)(_seed_sequence(node.get("seed_sequence")))
     try:
         bit_generator.state = node["state"]
-    except (TypeError, ValueError, KeyError) as error:
+    except (TypeError, ValueError, KeyError, OverflowError) as error:
         raise ProtocolError(f"a random generator state that NumPy refuses ({error})") from None
     return bit_generator
 
@@ -577,6 +580,8 @@ class Peer:
                 target.update(value)
             elif isinstance(target, np.random.Generator) and isinstance(node, dict) and node.get("t") == "generator":
                 rebuilt = _bit_generator(node)
+                if type(rebuilt) is not type(target.bit_generator):
+                    raise ProtocolError(f"a {type(rebuilt).__name__} state for a {type(target.bit_generator).__name__}")
                 target.bit_generator.state = rebuilt.state
                 _spawn_as_many(target.bit_generator.seed_seq, rebuilt.seed_seq)
             elif _is_axes(target) and isinstance(node, dict) and node.get("t") == "axes":
