@@ -200,9 +200,12 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
         'require(step)\ncheck_close(step(np.ones(2)), 2.5 * np.ones(2), "step(x)")\npassed("step")',
         "def loop(x):\n    return step(x)",
         'require(loop)\ncheck_close(loop(np.ones(2)), 2.5 * np.ones(2), "loop(x)")\npassed("loop")',
+        "def outer(x):\n    return scale(x)",
+        'require(outer)\ncheck_close(outer(1.0), 3.0, "outer(1)")\npassed("outer")',
+        'require(outer)\nprint("a figure")',
     ]
     nb, errors, text = _run_in_kernel(cells_source, tmp_path)
-    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19, 21, 22, 27, 29, 31], text
+    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19, 21, 22, 27, 29, 31, 33, 34, 35], text
     # a crash inside step, whose own check failed because of dyn: both are named, dyn as where to start (the student
     # review of issue 34: pf_step was blamed, tracking_dynamics, whose tuple pf_step multiplied, was not named)
     assert text[32].startswith("The error was raised inside your step, which does not pass its own visible checks yet."), text[32]
@@ -249,6 +252,9 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
     assert " ".join(printed[16].split()) == ("Note: your scale does not pass its visible checks yet, so what this cell "
                                              "shows may be wrong."), printed[16]
     assert "Note:" not in printed[11]
+    # and of a blank that the blanks it needs call (the fairness review of castaway-bob: a figure's note named
+    # kalman_step, run_rank2 and run_rank4, not the joseph_covariance they call, which was at fault)
+    assert " ".join(printed[35].split()).startswith("Note: your scale does not pass its visible checks yet"), printed[35]
     # speeds crashed in its own check (a ragged array for a matrix input) and did not raise here: start fails for its
     # own reason, and speeds is not blamed
     assert text[18].startswith("ValueError in your speeds:"), text[18]
@@ -265,7 +271,7 @@ VISIBLY_FAILED = {
     "castaway-bob": ("joseph_covariance/swapped-transposes", "run_rank2/restarts", "run_rank4/flow-at-new-time",
                      "run_rank4/handout-Q", "joseph_covariance/right-not-transposed", "kalman_step/input-inside-A",
                      "run_rank2/global-sigma-gps", "run_rank4/flow-at-fix", "run_rank4/flow-at-predicted-position",
-                     "run_rank4/position-noise", "kalman_step/if-u"),
+                     "run_rank4/position-noise", "kalman_step/if-u", "run_rank4/global-sigma-gps"),
     "nonlinear-filters": ("moment_error/unweighted", "moment_error/degree-at-most", "bootstrap_pf_step/bearing-not-wrapped",
                           "bootstrap_pf_step/noise-before-f", "unscented_points/centre-weight-one-over-n-plus-kappa",
                           "ekf_update/angle-index-hard-coded", "ekf_update/wraps-every-component",
@@ -282,7 +288,9 @@ places of the measurement (p = 1, and the bearing first of p = 2), and a 2-D pro
 The reentry ones passed them until the fairness review of those labs added a run with scripted parents (N = 3), a
 non-diagonal S_Q and a non-diagonal S_R. castaway-bob's run_rank4/position-noise passed them until the science review
 found case (d) too loose for it (8e-8 of the variance, under the default rtol of 1e-7). castaway-bob's kalman_step/if-u
-passed them, as every u they gave had one entry, until the fairness review of the messages added a u of two."""
+passed them, as every u they gave had one entry, until the fairness review of the messages added a u of two.
+castaway-bob's run_rank4/global-sigma-gps passed them until the fairness review of castaway-bob's checks (helper-42)
+found that no case of run_rank4 gave another sigma_gps (case (g) now does)."""
 
 VISIBLE_MESSAGES = {
     "train-kf": {"nees/root": ("take no square root", None),
@@ -300,7 +308,17 @@ VISIBLE_MESSAGES = {
                      # in run_rank4's check; run_rank4's last check named Q as the cause, whatever blank was wrong
                      "kalman_step/if-u": ("write `if u is not None:`", None),
                      "run_rank4/handout-Q": ("If your transition_matrix, kalman_gain, joseph_covariance and kalman_step "
-                                             "are right, look at Q", None)},
+                                             "are right, look at Q", None),
+                     # the fairness review of castaway-bob's checks (helper-42): a Q from the standard deviation was told to
+                     # pair estimate k with fix k, an R from it to look at Q, a gain from P (or a P- without Q) to look at the
+                     # state update, an input added to P too that the prediction is x- = A x + u, and a centred window
+                     # was shown its own estimates as "expected"
+                     "run_rank2/Q-std": ("Q = sigma_walk^2 I", "Update estimate k with fix k"),
+                     "run_rank4/R-std": ("R = sigma_gps^2 I, a variance", None),
+                     "kalman_step/gain-from-old-P": ("not from the P you were given", None),
+                     "kalman_step/no-Q": ("P- = A P A^T + Q = 2", None),
+                     "trailing_mean/includes-future": ("must not use fixes that come after it", "expected"),
+                     "run_rank4/global-sigma-gps": ("not from the notebook's SIGMA_GPS", None)},
     "nonlinear-filters": {
         # the check of P_yy comes before the check of the mean, which a P_yy without R makes wrong as well
         "sigma_point_update/no-R": ("Did you add R to P_yy", None),

@@ -112,6 +112,26 @@ MISTAKES = (
     Mistake("run_rank4", "handout-Q", "takes the handout's slip Q = sigma_F I_4",
             "Q = np.diag([0.0, 0.0, sigma_F**2, sigma_F**2])", "Q = sigma_F * np.eye(4)",
             hint="Your run_rank4 behaves as if it took the handout's slip Q = sigma_F I: only the velocity takes process noise, with variance sigma_F^2."),
+    Mistake("run_rank4", "global-sigma-gps", "builds R from the notebook's SIGMA_GPS instead of the argument sigma_gps",
+            "R = sigma_gps**2 * np.eye(2)", "R = SIGMA_GPS**2 * np.eye(2)",
+            hint="Your run_rank4 behaves as if R came from the notebook's SIGMA_GPS instead of the argument sigma_gps: "
+                 "build R = sigma_gps^2 I from the argument, so that another GPS can be given."),
+    Mistake("run_rank4", "R-std", "builds R from the standard deviation sigma_gps, where it needs the variance",
+            "R = sigma_gps**2 * np.eye(2)", "R = sigma_gps * np.eye(2)",
+            hint="Your run_rank4 behaves as if R were sigma_gps I, a standard deviation where the GPS noise's covariance "
+                 "needs the variance: R = sigma_gps^2 I."),
+    Mistake("run_rank4", "global-alpha", "builds A from the notebook's ALPHA instead of the argument alpha",
+            "transition_matrix(dt, alpha)", "transition_matrix(dt, ALPHA)",
+            hint="Your run_rank4 behaves as if A came from the notebook's ALPHA instead of the argument alpha: "
+                 "build A = transition_matrix(dt, alpha) from the argument."),
+    Mistake("run_rank4", "global-alpha-spread", "takes the first velocity variance from the notebook's ALPHA",
+            "var_w = sigma_F**2 / (1.0 - alpha**2)", "var_w = sigma_F**2 / (1.0 - ALPHA**2)",
+            hint="Your run_rank4 behaves as if the first velocity variance came from the notebook's ALPHA: "
+                 "sigma_w^2 = sigma_F^2 / (1 - alpha^2), with the argument alpha."),
+    Mistake("run_rank4", "spread-is-sigma-F", "starts the velocity with variance sigma_F^2, not its stationary spread",
+            "var_w = sigma_F**2 / (1.0 - alpha**2)", "var_w = sigma_F**2",
+            hint="Your run_rank4 behaves as if the first velocity variance were sigma_F^2, one step of the random "
+                 "force: Bob's velocity starts from its stationary spread, sigma_F^2 / (1 - alpha^2)."),
     Mistake("run_rank4", "ignores-current", "never passes the current to the step", "Q, R, u=u)", "Q, R, u=None)",
             hint="Your run_rank4 behaves as if the current were never passed to the step."),
     Mistake("track_rmse", "per-axis", "averages over both coordinates: the RMSE per axis, 1/sqrt(2) too small",
