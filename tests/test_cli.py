@@ -91,6 +91,16 @@ def test_the_table_shows_a_late_penalty_and_the_total_that_grades_csv_has():
     assert lines == ["    Late: a penalty of 4.5 points, so its total is 4.5 (grades.csv's total)."], lines
 
 
+def test_a_late_submissions_own_row_gives_the_total_that_grades_csv_has():
+    """Issue 36: the row itself still read "alice  train-kf  9/9  full marks", the penalty only on the line below."""
+    late = GradeRow("alice", "train-kf", {"test_a": 9.0}, {"test_a": 9.0}, frozenset({"test_a"}), late_penalty=4.5)
+    on_time = GradeRow("bob", "train-kf", {"test_a": 9.0}, {"test_a": 9.0}, frozenset({"test_a"}))
+    rows = [line.split() for line in table.format_table([late, on_time], width=100).splitlines()
+            if line.startswith(("alice", "bob"))]
+    assert rows == [["alice", "train-kf", "9/9", "full", "marks;", "late,", "total", "4.5"],
+                    ["bob", "train-kf", "9/9", "full", "marks"]], rows
+
+
 def test_the_table_prints_no_terminal_control_from_a_submissions_message():
     """Adversarial review: a blank that raised an error whose message held escape sequences (cursor up,
     erase line, window title, clipboard, hyperlink) had them printed raw, which can overprint rows."""

@@ -240,7 +240,7 @@ def test_grade_skips_a_folder_not_named_by_a_student_id_and_grades_the_rest(tmp_
     seen = {}
     monkeypatch.setattr(grading, "check_reference_available", lambda labs: None)
     monkeypatch.setattr(grading, "set_up", lambda labs, workdir, by_lab: seen.setdefault("registered", by_lab))
-    def autograde(by_lab, workdir, jobs=None):
+    def autograde(by_lab, workdir, jobs=None, submitted=intake.SUBMITTED):
         given = {(s, lab_id) for lab_id, students in seen.setdefault("graded", by_lab).items() for s in students}
         return dict.fromkeys(by_lab, ""), given, given
     monkeypatch.setattr(grading, "autograde", autograde)
@@ -281,3 +281,60 @@ def test_a_notebook_holding_text_no_file_can_store_is_graded_with_a_note(tmp_pat
     taken = nbformat.read(tmp_path / "course" / "submitted" / "s001" / LAB.id / LAB.notebook_name, as_version=4)
     assert taken.cells[-1].source == "my note \ufffd here"
     assert any("not valid Unicode" in note.text for note in grader_notes(taken))
+
+
+def files_under(folder) -> dict[str, bytes]:
+    """Relative path -> bytes of every file beneath ``folder``."""
+    return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
+
+
+def test_the_courses_own_submitted_folder_is_left_as_collected_and_repaired_in_copies(tmp_path):
+    """Issue 36: on a hub, `grade submitted` deleted nbgrader's submission_secret.txt from what `collect` left
+    (release_feedback then failed) and rewrote the collected notebook in place. s001 submitted under another name,
+    with a file of their own; s002 a file that is no notebook. submitted/ stays byte for byte as collected, and the
+    copies that autograde reads (intake/) hold the repaired notebook, the time and the secret."""
+    from autograder.pipeline.restore import grader_notes
+
+    course = tmp_path / "course"
+    for student, name, text in (("s001", "my work.ipynb", notebook("s001")), ("s002", LAB.notebook_name, '{"cells": [')):
+        folder = course / "submitted" / student / LAB.id
+        folder.mkdir(parents=True)
+        (folder / name).write_text(text)
+        (folder / "timestamp.txt").write_text("2026-10-09 10:00:00.000000 UTC")
+        (folder / intake.SECRET).write_text(f"secret-of-{student}")
+    (course / "submitted/s001" / LAB.id / "scratch.py").write_text("x = 1\n")
+    collected = files_under(course / "submitted")
+
+    assert intake.graded_from(course / "submitted", course) == intake.EXCHANGE_INTAKE
+    assert intake.import_submissions(course / "submitted", course, [LAB]) == {LAB.id: ["s001", "s002"]}
+    assert files_under(course / "submitted") == collected
+    taken = course / intake.EXCHANGE_INTAKE
+    for student in ("s001", "s002"):
+        assert sorted(files_under(taken / student / LAB.id)) == [intake.SECRET, "timestamp.txt", LAB.notebook_name]
+        assert (taken / student / LAB.id / intake.SECRET).read_text() == f"secret-of-{student}"
+    assert tag(taken / "s001" / LAB.id / LAB.notebook_name) == "s001"
+    [renamed] = grader_notes(nbformat.read(taken / "s001" / LAB.id / LAB.notebook_name, as_version=4))
+    assert "submitted as my work.ipynb" in renamed.text
+    [unreadable] = grader_notes(nbformat.read(taken / "s002" / LAB.id / LAB.notebook_name, as_version=4))
+    assert "could not be read as a notebook" in unreadable.text
+
+
+def test_an_lms_download_keeps_the_submission_secret_that_collect_left_in_submitted(tmp_path):
+    """SUBMISSIONS elsewhere replaces the notebook in submitted/ and drops stale files, but nbgrader's
+    submission_secret.txt stays there, for release_feedback; one that SUBMISSIONS holds is taken in too."""
+    course = tmp_path / "course"
+    for student in ("s001", "s002"):
+        (course / "submitted" / student / LAB.id).mkdir(parents=True)
+        (course / "submitted" / student / LAB.id / intake.SECRET).write_text("from-collect")
+        (course / "submitted" / student / LAB.id / "stale.txt").write_text("old")
+        (tmp_path / "subs" / student / LAB.id).mkdir(parents=True)
+        (tmp_path / "subs" / student / LAB.id / LAB.notebook_name).write_text(notebook(student))
+    (tmp_path / "subs/s002" / LAB.id / intake.SECRET).write_text("from-subs")
+
+    assert intake.graded_from(tmp_path / "subs", course) == intake.SUBMITTED
+    intake.import_submissions(tmp_path / "subs", course, [LAB])
+    for student, secret in (("s001", "from-collect"), ("s002", "from-subs")):
+        folder = course / "submitted" / student / LAB.id
+        assert sorted(p.name for p in folder.iterdir()) == [intake.SECRET, LAB.notebook_name]
+        assert (folder / intake.SECRET).read_text() == secret and tag(folder / LAB.notebook_name) == student
+    assert not (course / intake.EXCHANGE_INTAKE).exists()

@@ -123,8 +123,8 @@ DUNDER_GLOBALS = frozenset({"__builtins__", "__import__", "__name__", "__loader_
                             "__file__"})
 
 HIDDEN_STRING = re.compile(r"(?:^|[^A-Za-z0-9_])(solutions|autograder)(?:\.[A-Za-z_]|/|\\)|^(?:solutions|autograder)$")
-PROTECTED_PARTS = frozenset({"solutions", "autograder", "source", ".git", "submitted", "autograded", "feedback",
-                              "release"})
+PROTECTED_PARTS = frozenset({"solutions", "autograder", "source", ".git", "submitted", "intake", "autograded",
+                              "feedback", "release"})
 PLANTED_SUFFIXES = (".py", ".pyc", ".pth", ".so", ".ipynb")
 DB_SUFFIXES = (".db", ".sqlite", ".sqlite3")
 

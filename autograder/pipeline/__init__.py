@@ -3,7 +3,7 @@
 - ``collect``: an LMS download becomes ``SUBMISSIONS/<student>/<lab>/<lab>.ipynb``;
 - ``grading``: ``python -m autograder grade``, which runs the rest;
 - ``nbgrader_apps``: nbgrader's converters, run in-process on a course folder;
-- ``intake``: each submission read defensively into nbgrader's ``submitted/``;
+- ``intake``: each submission read defensively into nbgrader's ``submitted/`` (``intake/`` for the course's own ``submitted/``);
 - ``restore``: the lab's cells put back in order, and the grader's notes;
 - ``execute``: nbgrader's execute step, made safe for a class (caps, recovery);
 - ``compare``: the hidden tests, run in the grader's process against the student's function;

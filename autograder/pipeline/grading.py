@@ -20,7 +20,7 @@ from autograder.kernel import sandbox
 from autograder.labs import ROOT, Lab
 from autograder.pipeline import class_report, compare, late, shards
 from autograder.pipeline.grades import GradeRow, all_graded_labs, read_grades, write_grades
-from autograder.pipeline.intake import class_list, import_submissions, not_student_ids
+from autograder.pipeline.intake import SUBMITTED, class_list, graded_from, import_submissions, not_student_ids
 from autograder.pipeline.nbgrader_apps import course_config, feedback_page, generate_release, gradebook_url, run_app
 from autograder.pipeline.shards import Shard
 from autograder.pipeline.table import print_table
@@ -49,25 +49,26 @@ def sandbox_line() -> str:
             "forged, but see README (The grading kernel's sandbox) for what a kernel can reach here.")
 
 
-def _grade_student(workdir: Path, lab_id: str, student: str) -> tuple[str, bool, bool]:
-    """Autograde, then write the feedback of, one student's submission of a lab, under that
-    submission's lock (another shard grading it waits): nbgrader's log, and whether the graded notebook and the
-    feedback page were there when the lock was let go. (Read after it, they can be missing only because an
+def _grade_student(workdir: Path, lab_id: str, student: str, submitted: str) -> tuple[str, bool, bool]:
+    """Autograde (from the folder ``submitted`` of ``workdir``), then write the feedback of, one student's
+    submission of a lab, under that submission's lock (another shard grading it waits): nbgrader's log, and
+    whether the graded notebook and the feedback page were there when the lock was let go. (Read after it, they can be missing only because an
     overlapping shard is grading the submission again: that is no failure of this run.)"""
     log = []
     lab = Lab(lab_id)
     with shards.gradebook_lock(gradebook_url(workdir), shards.submission_lock_name(lab_id, student)):
         for app_class in (Autograde, GenerateFeedback):
-            result = run_app(app_class, workdir, lab, student)
+            result = run_app(app_class, workdir, lab, student, submitted)
             log.append(result.get("log", "") + result.get("error", ""))
         graded = (workdir / "autograded" / student / lab_id / lab.notebook_name).exists()
         page = feedback_page(workdir, lab_id, student).exists()
     return "".join(log), graded, page
 
 
-def autograde(by_lab: dict[str, list[str]], workdir: Path,
-              jobs: int | None = None) -> tuple[dict[str, str], set[tuple[str, str]], set[tuple[str, str]]]:
-    """``nbgrader autograde`` and feedback for the submissions in ``workdir``: lab id -> students.
+def autograde(by_lab: dict[str, list[str]], workdir: Path, jobs: int | None = None,
+              submitted: str = SUBMITTED) -> tuple[dict[str, str], set[tuple[str, str]], set[tuple[str, str]]]:
+    """``nbgrader autograde`` and feedback for the submissions in ``workdir``: lab id -> students,
+    read from its folder ``submitted`` (``intake.graded_from``).
 
     With ``jobs > 1`` (default: one per core) the submissions are graded that many at a time in
     separate processes, which all write to the one gradebook (SQLite waits for its lock; a database
@@ -91,11 +92,11 @@ def autograde(by_lab: dict[str, list[str]], workdir: Path,
     with tqdm(total=len(tasks), desc="Grading", unit="submission", file=sys.stderr, dynamic_ncols=True) as bar:
         if jobs <= 1 or len(tasks) <= 1:
             for lab_id, student in tasks:
-                record(lab_id, student, _grade_student(workdir, lab_id, student))
+                record(lab_id, student, _grade_student(workdir, lab_id, student, submitted))
                 bar.update()
         else:
             with ProcessPoolExecutor(min(jobs, len(tasks)), mp_context=multiprocessing.get_context("spawn")) as pool:
-                futures = {pool.submit(_grade_student, workdir, lab_id, student): (lab_id, student)
+                futures = {pool.submit(_grade_student, workdir, lab_id, student, submitted): (lab_id, student)
                            for lab_id, student in tasks}
                 for future in as_completed(futures):
                     record(*futures[future], future.result())
@@ -177,7 +178,7 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     if shard is not None:
         print(f"Shard {shard} grades {count(sum(map(len, by_lab.values())), 'submission')} of the class's "
               f"{sum(map(len, whole_class.values()))}.")
-    logs, graded, written = autograde(by_lab, workdir, jobs)
+    logs, graded, written = autograde(by_lab, workdir, jobs, graded_from(submissions, workdir))
     if shard is None:
         rows = read_grades(workdir, all_graded_labs(workdir))
     else:

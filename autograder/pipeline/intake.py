@@ -1,5 +1,7 @@
 """Taking a class's submissions into the course folder: ``SUBMISSIONS/<student>/<lab>/<lab>.ipynb``
-becomes nbgrader's ``submitted/<student>/<lab>/``, each file read defensively."""
+becomes nbgrader's ``submitted/<student>/<lab>/``, each file read defensively. When ``SUBMISSIONS`` is
+the course's own ``submitted/`` (nbgrader's ``collect`` on a hub), it is left as collected, and the
+copies that autograde reads go into ``intake/<student>/<lab>/`` instead (``graded_from``)."""
 
 from __future__ import annotations
 
@@ -23,6 +25,15 @@ MAX_SUBMISSION_BYTES = 50_000_000
 a larger one is graded as empty, since reading it could take the grader's memory."""
 STUDENT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
 """Our student ids are folder names: letters, digits, ``_``, ``.`` and ``-``, beginning with a letter or a digit."""
+SUBMITTED = "submitted"
+"""nbgrader's folder of submissions in a course folder, where its ``collect`` and ``zip_collect`` put them."""
+EXCHANGE_INTAKE = "intake"
+"""Where ``grade`` writes the copies it autogrades when ``SUBMISSIONS`` is the course's own ``submitted/``."""
+SECRET = "submission_secret.txt"
+"""The file that nbgrader's ``submit`` writes beside the notebook and ``collect`` copies into ``submitted/``:
+``release_feedback`` names the student's feedback by it, so it must reach ``feedback/<student>/<lab>/``."""
+MAX_SECRET_BYTES = 4096
+"""The most of a ``submission_secret.txt`` copied (nbgrader's holds 128 characters)."""
 
 def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
     """The notebook in a student's ``folder`` for ``lab``, and notes on anything wrong with it.
@@ -89,18 +100,29 @@ def not_student_ids(submissions: Path, labs: list[Lab]) -> list[str]:
             "beginning with a letter or a digit); it was not graded." for name in sorted(names)]
 
 
+def graded_from(submissions: Path, workdir: Path) -> str:
+    """The folder of ``workdir`` that autograde reads the submissions from: ``submitted/``, or
+    ``intake/`` when ``submissions`` is (or is inside) ``workdir/submitted/``, whose collected files
+    ``grade`` must not rewrite (nbgrader's ``release_feedback`` needs them as ``collect`` left them)."""
+    return EXCHANGE_INTAKE if submissions.resolve().is_relative_to((workdir / SUBMITTED).resolve()) else SUBMITTED
+
+
 def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
                        takes: Callable[[str], bool] | None = None) -> dict[str, list[str]]:
-    """Put ``submissions/<student>/<lab>/<lab>.ipynb`` into ``workdir/submitted/``, for these labs
-    (only the students that ``takes`` accepts, when it is given: a shard's).
+    """Put ``submissions/<student>/<lab>/<lab>.ipynb`` into the folder of ``workdir`` that autograde
+    reads (``graded_from``: ``submitted/``, or ``intake/`` for the course's own ``submitted/``), for
+    these labs (only the students that ``takes`` accepts, when it is given: a shard's).
 
     Each file goes through ``read_submission``; its notes become a grader's note at the top of the
     notebook, which the feedback shows. A ``timestamp.txt`` beside the notebook (nbgrader's
-    submission time) is copied too, so that late penalties apply. Anything else in the target
-    folder goes. Each file is replaced whole (written beside it, then renamed), so that another
-    process taking in or grading the same submission at the same time (overlapping shards in one
-    course folder) always reads a whole file, the same. Returns lab id -> students.
+    submission time) is copied too, so that late penalties apply, and so is a ``submission_secret.txt``
+    (nbgrader's), so that ``release_feedback`` finds it beside the feedback. Anything else in the target
+    folder goes, but a ``submission_secret.txt`` that nbgrader's ``collect`` put there stays. Each file
+    is replaced whole (written beside it, then renamed), so that another process taking in or grading
+    the same submission at the same time (overlapping shards in one course folder) always reads a whole
+    file, the same. Returns lab id -> students.
     """
+    into = workdir / graded_from(submissions, workdir)
     by_lab: dict[str, list[str]] = {}
     for lab in labs:
         by_lab[lab.id] = [s for s in class_list(submissions, [lab])[lab.id] if takes is None or takes(s)]
@@ -115,13 +137,16 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
             if isinstance(stamp, str):
                 notes.append(stamp)
             add_grader_notes(nb, notes)
-            target = workdir / "submitted" / student / lab.id
+            target = into / student / lab.id
             target.mkdir(parents=True, exist_ok=True)
             files = {lab.notebook_name: (nbformat.writes(nb).rstrip("\n") + "\n").encode()}  # as nbformat.write
             if isinstance(stamp, bytes):
                 files["timestamp.txt"] = stamp
+            secret = _submission_secret(folder)
+            if secret is not None:
+                files[SECRET] = secret
             for stale in target.iterdir():
-                if stale.name in files or stale.name.startswith(PARTIAL):
+                if stale.name in files or stale.name.startswith(PARTIAL) or stale.name == SECRET:
                     continue
                 if stale.is_dir() and not stale.is_symlink():
                     shutil.rmtree(stale, ignore_errors=True)
@@ -159,8 +184,18 @@ def _submission_time(path: Path) -> bytes | str | None:
     return data
 
 
+def _submission_secret(folder: Path) -> bytes | None:
+    """The ``submission_secret.txt`` in a student's ``folder`` to copy, or None if there is none or it is
+    reached through a symbolic link (it would name the feedback of whichever submission it points to)."""
+    path = folder / SECRET
+    if any(p.is_symlink() for p in (folder.parent, folder, path)) or not path.is_file():
+        return None
+    with open(path, "rb") as handle:
+        return handle.read(MAX_SECRET_BYTES)
+
+
 PARTIAL = ".partial-"
-"""How the name of a file being written into ``submitted/`` begins, before it is renamed into place."""
+"""How the name of a file being written into ``submitted/`` (or ``intake/``) begins, before it is renamed into place."""
 
 
 def _replace(path: Path, data: bytes) -> None:

@@ -78,9 +78,12 @@ def _coursedir(workdir: Path, lab: Lab, student: str) -> CourseDirectory:
     return coursedir
 
 
-def run_app(app_class: type, workdir: Path, lab: Lab, student: str = "*") -> dict:
-    """Run one nbgrader converter on a lab (every student, or one); nbgrader's ``capture_log`` result."""
+def run_app(app_class: type, workdir: Path, lab: Lab, student: str = "*", submitted: str | None = None) -> dict:
+    """Run one nbgrader converter on a lab (every student, or one), autograde reading the submissions from
+    the folder ``submitted`` of ``workdir`` when it is given; nbgrader's ``capture_log`` result."""
     coursedir = _coursedir(workdir, lab, student)
+    if submitted is not None:
+        coursedir.submitted_directory = submitted
     app = app_class(coursedir=coursedir, config=coursedir.config)
     app.force = True
     return capture_log(app)

@@ -26,8 +26,8 @@ def _lost_lines(row: GradeRow) -> list[str]:
 
 
 def format_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = None, width: int | None = None) -> str:
-    """The summary table: one line per submission (student, lab, autograded score, what happened),
-    then the grader's notes and each lost cell with its reason, wrapped to ``width`` columns
+    """The summary table: one line per submission (student, lab, autograded score, what happened, and for a
+    late one its total after the penalty, as grades.csv has it), then its late penalty, the grader's notes and each lost cell with its reason, wrapped to ``width`` columns
     (default: the terminal's, at most TABLE_WIDTH); a line cut short ends in an ellipsis."""
     width = width or min(shutil.get_terminal_size((TABLE_WIDTH, 24)).columns, TABLE_WIDTH)
     names = [r.student for r in rows] + [s for students in (failures or {}).values() for s in students]
@@ -48,6 +48,8 @@ def format_table(rows: list[GradeRow], failures: dict[str, list[str]] | None = N
             result = "full marks"
         else:
             result = f"lost {len(row.lost)} of {len(row.autograded)} cells"
+        if row.late_penalty:  # the score is before the penalty: the row itself says so, not only the line below
+            result += f"; late, total {row.total:g}"
         lines += line(row.student, row.lab, f"{row.auto_score:g}/{row.auto_max:g}", result)
         late = ([f"Late: a penalty of {row.late_penalty:g} points, so its total is {row.total:g} (grades.csv's total)."]
                 if row.late_penalty else [])
