@@ -118,11 +118,12 @@ c.ClearMetadataPreprocessor.preserve_nb_metadata_mask = {("kernelspec",), ("lang
 from autograder.pipeline.feedback import NBGRADER_TEMPLATES, TEMPLATE, TEMPLATE_PATHS, TEMPLATES, FeedbackGrades  # noqa: E402
 
 # InertHtml again and the template's `kit_sanitise`: what a page renders from a submission is
-# sanitised HTML, also from a notebook graded before the sanitiser (autograder/pipeline/sanitise.py).
-from autograder.pipeline.sanitise import sanitise  # noqa: E402
+# sanitised HTML, also from a notebook graded before the sanitiser (autograder/pipeline/sanitise.py),
+# with its TeX as MathML: the page loads no MathJax, nor any other script.
+from autograder.pipeline.sanitise import sanitise_math  # noqa: E402
 
 c.GenerateFeedback.preprocessors = [InertHtml, FeedbackGrades, CSSHTMLHeaderPreprocessor, ClearHiddenTests]
-c.GenerateFeedback.HTMLExporter.filters = {"kit_sanitise": sanitise}
+c.GenerateFeedback.HTMLExporter.filters = {"kit_sanitise": sanitise_math}
 c.GenerateFeedback.HTMLExporter.template_name = TEMPLATE
 c.GenerateFeedback.HTMLExporter.extra_template_basedirs = [str(NBGRADER_TEMPLATES), str(TEMPLATES)]
 c.GenerateFeedback.HTMLExporter.extra_template_paths = TEMPLATE_PATHS

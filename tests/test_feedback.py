@@ -79,6 +79,32 @@ def test_written_answers_not_graded_yet_say_so(graded):
     assert panel_heading(text, "test_kupdate").startswith("Grade cell: test_kupdate Score: 0.0 /")
 
 
+def test_the_page_opens_with_a_summary_and_a_link_to_the_first_cell_that_lost_points(graded):
+    """Issue 36: the page opened with nbgrader's long list of every graded cell; it now says the points,
+    the blanks with full marks, the written answers waiting, and where to look first, by name."""
+    row, workdir = graded
+    text = page(workdir)
+    top = text.split('<div class="panel-body">', 1)[0]
+    summary = " ".join(html.unescape(re.sub(r"<[^>]*>", " ", top.split('<ul class="kit-summary">', 1)[1].split("</ul>", 1)[0])).split())
+    blanks = [c for c in row.max_cells if c.startswith("test_")]
+    assert f"Blanks: {len(blanks) - 1} of {len(blanks)} earned full marks" in summary, summary
+    assert f"The {len(written(row))} written answers worth" in summary, summary
+    assert "Look first at the graded cell of kupdate (0.0 of" in summary and "the first cell that lost points" in summary, summary
+    assert re.search(r'<a href="#test_kupdate">the graded cell of <code>kupdate</code></a>', top), top
+    assert '<a name="test_kupdate"></a>' in text, "the link leads nowhere"
+    # the list of every graded cell is kept, folded under the summary
+    assert re.search(r"<details>\s*<summary>Every graded cell", top) and top.count("<li><a href=") >= len(row.max_cells)
+
+
+def test_the_page_runs_no_script_and_its_math_is_mathml(graded):
+    """The page loaded MathJax from a CDN: offline its math was raw TeX, and a third-party script ran."""
+    _, workdir = graded
+    text = page(workdir)
+    assert "<script" not in text.lower() and "mathjax" not in re.sub(r"<!--.*?-->", "", text, flags=re.S).lower()
+    assert text.count("<math") > 50
+    assert '<math display="block">' in text
+
+
 def test_the_feedback_command_rewrites_the_pages_after_hand_grading(graded, capsys):
     row, workdir = graded
     first, *rest = written(row)
@@ -90,6 +116,8 @@ def test_the_feedback_command_rewrites_the_pages_after_hand_grading(graded, caps
     text = page(workdir)
     assert f"Score: {hand:.1f} / {row.max_cells[first]:.1f}" in panel_heading(text, first)
     assert all("not graded yet" in panel_heading(text, cell) for cell in rest)
+    # the written answer comes before kupdate in the notebook: it is now the first cell that lost points
+    assert re.search(rf'<b>Look first at</b>\s*<a href="#{first}">the written answer', text), "the summary is not rewritten"
     with open(workdir / "grades.csv") as handle:
         header, values = [line.rstrip("\n").split(",") for line in handle][:2]
     assert float(dict(zip(header, values))[first]) == hand
@@ -115,3 +143,4 @@ def test_long_messages_wrap(graded):
     rule = re.search(r"div\.output_area pre[^{]*\{([^}]*)\}", style)
     assert rule, "no rule for the output's <pre>"
     assert "white-space: pre-wrap" in rule.group(1) and "overflow-wrap: break-word" in rule.group(1)
+

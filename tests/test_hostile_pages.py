@@ -7,7 +7,8 @@ handlers, ``javascript:``/``vbscript:``/``data:`` links, SVG, frames, objects, `
 displayed data, in output metadata (nbconvert writes an image's width unquoted) and in a PNG's
 data. Each payload tries to set ``window.__pwned``, the page's title, open a dialog or reach
 another address. A page passes if none of that happens, no element from the submission carries
-an event handler or a live link, and the honest parts still render: math as TeX for MathJax, an
+an event handler or a live link, and the honest parts still render: math (formgrader's as TeX for
+MathJax, the feedback page's as MathML, made when the page was written: it loads no script), an
 https link, a table, the lab's PNG figures. MathJax's CDN is served a stub (this machine cannot
 reach it); every other request must stay on the page's own address.
 """
@@ -63,6 +64,8 @@ TEX = [
     r"$\unicode[evil]{x41}$ $\class{tex2jax_process}{x}$ $\style{position:fixed;top:0}{x}$ $\cssId{notebook}{x}$",
     rf"$\require{{{EVIL}/x.js}}$ $\data{{x=1}}{{y}}$ $\bbox[background:url({EVIL}/b.png)]{{z}}$",
     r"$$\newcommand{\x}[1]{\hr#1}\x{ef}{javascript:alert(1)}{y}$$",
+    rf"$\text{{<img src=x onerror=\"{JS}\">}}$ $\mbox{{</mtext><svg onload=\"{JS}\">}}$",
+    "$" + "{" * 3000 + r"\frac{x}{" * 300 + "}" * 3300 + "$ $" + "x+" * 20_000 + "x$",
 ]
 MARKDOWN = [f"[md link](javascript:{JS})", f"<javascript:{JS}>", f"![md image]({EVIL}/md.png)"]
 HONEST = ("Honest answer: the variance is $x^2$, and\n\n$$\\hat{\\mathbf{x}}_{k|k} = \\sum_i w_i$$\n\n"
@@ -158,8 +161,9 @@ def watched(browser: Browser, own: str) -> Iterator[tuple[Page, dict]]:
         context.close()
 
 
-def assert_inert(page: Page, seen: dict, url: str, title: str) -> None:
-    """Nothing from the submission ran, navigated or reached out; the honest parts render."""
+def assert_inert(page: Page, seen: dict, url: str, title: str, mathml: bool) -> None:
+    """Nothing from the submission ran, navigated or reached out; the honest parts render (the math
+    as MathML if ``mathml``, else as TeX for MathJax)."""
     page.wait_for_timeout(1500)  # a meta refresh, a timer, a late image
     assert page.evaluate("window.__pwned") is None, "a payload ran"
     assert seen["dialogs"] == [], seen["dialogs"]
@@ -171,7 +175,12 @@ def assert_inert(page: Page, seen: dict, url: str, title: str) -> None:
     text = notebook.inner_text()
     written = "\n".join(notebook.locator(".text_cell_render").all_inner_texts())
     assert "tex link" in written and not re.search(MACROS, written), "a MathJax macro left live"
-    assert "$x^2$" in text and r"\hat{\mathbf{x}}_{k|k} = \sum_i w_i" in text, "the honest TeX is not there for MathJax"
+    if mathml:
+        honest = notebook.locator(".text_cell_render math")
+        assert honest.count() >= 2 and "$x^2$" not in text, "the honest TeX is not MathML"
+        assert honest.first.evaluate("m => m.getBoundingClientRect().height") > 0, "the browser does not lay out the MathML"
+    else:
+        assert "$x^2$" in text and r"\hat{\mathbf{x}}_{k|k} = \sum_i w_i" in text, "the honest TeX is not there for MathJax"
     assert notebook.locator('a[href="https://numpy.org/doc/"]').count() >= 1
     assert notebook.locator("table td", has_text="2").count() >= 1
     figures = notebook.locator('img[src^="data:image/png"]')
@@ -189,7 +198,8 @@ def test_the_feedback_page_of_a_hostile_submission_runs_nothing(course, browser)
     url = path.as_uri()
     with watched(browser, url) as (page, seen):
         page.goto(url)
-        assert_inert(page, seen, url, title_of(path.read_text()))
+        assert_inert(page, seen, url, title_of(path.read_text()), mathml=True)
+    assert "<script" not in path.read_text().lower(), "the feedback page holds a script"
 
 
 def _course_config(course: Path) -> None:
@@ -234,4 +244,4 @@ def test_formgraders_view_of_a_hostile_submission_runs_nothing(course, browser, 
         url = f"{server}/formgrader/submissions/{submission}/?token={token}"
         with watched(browser, server + "/") as (page, seen):
             served = page.goto(url).text()
-            assert_inert(page, seen, url, title_of(served))
+            assert_inert(page, seen, url, title_of(served), mathml=False)

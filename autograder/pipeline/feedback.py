@@ -4,6 +4,9 @@
 - A test cell that earned its marks although the visible check above it failed says why: the
   check ran the student's other blanks, the hidden tests graded this blank with the reference's.
 - Long messages wrap (the template's CSS).
+- The page opens with a summary (``summary``): points earned of the total, how many blanks earned
+  full marks, the written answers not graded yet, and a link to the first cell that lost points.
+- Its TeX is MathML, made here (autograder.pipeline.mathml): the page loads no MathJax, no script.
 
 ``FeedbackGrades`` (nbgrader's GetGrades, extended) marks the cells; the template
 ``templates/kit_feedback`` shows them. ``regenerate`` rewrites every feedback page and the grades
@@ -21,6 +24,7 @@ from nbformat import NotebookNode
 from nbgrader.preprocessors import GetGrades
 
 from autograder import cells
+from autograder.pipeline import mathml
 from course.checks import listed
 from course.validate_order import question_of
 
@@ -60,11 +64,48 @@ def cross_blank_note(blank: str, others_lost: list[str]) -> str:
             f"grade each blank on its own, with the reference in place of every other blank. {cause}")
 
 
+def _points(cell: NotebookNode) -> tuple[float, float]:
+    """(score, points) of a graded cell."""
+    return float(cell.metadata.nbgrader.get("score") or 0), float(cell.metadata.nbgrader.get("points") or 0)
+
+
+def _is_blank(cell: NotebookNode) -> bool:
+    """A blank's graded test cell (``test_<blank>``)."""
+    return cells.is_autograded_test(cell) and cells.grade_id(cell).startswith("test_")
+
+
+def summary(nb: NotebookNode) -> dict:
+    """What the page says first: the blanks (test cells ``test_<blank>``) and how many earned full
+    marks, their points, the written answers not graded yet, and the first graded cell, in the
+    notebook's order, that lost points (``first_lost``: its grade id, name, score and points; None
+    if none did). Run after GetGrades has scored the cells."""
+    graded = [c for c in nb.cells if cells.meta(c).get("grade")]
+    blanks = [c for c in graded if _is_blank(c)]
+    waiting = [c for c in graded if c.metadata.nbgrader.get("needs_manual_grade")]
+    lost = [c for c in graded if c not in waiting and _points(c)[0] < _points(c)[1]]
+    first = lost[0] if lost else None
+    return {
+        "blanks": len(blanks),
+        "blanks_full": sum(_points(c)[0] >= _points(c)[1] for c in blanks),
+        "blank_score": sum(_points(c)[0] for c in blanks),
+        "blank_points": sum(_points(c)[1] for c in blanks),
+        "written_waiting": len(waiting),
+        "first_lost": first and {
+            "grade_id": cells.grade_id(first),
+            "name": cells.grade_id(first).removeprefix("test_") if _is_blank(first)
+            else first.metadata.nbgrader.get("kit_question") or cells.grade_id(first),
+            "blank": _is_blank(first),
+            "score": _points(first)[0], "points": _points(first)[1]},
+    }
+
+
 class FeedbackGrades(GetGrades):
     """nbgrader's GetGrades, which also marks written answers not graded yet (``needs_manual_grade``),
     totals their points (``resources['nbgrader']['ungraded_points']``), notes at a test cell
-    with full marks whose blank's visible check failed (``kit_note``), and gives each written answer
-    its question (``kit_question``), which names it in the page's list of contents."""
+    with full marks whose blank's visible check failed (``kit_note``), gives each written answer
+    its question (``kit_question``), which names it in the page's list of contents, and puts the
+    page's ``summary`` in ``resources['nbgrader']['kit_summary']``. It starts the page's budget of
+    TeX conversion (``mathml.start_page``): it runs once per page, before the template."""
 
     def _get_score(self, cell: NotebookNode, resources: dict) -> None:
         super()._get_score(cell, resources)
@@ -73,6 +114,7 @@ class FeedbackGrades(GetGrades):
         cell.metadata.nbgrader["needs_manual_grade"] = bool(grade.needs_manual_grade)
 
     def preprocess(self, nb: NotebookNode, resources: dict) -> tuple[NotebookNode, dict]:
+        mathml.start_page()
         nb, resources = super().preprocess(nb, resources)
         graded = [c for c in nb.cells if cells.meta(c).get("grade")]
         resources["nbgrader"]["ungraded_points"] = sum(
@@ -92,6 +134,7 @@ class FeedbackGrades(GetGrades):
                 continue
             uses = _names_in(cell.source)
             test.metadata.nbgrader["kit_note"] = cross_blank_note(blank, [b for b in lost if b != blank and b in uses])
+        resources["nbgrader"]["kit_summary"] = summary(nb)
         return nb, resources
 
 

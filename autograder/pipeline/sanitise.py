@@ -6,7 +6,12 @@ SVG, style sheet, ``<meta>`` or ``<base>`` survives, a link goes to http, https,
 of the page, and an image is a PNG, JPEG or GIF held in the page (``data:``), so opening the page
 asks nothing of another address. Width and height are whole numbers.
 
-MathJax, which the pages load, typesets TeX found in the page's text, and some of its macros make
+``sanitise(html, math=True)`` (the feedback pages, which load no script) also turns each formula
+of the text into MathML (autograder.pipeline.mathml), the only MathML the page can hold: the first
+pass drops every ``<math>`` of the markup with its content, and the last keeps the converter's
+elements and attributes only (``mathml.TAGS``, ``mathml.ATTRIBUTES``).
+
+MathJax, which formgrader's pages load, typesets TeX found in the page's text, and some of its macros make
 links, classes, styles or ids, or load code (``\\href``, ``\\class``, ``\\style``, ``\\cssId``,
 ``\\require``, ``\\unicode``, ``\\data``, ``\\bbox``, and ``\\newcommand`` that would assemble one).
 So in the text a zero-width space follows the backslash of every control word that is not on
@@ -22,6 +27,9 @@ from html.parser import HTMLParser
 
 import nh3
 from pygments.token import STANDARD_TYPES
+
+from autograder.pipeline import mathml
+from autograder.pipeline.mathml import TEX_WORD, TEX_WORDS
 
 TAGS = frozenset({
     "a", "b", "blockquote", "br", "caption", "code", "dd", "del", "div", "dl", "dt", "em", "h1", "h2",
@@ -47,54 +55,33 @@ LINK = re.compile(r"(?:https?:|mailto:|#)", re.IGNORECASE)
 IMAGE = re.compile(r"data:image/(?:png|jpeg|gif);base64,[A-Za-z0-9+/=\s]*", re.IGNORECASE)
 NUMBER = re.compile(r"[0-9]{1,5}")
 
-TEX_WORDS = frozenset("""
-alpha beta gamma delta epsilon varepsilon zeta eta theta vartheta iota kappa lambda mu nu xi omicron
-pi varpi rho varrho sigma varsigma tau upsilon phi varphi chi psi omega Gamma Delta Theta Lambda Xi Pi
-Sigma Upsilon Phi Psi Omega ell hbar imath jmath aleph infty nabla partial emptyset varnothing
-mathbf mathrm mathcal mathsf mathbb mathit mathtt mathfrak boldsymbol bm rm bf it sf tt cal
-text textrm textbf textit texttt textsf mbox operatorname
-hat widehat vec dot ddot bar overline underline tilde widetilde check breve acute grave mathring
-overbrace underbrace overrightarrow overleftarrow overset underset stackrel
-frac dfrac tfrac cfrac binom dbinom tbinom sqrt
-sum prod coprod int iint iiint oint bigcup bigcap bigoplus bigotimes lim limsup liminf sup inf
-max min arg argmax argmin det exp log ln lg sin cos tan cot sec csc arcsin arccos arctan sinh cosh
-tanh coth deg dim ker hom gcd Pr mod bmod pmod
-left right big Big bigg Bigg bigl bigr Bigl Bigr biggl biggr middle
-begin end tag notag nonumber label displaystyle textstyle scriptstyle scriptscriptstyle limits nolimits
-quad qquad hspace vspace enspace thinspace negthinspace hfill
-cdot cdots ldots dots vdots ddots times div pm mp ast star circ bullet oplus ominus otimes oslash odot
-wedge vee cap cup setminus sqcup uplus dagger ddagger amalg
-le leq ge geq ne neq equiv approx sim simeq cong propto ll gg prec succ preceq succeq subset supset
-subseteq supseteq in notin ni owns mid nmid parallel perp models vdash dashv doteq asymp bowtie
-lt gt not neg lnot land lor forall exists nexists top bot angle triangle square
-to gets leftarrow rightarrow Leftarrow Rightarrow leftrightarrow Leftrightarrow mapsto longrightarrow
-longleftarrow Longrightarrow Longleftarrow longmapsto iff implies impliedby uparrow downarrow
-Uparrow Downarrow updownarrow nearrow searrow swarrow nwarrow hookrightarrow hookleftarrow
-rightharpoonup rightleftharpoons xrightarrow xleftarrow
-langle rangle lvert rvert lVert rVert vert Vert lbrace rbrace lbrack rbrack lfloor rfloor lceil rceil
-backslash prime colon
-substack atop choose over pmatrix bmatrix matrix cases
-color boxed
-""".split())
-"""TeX control words the text keeps: math, no links, classes, styles, ids, loads or definitions."""
-TEX_WORD = re.compile(r"\\(?:([A-Za-z]+)|.)", re.DOTALL)
 ZERO_WIDTH_SPACE = "\u200b"
 
-_cleaner = nh3.Cleaner(
-    tags=set(TAGS),
-    clean_content_tags=set(DROPPED_WITH_CONTENT),
-    attributes={tag: set(names) for tag, names in ATTRIBUTES.items()},
-    allowed_classes={tag: set(names) for tag, names in CLASSES.items()},
-    filter_style_properties=set(STYLE_PROPERTIES),
-    url_schemes={"http", "https", "mailto", "data"},
-    attribute_filter=lambda tag, name, value: _attribute(tag, name, value),
-    strip_comments=True,
-    link_rel=None,
-)
+def _cleaner_of(tags: frozenset[str], dropped: frozenset[str], attributes: dict[str, set[str]]) -> nh3.Cleaner:
+    return nh3.Cleaner(
+        tags=set(tags),
+        clean_content_tags=set(dropped),
+        attributes={tag: set(names) for tag, names in attributes.items()},
+        allowed_classes={tag: set(names) for tag, names in CLASSES.items()},
+        filter_style_properties=set(STYLE_PROPERTIES),
+        url_schemes={"http", "https", "mailto", "data"},
+        attribute_filter=lambda tag, name, value: _attribute(tag, name, value),
+        strip_comments=True,
+        link_rel=None,
+    )
+
+
+_cleaner = _cleaner_of(TAGS, DROPPED_WITH_CONTENT, ATTRIBUTES)
+_math_cleaner = _cleaner_of(TAGS | mathml.TAGS, DROPPED_WITH_CONTENT - {"math"}, ATTRIBUTES | mathml.ATTRIBUTES)
+"""The cleaner of a page whose TeX is MathML: its MathML comes from the converter alone, as the
+first pass (``_cleaner``) drops every ``<math>`` of the markup with its content."""
 
 
 def _attribute(tag: str, name: str, value: str) -> str | None:
-    """An attribute's value if it is allowed (a link, an image held in the page, a whole number)."""
+    """An attribute's value if it is allowed (a link, an image held in the page, a whole number, a
+    MathML attribute that mathml.attribute allows)."""
+    if tag in mathml.TAGS:
+        return mathml.attribute(name, value)
     if name == "href":
         return value if LINK.match(value) else None
     if name == "src":
@@ -113,27 +100,41 @@ def inert_tex(text: str) -> str:
 
 
 class _TexInText(HTMLParser):
-    """Rewrites the text of sanitised HTML with ``inert_tex``; tags are kept as written."""
+    """Rewrites the text of sanitised HTML with ``inert_tex``, or, with ``math``, each formula outside
+    code as MathML (autograder.pipeline.mathml) and the rest with ``inert_tex``; tags are kept as written."""
 
-    def __init__(self) -> None:
+    def __init__(self, math: bool) -> None:
         super().__init__(convert_charrefs=True)
         self.parts: list[str] = []
+        self.math = math
+        self.in_code = 0
 
     def handle_starttag(self, tag: str, attrs: list) -> None:
         self.parts.append(self.get_starttag_text() or "")
+        self.in_code += tag in ("code", "pre")
 
-    handle_startendtag = handle_starttag
+    def handle_startendtag(self, tag: str, attrs: list) -> None:
+        self.parts.append(self.get_starttag_text() or "")
 
     def handle_endtag(self, tag: str) -> None:
         self.parts.append(f"</{tag}>")
+        if tag in ("code", "pre") and self.in_code:
+            self.in_code -= 1
 
     def handle_data(self, data: str) -> None:
-        self.parts.append(html.escape(inert_tex(data), quote=False))
+        pieces = mathml.formulas(data) if self.math and not self.in_code else [(data, None)]
+        self.parts += [html.escape(inert_tex(text), quote=False) if markup is None else markup for text, markup in pieces]
 
 
-def sanitise(markup: str) -> str:
-    """``markup`` with only the allowlisted HTML and TeX left (see the module's doc)."""
-    parser = _TexInText()
+def sanitise(markup: str, math: bool = False) -> str:
+    """``markup`` with only the allowlisted HTML and TeX left (see the module's doc); with ``math``,
+    its formulas as MathML, for a page that loads no MathJax."""
+    parser = _TexInText(math)
     parser.feed(_cleaner.clean(markup))
     parser.close()
-    return _cleaner.clean("".join(parser.parts))
+    return (_math_cleaner if math else _cleaner).clean("".join(parser.parts))
+
+
+def sanitise_math(markup: str) -> str:
+    """``sanitise(markup, math=True)``: the feedback template's ``kit_sanitise``."""
+    return sanitise(markup, math=True)

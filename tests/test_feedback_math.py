@@ -1,0 +1,145 @@
+"""The feedback pages' TeX as MathML (autograder/pipeline/mathml.py, through the sanitiser's
+``sanitise_math``): every lab's math converts, a written answer cannot bring active content or
+HTML through "math", and TeX made to be slow or to crash the converter is shown as text, quickly.
+"""
+
+from __future__ import annotations
+
+import time
+from html.parser import HTMLParser
+
+import nbformat
+import pytest
+
+from autograder import cells
+from autograder.labs import all_labs
+from autograder.pipeline import mathml
+from autograder.pipeline.inert_html import inert_markdown, rendered
+from autograder.pipeline.sanitise import sanitise_math
+
+
+class _Elements(HTMLParser):
+    """Every element of a page (tag, attributes) and its text."""
+
+    def __init__(self) -> None:
+        super().__init__(convert_charrefs=True)
+        self.elements: list[tuple[str, dict]] = []
+        self.text: list[str] = []
+
+    def handle_starttag(self, tag: str, attrs: list) -> None:
+        self.elements.append((tag, dict(attrs)))
+
+    handle_startendtag = handle_starttag
+
+    def handle_data(self, data: str) -> None:
+        self.text.append(data)
+
+
+def parsed(markup: str) -> _Elements:
+    parser = _Elements()
+    parser.feed(markup)
+    parser.close()
+    return parser
+
+
+def page_of(markdown: str) -> str:
+    """What the feedback page makes of a Markdown cell: InertHtml, as grading runs it, then the
+    template's Markdown and ``kit_sanitise``."""
+    cell = nbformat.v4.new_markdown_cell(markdown)
+    inert_markdown(cell)
+    mathml.start_page()
+    return sanitise_math(rendered(cell.source))
+
+
+@pytest.mark.parametrize("lab", all_labs(), ids=lambda lab: lab.id)
+def test_every_labs_math_becomes_mathml(lab):
+    converted = 0
+    for cell in cells.read(lab.source_notebook).cells:
+        if cell.cell_type != "markdown":
+            continue
+        page = parsed(page_of(cell.source))
+        left = [m.group(0) for m in mathml.FORMULA.finditer("".join(page.text))]
+        assert left == [], f"TeX of {lab.id} left as text: {left[:3]}"
+        converted += sum(tag == "math" for tag, _ in page.elements)
+    assert converted >= 20, converted
+
+
+def test_text_that_only_looks_like_math_stays_text():
+    page = page_of("It costs $5 and $6, and `$x$` is code.\n\n```\n$$y$$\n```")
+    assert "<math" not in page and "$5 and $6" in page and "<code>$x$</code>" in page
+
+
+HOSTILE = [
+    r"$<img src=x onerror=alert(1)>$",
+    r"$$<script>alert(1)</script>$$",
+    r"$\href{javascript:alert(1)}{click}$",
+    r"$\style{position:fixed;top:0;left:0;width:100%;height:100%}{x}$",
+    r"$\class{x}{y}$ $\cssId{notebook}{z}$ $\unicode{x3C}$",
+    r"$\text{<img src=x onerror=alert(1)>}$",
+    r"$\text{</mtext><img src=x onerror=alert(1)><mtext>}$",
+    r"$\text{<a href='javascript:alert(1)'>a</a>}$",
+    r"$\text{<!-- x --><svg onload=alert(1)>}$",
+    r"$\mbox{<math><annotation-xml encoding='text/html'><img src=x onerror=alert(1)></annotation-xml></math>}$",
+    r"$\color{white}{hidden}$ $\rule{100cm}{100cm}$ $\hspace{-999em}x$ $\hspace{999em}y$",
+    r"$\newcommand{\x}{\href{javascript:alert(1)}{y}}\x$ $\def\y{z}\y$",
+    r"\[\href{javascript:alert(1)}{x}\] \(\style{color:red}{x}\)",
+    "<math><mi href=\"javascript:alert(1)\" onclick=\"alert(1)\">raw</mi><annotation-xml><img src=x onerror=alert(1)></annotation-xml></math>",
+    "<div>$\\text{&lt;img src=x onerror=alert(1)&gt;}$</div>",
+]
+
+
+@pytest.mark.parametrize("markdown", HOSTILE)
+def test_hostile_tex_in_a_written_answer_brings_no_active_content(markdown):
+    page = page_of(markdown)
+    for tag, attributes in parsed(page).elements:
+        assert tag in mathml.TAGS | {"p", "div", "code", "pre", "img"}, (tag, page)  # an inert <img>: no src
+        for name, value in attributes.items():
+            assert not name.startswith("on") and name not in ("href", "src", "style", "class", "id",
+                                                                "mathcolor", "mathbackground", "mathsize"), (tag, name, page)
+            assert "javascript" not in (value or "").lower(), page
+            if name in mathml.LENGTHS:
+                assert mathml.attribute(name, value) == value, (name, value)
+
+
+def test_a_macro_off_the_list_leaves_its_formula_as_text():
+    """InertHtml puts a zero-width space after such a macro's backslash: the formula is not converted as
+    the letters of a control symbol the converter does not know (it was, before TEX_SYMBOLS)."""
+    page = page_of(r"$\href{javascript:alert(1)}{click}$ and $\frac{1}{2}$")
+    assert page.count("<math") == 1 and "click" in page and "href" in page and "<mi>h</mi>" not in page
+
+
+@pytest.mark.parametrize("tex", [
+    "{" * 5000 + "x" + "}" * 5000,                                     # nesting past Python's recursion limit
+    r"\frac{" * 300 + "x" + "}{y}" * 300,
+    "x+" * 50_000,                                                     # far past MAX_TEX
+    r"\begin{bmatrix}" + r"\\".join(["&".join(["1"] * 40)] * 40) + r"\end{bmatrix}",
+    r"\newcommand{\a}{\a\a}\a",                                        # a macro that doubles itself
+    r"\frac{a}{", r"x^1^2^3", r"\left(", r"\end{matrix}", r"\sqrt[", "}" * 100,
+])
+def test_pathological_tex_is_shown_as_text_without_crashing_or_stalling(tex):
+    start = time.monotonic()
+    page = page_of(f"Answer: ${tex}$ and then $x^2$.")
+    assert time.monotonic() - start < 5, "the conversion stalled"
+    assert "<math" in page, "the honest formula after it is not converted"
+    assert page.count("<math") <= 2
+
+
+def test_a_page_of_many_formulas_stops_converting_when_its_budget_is_spent(monkeypatch):
+    """A written answer of 20,000 formulas converts for PAGE_SECONDS at most, then shows TeX as text;
+    so does finding formulas in text made to be slow to search (an opening without its closing)."""
+    monkeypatch.setattr(mathml, "PAGE_SECONDS", 0.5)
+    start = time.monotonic()
+    page = page_of(" ".join([r"$\frac{a}{b}$"] * 20_000))
+    assert time.monotonic() - start < 5 + 0.5
+    assert 0 < page.count("<math") < 20_000 and r"$\frac{a}{b}$" in page
+    assert mathml.formulas("$x$") == [("$x$", None)], "the budget is spent"
+    mathml.start_page()
+    assert mathml.formulas("$x$")[0][1] is not None, "the next page gets its own budget"
+
+
+def test_text_made_slow_to_search_for_formulas_is_searched_in_bounded_time():
+    """An opening ``\\[`` without its closing, 50,000 times: each search reaches MAX_TEX characters at most."""
+    mathml.start_page()
+    start = time.monotonic()
+    page = sanitise_math("<p>" + "\\[a " * 50_000 + " $x$</p>")
+    assert time.monotonic() - start < 10 and "<math" in page
