@@ -93,6 +93,6 @@ def test_a_class_through_nbgraders_exchange_gets_its_own_feedback_after_grade(tm
         home = tmp_path / student
         nbgrader(home, exchange, "fetch_feedback", LAB.id, f"--student={student}")
         [page] = (home / LAB.id / "feedback").glob(f"*/{LAB.notebook_name.removesuffix('.ipynb')}.html")
-        score = re.search(r"\(Score: ([0-9.]+) / ([0-9.]+)", page.read_text())
+        score = re.search(r"<h4>[^<]*: ([0-9.]+) of ([0-9.]+) points</h4>", page.read_text())  # the page's summary
         assert score and (float(score[1]), float(score[2])) == (pytest.approx(total), maximum), (student, score)
         assert page.read_bytes() == (course / "feedback" / student / LAB.id / page.name).read_bytes(), student

@@ -2,6 +2,7 @@
 
 import ast
 import inspect
+import re
 
 from nbgrader.nbgraderformat import MetadataValidator
 
@@ -137,3 +138,20 @@ def test_a_blank_that_calls_others_is_graded_after_them(lab):
     for position, blank in enumerate(order):
         later = _blanks_called(reference, blank, set(order)) - set(order[:position])
         assert not later, f"{blank} calls {sorted(later)}, whose hidden tests come after its own"
+
+
+@over_labs
+def test_no_comment_begins_a_line_inside_a_paragraph(lab):
+    """A line that begins with ``<!--`` starts an HTML block in CommonMark, which ends the paragraph above it:
+    JupyterLab and the feedback page then showed a claim marker's sentence cut in two (", and in about one
+    simulated hour ..." as a paragraph of its own). A claim marker goes at the end of its sentence's line."""
+    cut, spaced = [], []
+    for cell in cells.read(lab.source_notebook).cells:
+        if cell.cell_type != "markdown":
+            continue
+        lines = cell.source.split("\n")
+        cut += [line for above, line in zip(lines, lines[1:]) if line.lstrip().startswith("<!--") and above.strip()]
+        # and punctuation after a comment shows after a space: "within 20% of the lecture's ." (put the comment after it)
+        spaced += re.findall(r"\S+ <!--(?:(?!-->).)*-->[ \t]*[,.;:)]", cell.source)
+    assert cut == [], f"move these comments to the end of the line above: {cut}"
+    assert spaced == [], f"put the punctuation before these comments: {spaced}"
