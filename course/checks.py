@@ -529,7 +529,10 @@ def validate(function: Callable) -> None:
                            f"inside {w['your']}, which {failing}. Fix {w['it']} first. The error: {_ended(said)}")
             else:
                 user = name if set(failed[3]) <= set(_calls(name)) else "its check"
-                message += f" This may come from {w['your']}, which {user} uses: {w['they']} {failing}."
+                blame = f"This may come from {w['your']}, which {user} uses: {w['they']} {failing}."
+                # as the check cell says it: a wrong value after the blank that may have made it, a crash before
+                message = (f"{name} does not pass its visible checks yet. {blame} Its check cell above says: {_ended(said)}"
+                           if failed[1].startswith(f"{AssertionError.__name__}: ") else f"{message} {blame}")
     else:
         message = (f"{name} has not passed its visible checks since you last defined it: run the check "
                    f"cell below {name} and fix what its message says.")
@@ -919,8 +922,10 @@ def _explain_failure(shell: Any, etype: type, value: BaseException, tb: Any, tb_
             return message
         said = message or f"{etype.__name__}: {value}"
         blame = wrap(_blame(blamed, checked, cause_inside, here))
-        # the certain cause first; a possible one after what this cell's own error says
-        return f"{blame}\n\n{said}" if cause_inside else f"{said}\n\n{blame}"
+        # the certain cause first, and a failing blank before a wrong value that it may have made (the fairness review
+        # of castaway-bob: run_rank4's check told a correct run_rank4 to build A from alpha, and only then that
+        # transition_matrix failed its checks); a crash in this cell's own code before a blank that may have fed it
+        return f"{blame}\n\n{said}" if cause_inside or isinstance(value, AssertionError) else f"{said}\n\n{blame}"
 
     message = composed("this cell")
     watch = _watch["now"] if checked is not None else None

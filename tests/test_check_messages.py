@@ -203,9 +203,12 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
         "def outer(x):\n    return scale(x)",
         'require(outer)\ncheck_close(outer(1.0), 3.0, "outer(1)")\npassed("outer")',
         'require(outer)\nprint("a figure")',
+        "def outer2(x):\n    return scale(x) + 1.0",
+        'require(outer2)\ncheck_close(outer2(1.0), 3.0, "outer2(1)", "Add 1.")\npassed("outer2")',
+        "validate(outer2)",
     ]
     nb, errors, text = _run_in_kernel(cells_source, tmp_path)
-    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19, 21, 22, 27, 29, 31, 33, 34, 35], text
+    assert [i for i, e in enumerate(errors) if e is None] == [0, 1, 3, 8, 10, 12, 13, 14, 17, 19, 21, 22, 27, 29, 31, 33, 34, 35, 36], text
     # a crash inside step, whose own check failed because of dyn: both are named, dyn as where to start (the student
     # review of issue 34: pf_step was blamed, tracking_dynamics, whose tuple pf_step multiplied, was not named)
     assert text[32].startswith("The error was raised inside your step, which does not pass its own visible checks yet."), text[32]
@@ -255,6 +258,15 @@ def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_
     # and of a blank that the blanks it needs call (the fairness review of castaway-bob: a figure's note named
     # kalman_step, run_rank2 and run_rank4, not the joseph_covariance they call, which was at fault)
     assert " ".join(printed[35].split()).startswith("Note: your scale does not pass its visible checks yet"), printed[35]
+    # a wrong value from a blank whose callee fails its checks: the callee first, then the check's own finding, in the
+    # check cell and in Validate (the fairness review of castaway-bob: a correct run_rank4 was told first to build A
+    # from alpha, and only then that transition_matrix, which it calls, failed its checks)
+    assert text[37] == ("This may come from your scale, which outer2 uses: it does not pass its own visible checks yet. "
+                        "Make it pass its checks first (its check cell says what is wrong), then run this cell again. "
+                        "AssertionError: outer2(1) is not right: expected 3 but got 4. Add 1."), text[37]
+    assert text[38] == ("NotPassingYet: outer2 does not pass its visible checks yet. This may come from your scale, which "
+                        "outer2 uses: it does not pass its own visible checks yet. Its check cell above says: outer2(1) is "
+                        "not right. Add 1."), text[38]
     # speeds crashed in its own check (a ragged array for a matrix input) and did not raise here: start fails for its
     # own reason, and speeds is not blamed
     assert text[18].startswith("ValueError in your speeds:"), text[18]

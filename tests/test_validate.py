@@ -147,8 +147,8 @@ def test_validate_gives_the_first_sentences_of_a_failing_check_once(tmp_path, mo
                                 _bundle_config(tmp_path, monkeypatch))
     error = failed["test_trailing_mean"]
     flat = " ".join(error.split())
-    assert ("trailing_mean does not pass its visible checks yet. Its check cell above says: the first four estimates "
-            "after changing the last fix are not right. An estimate must not use fixes that come after it.") in flat, flat
+    assert ("trailing_mean does not pass its visible checks yet. Its check cell above says: Moving the last fix to "
+            "(900, 900) changed your first four estimates. An estimate must not use fixes that come after it") in flat, flat
     assert "expected" not in flat and "but got" not in flat, flat
     assert len(error.strip().splitlines()) <= SHOWN_ERROR_LINES + 1 and MORE not in error, error
 
