@@ -187,12 +187,12 @@ def measure(lab: Lab, n: int) -> tuple[list[dict[str, float]], dict[str, float]]
     phases = Phases()
     grade_student = grading._grade_student
 
-    def measured(workdir: Path, lab_id: str, student: str) -> str:
-        plain = plain_seconds(workdir / "submitted" / student / lab_id / lab.notebook_name)
+    def measured(workdir: Path, lab_id: str, student: str, submitted: str) -> tuple[str, bool, bool]:
+        plain = plain_seconds(workdir / submitted / student / lab_id / lab.notebook_name)
         phases.take()
         cpu, start = cpu_seconds(), time.perf_counter()
         with phases.phase("nbgrader"):
-            log = grade_student(workdir, lab_id, student)
+            log = grade_student(workdir, lab_id, student, submitted)
         wall = time.perf_counter() - start
         seconds, kernel_cpu = phases.take()
         rows.append({"plain": plain, "grading": wall, "idle": max(0.0, wall - (cpu_seconds() - cpu) - kernel_cpu), **seconds})
