@@ -26,13 +26,20 @@ from gradebook_sql import formgrader_gives
 LAB = get_lab("train-kf")
 [MISTAKE] = [m for m in catalogue(LAB) if (m.blank, m.slug) == ("kupdate", "innovation-sign")]
 STUDENT = "s001"
+FORGED = "You earned every point of this lab."
 
 
 @pytest.fixture(scope="module")
 def graded(tmp_path_factory):
     """The submission graded: (its grade row, the course folder)."""
     class_dir, workdir = tmp_path_factory.mktemp("class"), tmp_path_factory.mktemp("course")
-    submissions.write(submissions.with_mistake(LAB, MISTAKE), class_dir, STUDENT, LAB)
+    nb = submissions.with_mistake(LAB, MISTAKE)
+    # an adversarial review of issue 36: a cell the student adds above a written answer stood in the page's summary
+    # as its question, and cell metadata that pages obey took a written answer and its score off them
+    at = next(k for k, c in enumerate(nb.cells) if cells.meta(c).get("grade_id") == "derivation_1")
+    nb.cells.insert(at, nbformat.v4.new_markdown_cell(f"**Derivation 1.** {FORGED}"))
+    nb.cells[at + 1].metadata.update({"transient": {"remove_source": True}, "jupyter": {"source_hidden": True}})
+    submissions.write(nb, class_dir, STUDENT, LAB)
     [row] = grading.grade(class_dir, workdir, jobs=1).rows
     return row, workdir
 
@@ -144,3 +151,17 @@ def test_long_messages_wrap(graded):
     assert rule, "no rule for the output's <pre>"
     assert "white-space: pre-wrap" in rule.group(1) and "overflow-wrap: break-word" in rule.group(1)
 
+
+
+def test_the_page_names_each_written_answer_by_the_labs_question_and_obeys_no_metadata_of_the_students(graded):
+    row, workdir = graded
+    text = page(workdir)
+    toc = [" ".join(html.unescape(re.sub(r"<[^>]*>", " ", li)).split()) for li in re.findall(r"<li>.*?</li>", text, re.S)]
+    [line] = [li for li in toc if "Derivation 1" in li and "Written answer" in li]
+    assert FORGED not in line and "Show that the minimiser" in line, line
+    autograded = nbformat.read(workdir / "autograded" / STUDENT / LAB.id / LAB.notebook_name, as_version=4)
+    assert not [c.metadata for c in autograded.cells if {"transient", "jupyter"} & set(c.metadata)]
+    # the answer (the model answer's words) and its heading with the score are on the page
+    assert "convex quadratic" in html.unescape(re.sub(r"<[^>]*>", "", text))
+    heading = panel_heading(text, "derivation_1")  # graded by hand by an earlier test of this module, or not yet
+    assert heading.startswith("Student's answer") and ("Score:" in heading or "not graded yet" in heading), heading

@@ -14,7 +14,7 @@ import pytest
 from autograder import cells
 from autograder.labs import all_labs
 from autograder.pipeline import mathml
-from autograder.pipeline.inert_html import inert_markdown, rendered
+from autograder.pipeline.inert_html import MAX_MARKDOWN_CHARS, inert_markdown, rendered
 from autograder.pipeline.sanitise import sanitise_math
 
 
@@ -118,28 +118,58 @@ def test_a_macro_off_the_list_leaves_its_formula_as_text():
 ])
 def test_pathological_tex_is_shown_as_text_without_crashing_or_stalling(tex):
     start = time.monotonic()
-    page = page_of(f"Answer: ${tex}$ and then $x^2$.")
+    markdown = f"Answer: ${tex}$ and then $x^2$."
+    page = page_of(markdown)
     assert time.monotonic() - start < 5, "the conversion stalled"
-    assert "<math" in page, "the honest formula after it is not converted"
+    # a cell too long to render as Markdown is text, math and all (inert_html.MAX_MARKDOWN_CHARS)
+    assert "<math" in page or len(markdown) > MAX_MARKDOWN_CHARS, "the honest formula after it is not converted"
     assert page.count("<math") <= 2
 
 
 def test_a_page_of_many_formulas_stops_converting_when_its_budget_is_spent(monkeypatch):
     """A written answer of 20,000 formulas converts for PAGE_SECONDS at most, then shows TeX as text;
     so does finding formulas in text made to be slow to search (an opening without its closing)."""
-    monkeypatch.setattr(mathml, "PAGE_SECONDS", 0.5)
+    monkeypatch.setattr(mathml, "PAGE_SECONDS", 0.05)
+    mathml.start_page()
     start = time.monotonic()
-    page = page_of(" ".join([r"$\frac{a}{b}$"] * 20_000))
-    assert time.monotonic() - start < 5 + 0.5
-    assert 0 < page.count("<math") < 20_000 and r"$\frac{a}{b}$" in page
+    page = sanitise_math("<p>" + " ".join([r"$\frac{a}{b}$"] * 1_400) + "</p>")  # just under MAX_TEXT
+    assert time.monotonic() - start < 5
+    assert 0 < page.count("<math") < 1_400 and r"$\frac{a}{b}$" in page
     assert mathml.formulas("$x$") == [("$x$", None)], "the budget is spent"
     mathml.start_page()
     assert mathml.formulas("$x$")[0][1] is not None, "the next page gets its own budget"
 
 
 def test_text_made_slow_to_search_for_formulas_is_searched_in_bounded_time():
-    """An opening ``\\[`` without its closing, 50,000 times: each search reaches MAX_TEX characters at most."""
+    """An opening ``\\[`` without its closing, 4,900 times (just under MAX_TEXT): each search reaches MAX_TEX
+    characters at most."""
     mathml.start_page()
     start = time.monotonic()
-    page = sanitise_math("<p>" + "\\[a " * 50_000 + " $x$</p>")
+    page = sanitise_math("<p>" + "\\[a " * 4_900 + " $x$</p>")
     assert time.monotonic() - start < 10 and "<math" in page
+
+
+def test_markup_in_a_text_argument_leaves_its_formula_as_text():
+    """An adversarial review of issue 36: latex2mathml copies the argument of \\text into <mtext> as it is, so that
+    it could close it and open MathML elements of its own, nested <mpadded voffset> that lifted a formula over the
+    page's score; and markup the check could not parse (<![x[) raised out of it, and the page was never written."""
+    lifted = (r"$\text{</mtext><mpadded/width='0'/height='0'/depth='0'><mpadded/voffset='9.90em'>"
+              r"24.0 of 24.0 points<mtext>}$ and $x < y$ and $\text{<![x[}$")
+    page = page_of(lifted)
+    assert all(tag != "mpadded" and "voffset" not in attributes for tag, attributes in parsed(page).elements), page
+    assert page.count("<math") == 1, "only the honest $x < y$ is MathML"
+    assert mathml.mathml(r"\text{<![x[}", display=False) is None
+    assert mathml.mathml(r"\text{if } x < y", display=False) is None and mathml.mathml(r"x < y", display=False)
+
+
+def test_a_markdown_cell_too_long_to_render_quickly_is_shown_as_text():
+    """The same review: nbconvert's Markdown takes time quadratic in a text of \\( (150 KB took two minutes of a
+    grading worker), and one search for formulas in 1 MB took 15 s, past the page's budget."""
+    cell = nbformat.v4.new_markdown_cell("\\\\(" * 50_000)
+    start = time.monotonic()
+    inert_markdown(cell)
+    assert time.monotonic() - start < 5 and cell.source.startswith("<div><pre>"), cell.source[:80]
+    mathml.start_page()
+    start = time.monotonic()
+    assert mathml.formulas("\\(" + "x" * 1_000_000) == [("\\(" + "x" * 1_000_000, None)]
+    assert time.monotonic() - start < 1

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import ast
 import re
+from functools import cache
 from pathlib import Path
 
 import nbgrader
@@ -24,6 +25,7 @@ from nbformat import NotebookNode
 from nbgrader.preprocessors import GetGrades
 
 from autograder import cells
+from autograder.labs import Lab
 from autograder.pipeline import mathml
 from course.checks import listed
 from course.validate_order import question_of
@@ -99,6 +101,16 @@ def summary(nb: NotebookNode) -> dict:
     }
 
 
+@cache
+def _questions(lab_id: str) -> dict[str, str]:
+    """Each written answer's question, as the lab releases it: grade_id -> question. Not the submission's text above
+    the answer, which is the student's to edit (an adversarial review of issue 36: a student's text stood in the
+    page's summary as the question)."""
+    released = cells.read(Lab(lab_id).release_notebook)
+    return {cells.grade_id(cell): question_of(released, index) for index, cell in enumerate(released.cells)
+            if cell.cell_type == "markdown" and cells.meta(cell).get("grade")}
+
+
 class FeedbackGrades(GetGrades):
     """nbgrader's GetGrades, which also marks written answers not graded yet (``needs_manual_grade``),
     totals their points (``resources['nbgrader']['ungraded_points']``), notes at a test cell
@@ -119,10 +131,11 @@ class FeedbackGrades(GetGrades):
         graded = [c for c in nb.cells if cells.meta(c).get("grade")]
         resources["nbgrader"]["ungraded_points"] = sum(
             c.metadata.nbgrader.get("points") or 0 for c in graded if c.metadata.nbgrader.get("needs_manual_grade"))
-        for index, cell in enumerate(nb.cells):
+        questions = _questions(resources["nbgrader"]["assignment"])
+        for cell in nb.cells:
             if cell.cell_type == "markdown" and cells.meta(cell).get("grade"):
                 # the contents list names each written answer by its question, not "Written response" each time
-                cell.metadata.nbgrader["kit_question"] = question_of(nb, index)
+                cell.metadata.nbgrader["kit_question"] = questions.get(cells.grade_id(cell), cells.grade_id(cell))
         tests = {cells.grade_id(c).removeprefix("test_"): c for c in graded if cells.grade_id(c).startswith("test_")}
         lost = [blank for blank, c in tests.items()
                 if (c.metadata.nbgrader.get("score") or 0) < c.metadata.nbgrader.get("points", 0)]

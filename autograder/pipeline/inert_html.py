@@ -61,11 +61,17 @@ def _as_text(source: str) -> str:
     return f"<div><pre>{escaped}</pre></div>"
 
 
+MAX_MARKDOWN_CHARS = 10_000
+"""The longest Markdown cell rendered as Markdown (a lab's longest has about 4,800 characters); a longer one is
+shown as text. nbconvert's Markdown takes time quadratic in some texts: 30,000 characters of ``\\(`` took 6.5 s,
+150,000 took two minutes of a grading worker (an adversarial review of issue 36)."""
+
+
 def inert_markdown(cell: NotebookNode) -> None:
     """Make ``cell`` (Markdown) render to sanitised HTML (see the module's doc)."""
     attachments = cell.get("attachments")
     try:
-        page = rendered(cell.source, attachments)
+        page = rendered(cell.source, attachments) if len(cell.source) <= MAX_MARKDOWN_CHARS else None
     except Exception:  # noqa: BLE001 (nbconvert cannot render it, e.g. an attachment it names is missing: show it as text)
         page = None
     clean = sanitise(page) if page is not None else None

@@ -71,6 +71,9 @@ FORMULA = re.compile(
 characters (so that finding formulas takes time linear in the text, at worst MAX_TEX per character)."""
 MAX_DEPTH = 20
 """Groups ({...}, \\left...\\right, \\begin...\\end) nested in one formula."""
+MAX_TEXT = 20_000
+"""The longest text whose formulas are converted (a lab's longest Markdown cell has about 4,800 characters): finding
+formulas takes up to MAX_TEX steps per character, and 1 MB of text took 15 s in one search."""
 PAGE_SECONDS = 10.0
 """Conversion time of one page (a lab's page takes about 0.2 s); later formulas are shown as text."""
 
@@ -87,7 +90,7 @@ ATTRIBUTES = {
            "minsize", "maxsize", "lspace", "rspace"},
     "mover": {"accent"}, "munder": {"accentunder"}, "mfrac": {"linethickness"},
     "mspace": {"width", "height", "depth", "linebreak"},
-    "mpadded": {"width", "height", "depth", "lspace", "voffset"},
+    "mpadded": {"width", "height", "depth", "lspace"},  # no voffset: nested, it lifted a formula over the page
     "mstyle": {"displaystyle", "scriptlevel"},
     "mtable": {"displaystyle", "rowspacing", "columnspacing", "columnalign"},
     "mtd": {"columnalign"}, "menclose": {"notation"},
@@ -161,17 +164,25 @@ def start_page() -> None:
     _budget.seconds = PAGE_SECONDS
 
 
+TEXT_COMMAND = re.compile(r"\\(?:text[a-z]*|mbox|operatorname)(?![A-Za-z])")
+"""The control words whose argument latex2mathml copies into ``<mtext>`` as it is, markup included."""
+MARKUP = re.compile(r"<")
+"""What opens a tag in the converter's output (a formula's own < is made &lt; outside such an argument)."""
+
+
 def mathml(tex: str, display: bool) -> str | None:
     """``tex`` as MathML (block if ``display``), or None to show it as text."""
-    if not convertible(tex):
+    # an argument of \text copied as it is can close the <mtext> and open elements of its own, with attributes
+    # that move them over the page (an adversarial review of issue 36: <mpadded voffset> over the score)
+    if not convertible(tex) or (TEXT_COMMAND.search(tex) and MARKUP.search(tex)):
         return None
     try:
         markup = convert(tex, display="block" if display else "inline")
-    except Exception:  # noqa: BLE001 (latex2mathml raises many kinds on TeX it cannot read: show the TeX)
+        check = _Elements()
+        check.feed(markup)
+        check.close()
+    except Exception:  # noqa: BLE001 (latex2mathml, and the check of what it made, raise many kinds: show the TeX)
         return None
-    check = _Elements()
-    check.feed(markup)
-    check.close()
     return markup if check.clean else None
 
 
@@ -181,7 +192,8 @@ def formulas(text: str) -> list[tuple[str, str | None]]:
     pieces: list[tuple[str, str | None]] = []
     end, start = 0, time.monotonic()
     try:
-        for match in FORMULA.finditer(text) if _budget.seconds > 0 else ():
+        # one search can take MAX_TEX steps per character, which the budget, checked between matches, cannot stop
+        for match in FORMULA.finditer(text) if _budget.seconds > 0 and len(text) <= MAX_TEXT else ():
             if time.monotonic() - start > _budget.seconds:
                 break
             kind, tex = next((kind, tex) for kind, tex in match.groupdict().items() if tex is not None)

@@ -227,6 +227,12 @@ class RestoreLabCells(NbGraderPreprocessor):
             notes.append(f"The nbgrader metadata of cells {', '.join(retagged)} was not as released; "
                          "it was graded as released.")
         nb.cells = note + added[None] + [c for i in order for c in [mine.get(i, by_id[i]), *added.get(i, [])]]
+        for cell in nb.cells:
+            # the rest of a cell's metadata is the student's, and pages obey some of it: transient.remove_source and
+            # jupyter.source_hidden took a written answer, its score and the grader's comment off the feedback page
+            # and formgrader's (an adversarial review of issue 36)
+            for key in [k for k in cell.metadata if k not in (NOTES_KEY, "nbgrader")]:
+                del cell.metadata[key]
         _keep_cell_ids_unique(nb, restored=[by_id[i] for i in missing])
         add_grader_notes(nb, notes)
         return nb, resources
