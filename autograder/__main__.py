@@ -38,7 +38,7 @@ def build_parser() -> argparse.ArgumentParser:
     bundle.add_argument("out", type=Path, help="a new folder")
     grade = commands.add_parser("grade", help="autograde SUBMISSIONS/<student>/<lab>/<lab>.ipynb; write grades and feedback")
     grade.add_argument("submissions", type=Path, help="the folder of submissions, SUBMISSIONS/<student>/<lab>/<lab>.ipynb "
-                       "(a <student> folder not named by a student id, letters, digits and _ . -, is skipped and listed)")
+                       "(a <student> folder not named by a student id, letters, digits and _ . @ -, is skipped and listed)")
     grade.add_argument("--workdir", type=Path, default=ROOT, help="the nbgrader course folder to grade in (default: the course root)")
     grade.add_argument("--out", type=Path, default=None, help="the grades CSV (default: WORKDIR/grades.csv)")
     grade.add_argument("--jobs", type=int, default=default_jobs(), help=JOBS_HELP)

@@ -2,12 +2,18 @@
 student ids, into the layout `python -m autograder grade` takes. Nothing is dropped silently."""
 
 import os
+import re
+import secrets
 import subprocess
 import sys
+import tracemalloc
 import zipfile
+from datetime import datetime, timezone
+from pathlib import Path
 
 import nbformat
 import pytest
+from nbgrader.utils import parse_utc
 
 from autograder.pipeline import grading, intake
 from autograder.catalogues import submissions
@@ -190,20 +196,129 @@ def test_a_file_name_that_reads_as_an_impossible_time_is_that_students_refusal(t
     assert path == "dave_2026-13-45-99-99-99_sub.ipynb" and "dave (s004)" in reason and "not a date" in reason
 
 
-def test_a_timestamp_that_is_no_time_is_left_out_with_a_note_and_the_submission_is_graded(tmp_path):
-    """Adversarial review: a timestamp.txt that nbgrader cannot read made the submission "not graded"."""
-    from autograder.pipeline.restore import grader_notes
+def hub_class(course, students: dict) -> None:
+    """``course/submitted/<student>/<lab>/`` as nbgrader's ``collect`` leaves it, each student's ``timestamp.txt``
+    and ``submission_secret.txt`` made by ``students[student]`` (folder -> None), which may plant anything."""
+    for student, plant in students.items():
+        folder = course / "submitted" / student / LAB.id
+        folder.mkdir(parents=True)
+        (folder / LAB.notebook_name).write_text(notebook(student))
+        (folder / "timestamp.txt").write_text("2026-10-09 10:00:00.000000 UTC")
+        (folder / intake.SECRET).write_text(secrets.token_hex(64))
+        plant(folder)
 
-    for student, stamp in (("s001", "the day before yesterday"), ("s002", "2026-10-09 10:00:00.000000 UTC")):
-        (tmp_path / "subs" / student / LAB.id).mkdir(parents=True)
-        (tmp_path / "subs" / student / LAB.id / LAB.notebook_name).write_text(notebook(student))
-        (tmp_path / "subs" / student / LAB.id / "timestamp.txt").write_text(stamp)
+
+def notes_of(path) -> str:
+    """The text of the grader's notes of the notebook at ``path``."""
+    from autograder.pipeline.restore import grader_notes
+    return " ".join(note.text for note in grader_notes(nbformat.read(path, as_version=4)))
+
+
+def test_a_timestamp_that_is_no_time_is_replaced_by_the_due_date_with_a_note(tmp_path, monkeypatch):
+    """Adversarial review: a timestamp.txt that nbgrader cannot read made the submission "not graded"; then, left
+    out, release_feedback stopped at that student (FileNotFoundError) and released no one's feedback after them.
+    The lab's due date stands in (not late), or with no due date the time of intake; on a hub, a missing one too."""
+    def stamp(text):
+        return lambda folder: (folder / "timestamp.txt").write_text(text)
+    hub_class(tmp_path / "course", {"s001": stamp("the day before yesterday"), "s002": stamp(""),
+                                    "s003": lambda folder: (folder / "timestamp.txt").unlink(), "s004": lambda _: None})
+    intake.import_submissions(tmp_path / "course" / "submitted", tmp_path / "course", [LAB])
+    taken = tmp_path / "course" / intake.EXCHANGE_INTAKE
+    for student in ("s001", "s002", "s003"):
+        assert (taken / student / LAB.id / "timestamp.txt").read_text() == "2026-10-09 22:59:00.000000 UTC"
+        assert ("timestamp.txt is missing or does not hold a time, so the lab's due date, 2026-10-09 22:59:00.000000 "
+                "UTC, stands in for it: no late penalty was computed. Check when it was submitted."
+                ) in notes_of(taken / student / LAB.id / LAB.notebook_name)
+    assert (taken / "s004" / LAB.id / "timestamp.txt").read_text() == "2026-10-09 10:00:00.000000 UTC"
+    assert notes_of(taken / "s004" / LAB.id / LAB.notebook_name) == ""
+
+    monkeypatch.setattr(intake, "read_due_dates", lambda path: {})
+    before = datetime.now(timezone.utc).replace(microsecond=0)
+    intake.import_submissions(tmp_path / "course" / "submitted", tmp_path / "course", [LAB])
+    written = parse_utc((taken / "s001" / LAB.id / "timestamp.txt").read_text()).replace(tzinfo=timezone.utc)
+    assert before <= written <= datetime.now(timezone.utc)
+    assert "the time it was taken in" in notes_of(taken / "s001" / LAB.id / LAB.notebook_name)
+    # SUBMISSIONS elsewhere (an LMS download): no timestamp.txt is no submission time, never late, no note
+    (tmp_path / "subs/s005" / LAB.id).mkdir(parents=True)
+    (tmp_path / "subs/s005" / LAB.id / LAB.notebook_name).write_text(notebook("s005"))
     intake.import_submissions(tmp_path / "subs", tmp_path / "course", [LAB])
-    taken = tmp_path / "course" / "submitted"
-    assert not (taken / "s001" / LAB.id / "timestamp.txt").exists()
-    assert any("timestamp.txt does not hold a time" in note.text
-               for note in grader_notes(nbformat.read(taken / "s001" / LAB.id / LAB.notebook_name, as_version=4)))
-    assert (taken / "s002" / LAB.id / "timestamp.txt").read_text() == "2026-10-09 10:00:00.000000 UTC"
+    assert sorted(p.name for p in (tmp_path / "course/submitted/s005" / LAB.id).iterdir()) == [LAB.notebook_name]
+
+
+def test_a_timestamp_that_is_a_directory_or_a_link_is_unreadable_and_grading_goes_on(tmp_path):
+    """Adversarial review: a timestamp.txt that is a directory stopped `grade` for the whole class
+    (IsADirectoryError); only a regular file is read, not a link or a FIFO either."""
+    def replace(make):
+        def plant(folder):
+            (folder / "timestamp.txt").unlink()
+            make(folder / "timestamp.txt")
+        return plant
+    other = tmp_path / "elsewhere.txt"
+    other.write_text("2026-10-01 10:00:00.000000 UTC")
+    hub_class(tmp_path / "course", {"s001": replace(Path.mkdir), "s002": replace(lambda p: p.symlink_to(other)),
+                                    "s003": replace(os.mkfifo)})
+    assert intake.import_submissions(tmp_path / "course" / "submitted", tmp_path / "course", [LAB]) == {
+        LAB.id: ["s001", "s002", "s003"]}
+    for student in ("s001", "s002", "s003"):
+        folder = tmp_path / "course" / intake.EXCHANGE_INTAKE / student / LAB.id
+        assert (folder / "timestamp.txt").read_text() == "2026-10-09 22:59:00.000000 UTC"
+        assert "stands in for it" in notes_of(folder / LAB.notebook_name)
+
+
+def test_a_huge_timestamp_is_read_no_further_than_its_first_bytes(tmp_path):
+    """Adversarial review: timestamp.txt was read whole before its cut (a 2 GB sparse file took 2.1 GB)."""
+    def huge(folder):
+        with open(folder / "timestamp.txt", "r+b") as handle:
+            handle.truncate(200_000_000)
+    hub_class(tmp_path / "course", {"s001": huge})
+    tracemalloc.start()
+    try:
+        intake.import_submissions(tmp_path / "course" / "submitted", tmp_path / "course", [LAB])
+        peak = tracemalloc.get_traced_memory()[1]
+    finally:
+        tracemalloc.stop()
+    assert peak < 50_000_000
+    folder = tmp_path / "course" / intake.EXCHANGE_INTAKE / "s001" / LAB.id
+    assert (folder / "timestamp.txt").read_bytes() == b"2026-10-09 10:00:00.000000 UTC".ljust(200, b"\0")
+
+
+def test_a_secret_not_of_nbgraders_form_is_replaced_by_a_fresh_one_with_a_note(tmp_path):
+    """Adversarial review: an empty, non-UTF-8 or directory submission_secret.txt was copied unchecked (or dropped),
+    and release_feedback then stopped for the class (AssertionError, UnicodeDecodeError, FileNotFoundError). Only a
+    regular file of nbgrader's form (secrets.token_hex(64)) is copied; anything else, or on a hub none, gets a fresh
+    one, and the note says that the student cannot fetch that page."""
+    def secret(make):
+        def plant(folder):
+            (folder / intake.SECRET).unlink()
+            make(folder / intake.SECRET)
+        return plant
+    own = secrets.token_hex(64)
+    hub_class(tmp_path / "course", {"s001": secret(lambda p: p.write_bytes(b"")),
+                                    "s002": secret(lambda p: p.write_bytes(b"\xff\xfe not utf-8")),
+                                    "s003": secret(Path.mkdir), "s004": secret(lambda p: p.write_text(own + "\n")),
+                                    "s005": secret(lambda p: None), "s006": secret(lambda p: p.write_text(own))})
+    intake.import_submissions(tmp_path / "course" / "submitted", tmp_path / "course", [LAB])
+    taken = tmp_path / "course" / intake.EXCHANGE_INTAKE
+    fresh = {(taken / s / LAB.id / intake.SECRET).read_text() for s in ("s001", "s002", "s003", "s004", "s005")}
+    assert len(fresh) == 5 and all(re.fullmatch("[0-9a-f]{128}", text) for text in fresh) and own not in fresh
+    for student in ("s001", "s002", "s003", "s004", "s005"):
+        assert ("submission_secret.txt is not one that nbgrader's submit writes, so the grader gave it a new one: the "
+                f"student cannot fetch this page with fetch_feedback; send it to them from feedback/{student}/{LAB.id}/."
+                ) in notes_of(taken / student / LAB.id / LAB.notebook_name)
+    assert (taken / "s006" / LAB.id / intake.SECRET).read_text() == own
+    assert notes_of(taken / "s006" / LAB.id / LAB.notebook_name) == ""
+
+
+def test_a_hub_username_with_an_at_sign_is_a_student_id(tmp_path):
+    """Adversarial review: a hub's e-mail-like usernames were skipped as "not a student id". `@` is allowed after
+    the first character, which stays a letter or a digit (no spreadsheet formula: tests/test_csv_cells.py)."""
+    hub_class(tmp_path / "course", {"ann@uni.example": lambda _: None, "@SUM(A1)": lambda _: None})
+    submitted = tmp_path / "course" / "submitted"
+    assert intake.import_submissions(submitted, tmp_path / "course", [LAB]) == {LAB.id: ["ann@uni.example"]}
+    assert tag(tmp_path / "course" / intake.EXCHANGE_INTAKE / "ann@uni.example" / LAB.id / LAB.notebook_name
+               ) == "ann@uni.example"
+    [line] = intake.not_student_ids(submitted, [LAB])
+    assert line.startswith(f"The folder {str(submitted / '@SUM(A1)')!r} is not named by a student id")
 
 
 def test_a_student_list_mapping_one_name_twice_is_refused(download, tmp_path):
@@ -250,7 +365,7 @@ def test_grade_skips_a_folder_not_named_by_a_student_id_and_grades_the_rest(tmp_
     assert sorted(p.name for p in (tmp_path / "course/submitted").iterdir()) == ["s001"]
     printed = capsys.readouterr().out
     for name in ("-rm", "=2+5"):
-        assert (f"Skipped: The folder {str(klass / name)!r} is not named by a student id (letters, digits, _ . -, "
+        assert (f"Skipped: The folder {str(klass / name)!r} is not named by a student id (letters, digits, _ . @ -, "
                 "beginning with a letter or a digit); it was not graded.") in printed
     assert "Not graded: 2 folders not named by a student id (listed above)." in printed
 
@@ -283,6 +398,11 @@ def test_a_notebook_holding_text_no_file_can_store_is_graded_with_a_note(tmp_pat
     assert any("not valid Unicode" in note.text for note in grader_notes(taken))
 
 
+def hex_secret(student: str) -> str:
+    """A submission_secret.txt of nbgrader's form (128 hex digits), the same for the same student."""
+    return student.encode().hex().ljust(128, "0")
+
+
 def files_under(folder) -> dict[str, bytes]:
     """Relative path -> bytes of every file beneath ``folder``."""
     return {p.relative_to(folder).as_posix(): p.read_bytes() for p in sorted(folder.rglob("*")) if p.is_file()}
@@ -301,7 +421,7 @@ def test_the_courses_own_submitted_folder_is_left_as_collected_and_repaired_in_c
         folder.mkdir(parents=True)
         (folder / name).write_text(text)
         (folder / "timestamp.txt").write_text("2026-10-09 10:00:00.000000 UTC")
-        (folder / intake.SECRET).write_text(f"secret-of-{student}")
+        (folder / intake.SECRET).write_text(hex_secret(student))
     (course / "submitted/s001" / LAB.id / "scratch.py").write_text("x = 1\n")
     collected = files_under(course / "submitted")
 
@@ -311,7 +431,7 @@ def test_the_courses_own_submitted_folder_is_left_as_collected_and_repaired_in_c
     taken = course / intake.EXCHANGE_INTAKE
     for student in ("s001", "s002"):
         assert sorted(files_under(taken / student / LAB.id)) == [intake.SECRET, "timestamp.txt", LAB.notebook_name]
-        assert (taken / student / LAB.id / intake.SECRET).read_text() == f"secret-of-{student}"
+        assert (taken / student / LAB.id / intake.SECRET).read_text() == hex_secret(student)
     assert tag(taken / "s001" / LAB.id / LAB.notebook_name) == "s001"
     [renamed] = grader_notes(nbformat.read(taken / "s001" / LAB.id / LAB.notebook_name, as_version=4))
     assert "submitted as my work.ipynb" in renamed.text
@@ -329,11 +449,11 @@ def test_an_lms_download_keeps_the_submission_secret_that_collect_left_in_submit
         (course / "submitted" / student / LAB.id / "stale.txt").write_text("old")
         (tmp_path / "subs" / student / LAB.id).mkdir(parents=True)
         (tmp_path / "subs" / student / LAB.id / LAB.notebook_name).write_text(notebook(student))
-    (tmp_path / "subs/s002" / LAB.id / intake.SECRET).write_text("from-subs")
+    (tmp_path / "subs/s002" / LAB.id / intake.SECRET).write_text(hex_secret("s002"))
 
     assert intake.graded_from(tmp_path / "subs", course) == intake.SUBMITTED
     intake.import_submissions(tmp_path / "subs", course, [LAB])
-    for student, secret in (("s001", "from-collect"), ("s002", "from-subs")):
+    for student, secret in (("s001", "from-collect"), ("s002", hex_secret("s002"))):
         folder = course / "submitted" / student / LAB.id
         assert sorted(p.name for p in folder.iterdir()) == [intake.SECRET, LAB.notebook_name]
         assert (folder / intake.SECRET).read_text() == secret and tag(folder / LAB.notebook_name) == student

@@ -75,7 +75,7 @@ def read_students(path: Path) -> dict[str, str]:
         for line, record in enumerate(reader, start=2):
             name, student = record["lms_name"].strip(), record["student_id"].strip()
             if not STUDENT_ID.fullmatch(student):
-                raise IntakeError(f"{path}, line {line}: {student!r} is not a valid student id (letters, digits, _ . -).")
+                raise IntakeError(f"{path}, line {line}: {student!r} is not a valid student id (letters, digits, _ . @ -, beginning with a letter or a digit).")
             if students.get(name, student) != student:
                 raise IntakeError(f"{path}, line {line}: {name!r} is mapped to both {students[name]} and {student}.")
             students[name] = student

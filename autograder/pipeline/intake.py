@@ -7,9 +7,12 @@ from __future__ import annotations
 
 import os
 import re
+import secrets
 import shutil
+import stat
 import tempfile
 from collections.abc import Callable
+from datetime import datetime, timezone
 from pathlib import Path
 
 import nbformat
@@ -17,14 +20,16 @@ from nbgrader.utils import parse_utc
 from nbformat import NotebookNode
 
 from autograder import cells
-from autograder.labs import Lab
+from autograder.labs import DUE_DATES, Lab
+from autograder.pipeline.late import read_due_dates
 from autograder.pipeline.restore import add_grader_notes, forget_grader_notes
 
 MAX_SUBMISSION_BYTES = 50_000_000
 """The largest notebook file the grader reads (a lab's solved notebook, figures and all, is under 2 MB):
 a larger one is graded as empty, since reading it could take the grader's memory."""
-STUDENT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.-]*")
-"""Our student ids are folder names: letters, digits, ``_``, ``.`` and ``-``, beginning with a letter or a digit."""
+STUDENT_ID = re.compile(r"[A-Za-z0-9][A-Za-z0-9_.@-]*")
+"""Our student ids are folder names: letters, digits, ``_``, ``.``, ``@`` and ``-``, beginning with a letter or a
+digit (so that no id is a formula to a spreadsheet; ``@`` for a hub's e-mail-like usernames)."""
 SUBMITTED = "submitted"
 """nbgrader's folder of submissions in a course folder, where its ``collect`` and ``zip_collect`` put them."""
 EXCHANGE_INTAKE = "intake"
@@ -32,8 +37,12 @@ EXCHANGE_INTAKE = "intake"
 SECRET = "submission_secret.txt"
 """The file that nbgrader's ``submit`` writes beside the notebook and ``collect`` copies into ``submitted/``:
 ``release_feedback`` names the student's feedback by it, so it must reach ``feedback/<student>/<lab>/``."""
-MAX_SECRET_BYTES = 4096
-"""The most of a ``submission_secret.txt`` copied (nbgrader's holds 128 characters)."""
+NBGRADER_SECRET = re.compile(rb"[0-9a-f]{128}")
+"""A ``submission_secret.txt`` as nbgrader's ``submit`` writes it: ``secrets.token_hex(64)``, no newline."""
+MAX_TIMESTAMP_BYTES = 200
+"""The most of a ``timestamp.txt`` read (nbgrader's is about 30 bytes)."""
+TIMESTAMP_FORMAT = "%Y-%m-%d %H:%M:%S.%f %Z"
+"""nbgrader's ``Exchange.timestamp_format``, in which a stand-in ``timestamp.txt`` is written (in UTC)."""
 
 def read_submission(folder: Path, lab: Lab) -> tuple[NotebookNode, list[str]]:
     """The notebook in a student's ``folder`` for ``lab``, and notes on anything wrong with it.
@@ -96,7 +105,7 @@ def not_student_ids(submissions: Path, labs: list[Lab]) -> list[str]:
     writes it, so that a control character in the name shows rather than acts on the terminal."""
     names = {p.parent.name for lab in labs for p in submissions.glob(f"*/{lab.id}")
              if p.is_dir() and not STUDENT_ID.fullmatch(p.parent.name)}
-    return [f"The folder {str(submissions / name)!r} is not named by a student id (letters, digits, _ . -, "
+    return [f"The folder {str(submissions / name)!r} is not named by a student id (letters, digits, _ . @ -, "
             "beginning with a letter or a digit); it was not graded." for name in sorted(names)]
 
 
@@ -116,13 +125,17 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
     Each file goes through ``read_submission``; its notes become a grader's note at the top of the
     notebook, which the feedback shows. A ``timestamp.txt`` beside the notebook (nbgrader's
     submission time) is copied too, so that late penalties apply, and so is a ``submission_secret.txt``
-    (nbgrader's), so that ``release_feedback`` finds it beside the feedback. Anything else in the target
+    (nbgrader's), so that ``release_feedback`` finds it beside the feedback. One of them that is there but
+    unreadable (or, for the course's own ``submitted/``, missing: ``release_feedback`` needs both) is
+    replaced by a stand-in (``_stand_in_time``, a fresh secret), with a note. Anything else in the target
     folder goes, but a ``submission_secret.txt`` that nbgrader's ``collect`` put there stays. Each file
     is replaced whole (written beside it, then renamed), so that another process taking in or grading
     the same submission at the same time (overlapping shards in one course folder) always reads a whole
     file, the same. Returns lab id -> students.
     """
     into = workdir / graded_from(submissions, workdir)
+    from_exchange = into.name == EXCHANGE_INTAKE
+    due = read_due_dates(DUE_DATES)
     by_lab: dict[str, list[str]] = {}
     for lab in labs:
         by_lab[lab.id] = [s for s in class_list(submissions, [lab])[lab.id] if takes is None or takes(s)]
@@ -133,16 +146,22 @@ def import_submissions(submissions: Path, workdir: Path, labs: list[Lab],
             if replaced:
                 notes.append(f"It held {replaced} character(s) that are not valid Unicode (lone UTF-16 surrogates), "
                              "which no file can store; each was replaced by \ufffd.")
-            stamp = _submission_time(folder / "timestamp.txt")
-            if isinstance(stamp, str):
-                notes.append(stamp)
+            stamp = _submission_time(folder / "timestamp.txt", from_exchange)
+            if stamp == b"":
+                stamp, note = _stand_in_time(due.get(lab.id))
+                notes.append(note)
+            secret = _submission_secret(folder, from_exchange)
+            if secret == b"":
+                secret = secrets.token_hex(64).encode()
+                notes.append("Its submission_secret.txt is not one that nbgrader's submit writes, so the grader gave "
+                             "it a new one: the student cannot fetch this page with fetch_feedback; send it to them "
+                             f"from feedback/{student}/{lab.id}/.")
             add_grader_notes(nb, notes)
             target = into / student / lab.id
             target.mkdir(parents=True, exist_ok=True)
             files = {lab.notebook_name: (nbformat.writes(nb).rstrip("\n") + "\n").encode()}  # as nbformat.write
-            if isinstance(stamp, bytes):
+            if stamp is not None:
                 files["timestamp.txt"] = stamp
-            secret = _submission_secret(folder)
             if secret is not None:
                 files[SECRET] = secret
             for stale in target.iterdir():
@@ -168,30 +187,54 @@ def _valid_unicode(nb: NotebookNode) -> tuple[NotebookNode, int]:
     return nbformat.reads("".join("\ufffd" if "\ud800" <= ch <= "\udfff" else ch for ch in text), as_version=4), count
 
 
-def _submission_time(path: Path) -> bytes | str | None:
-    """The ``timestamp.txt`` to copy (bytes), or a note on why it is left out (str), or None if there is none.
-
-    One that nbgrader cannot read as a time made the whole submission "not graded" (adversarial review):
-    it is left out, so the submission is graded with no late penalty, and the note tells the instructor."""
-    if not path.exists() or path.is_symlink():
+def _submission_time(path: Path, required: bool) -> bytes | None:
+    """The ``timestamp.txt`` to copy; None if there is none (and it is not ``required``); empty if it is not a
+    regular file that nbgrader reads as a time (adversarial review: one that was no time made the submission
+    "not graded"; a directory stopped ``grade``; a huge one filled the grader's memory)."""
+    if not required and not os.path.lexists(path):
         return None
-    data = path.read_bytes()[:200]
+    data = _read_regular(path, MAX_TIMESTAMP_BYTES)
     try:
         parse_utc(data.decode().strip())
     except (ValueError, OverflowError, UnicodeDecodeError, TypeError):
-        return ("Its timestamp.txt does not hold a time, so it was left out: no late penalty was computed. "
-                "Check when it was submitted.")
+        return b""
     return data
 
 
-def _submission_secret(folder: Path) -> bytes | None:
-    """The ``submission_secret.txt`` in a student's ``folder`` to copy, or None if there is none or it is
-    reached through a symbolic link (it would name the feedback of whichever submission it points to)."""
+def _stand_in_time(due: datetime | None) -> tuple[bytes, str]:
+    """A ``timestamp.txt`` for a submission whose own is unreadable, in nbgrader's format, and the note that says so:
+    the lab's due date ``due`` (so no late penalty), or, with none, the time now (none then either). Without one,
+    ``release_feedback`` stopped at that student and released no one's feedback after them."""
+    when, what = (due, "the lab's due date") if due else (datetime.now(timezone.utc), "the time it was taken in")
+    text = when.astimezone(timezone.utc).strftime(TIMESTAMP_FORMAT)
+    return text.encode(), (f"Its timestamp.txt is missing or does not hold a time, so {what}, {text}, stands in "
+                           "for it: no late penalty was computed. Check when it was submitted.")
+
+
+def _submission_secret(folder: Path, required: bool) -> bytes | None:
+    """The ``submission_secret.txt`` in a student's ``folder`` to copy; None if there is none (and it is not
+    ``required``); empty if it is not a regular file of nbgrader's form (``NBGRADER_SECRET``), or is reached
+    through a symbolic link (it would name the feedback of whichever submission it points to). An empty,
+    non-UTF-8 or directory secret stopped ``release_feedback`` for the class."""
     path = folder / SECRET
-    if any(p.is_symlink() for p in (folder.parent, folder, path)) or not path.is_file():
+    if not required and not os.path.lexists(path):
         return None
-    with open(path, "rb") as handle:
-        return handle.read(MAX_SECRET_BYTES)
+    data = b"" if folder.parent.is_symlink() or folder.is_symlink() else _read_regular(path, 129)
+    return data if NBGRADER_SECRET.fullmatch(data) else b""
+
+
+def _read_regular(path: Path, limit: int) -> bytes:
+    """At most ``limit`` bytes of ``path``, or none if it is not a regular file (a symbolic link, a directory,
+    a FIFO, missing), checked on the file opened, without following a link or waiting on a FIFO."""
+    try:
+        fd = os.open(path, os.O_RDONLY | os.O_NOFOLLOW | os.O_NONBLOCK)
+    except OSError:
+        return b""
+    if not stat.S_ISREG(os.fstat(fd).st_mode):
+        os.close(fd)
+        return b""
+    with os.fdopen(fd, "rb") as handle:
+        return handle.read(limit)
 
 
 PARTIAL = ".partial-"
