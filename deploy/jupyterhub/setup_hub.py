@@ -38,6 +38,8 @@ SETTINGS = "hub.json"
 """The hub's settings under the prefix, which jupyterhub_config.py reads (root only: it may hold a password)."""
 PASSWORD_VARIABLE = "ELK_HUB_PASSWORD"
 """The shared password of the dummy authenticator (local tests only), read from the environment."""
+NO_NEWS = {"@jupyterlab/apputils-extension:notification": {"fetchNews": "false", "checkForUpdates": False}}
+"""JupyterLab's settings in the students' environment: no question about Jupyter's news on every first login."""
 
 
 class Refused(SystemExit):
@@ -105,6 +107,9 @@ def make_user_env(env: Path, base_python: str) -> Path:
                         if line and not line.startswith(("#", "-e"))]
         run([str(env / "bin" / "python"), "-I", "-m", "pip", "install", "--quiet", "--disable-pip-version-check",
              *requirements, f"jupyterhub=={importlib.metadata.version('jupyterhub')}", str(bundle)])
+    overrides = env / "share" / "jupyter" / "lab" / "settings" / "overrides.json"
+    overrides.parent.mkdir(parents=True, exist_ok=True)
+    overrides.write_text(json.dumps(NO_NEWS) + "\n")
     return env / "bin" / "python"
 
 
