@@ -50,6 +50,15 @@ NEEDS: dict[str, Need] = {
         "Debian's Chromium, the real browser that Playwright drives (Playwright's own download is not used)",
         "`sudo apt-get install --no-install-recommends chromium` (or set CHROMIUM to a Chromium's path)",
         _chromium_present),
+    "configurable-http-proxy": Need(
+        "JupyterHub's proxy, configurable-http-proxy (Node.js), for the hub recipe's test",
+        "`sudo apt-get install --no-install-recommends nodejs npm && sudo npm install -g configurable-http-proxy`",
+        lambda: shutil.which("configurable-http-proxy") is not None),
+    "root": Need(
+        "to run as root, since the hub recipe's test adds local users and the hub starts each user's server as that "
+        "user (CI runs as root)",
+        "`sudo`, in a machine or container where adding users is fine",
+        lambda: os.geteuid() == 0),
 }
 
 

@@ -27,7 +27,9 @@ def test_ci_installs_every_need_and_runs_every_test_with_readmes_command():
     export = script.index(f"export {RUN_EVERY_TEST}=1")
     assert export < script.index(readme_command), "KIT_RUN_EVERY_TEST must be set before the test command"
     assert "apt-get install" in script and "chromium" in script.split(readme_command)[0]
-    assert set(NEEDS) == {"chromium"}, "a new need must be installed by .ci/run (and listed in README)"
+    assert "npm install --global --silent configurable-http-proxy" in script.split(readme_command)[0]
+    assert set(NEEDS) == {"chromium", "configurable-http-proxy", "root"}, (
+        "a new need must be installed by .ci/run (and listed in README)")
 
 
 def test_without_chromium_the_browser_tests_are_skipped_naming_it_and_the_command_that_adds_it():

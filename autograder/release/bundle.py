@@ -5,6 +5,8 @@ instructors' ``environment.txt``), get a ``pyproject.toml`` without the instruct
 settings, and start JupyterLab with the bundle's own Jupyter configuration (``jupyter_config/``),
 which keeps nbgrader's Validate and turns off its instructor tools: formgrader, Create Assignment,
 and the assignment and course lists, which need an exchange directory that students do not have.
+On a JupyterHub with nbgrader's exchange (deploy/jupyterhub/), students get the same configuration with
+the Assignment List (and nbgrader's menu, which opens it) kept on.
 """
 
 from __future__ import annotations
@@ -40,6 +42,9 @@ INSTRUCTOR_SERVER_EXTENSIONS = (
     "nbgrader.server_extensions.course_list",
 )
 VALIDATE_SERVER_EXTENSION = "nbgrader.server_extensions.validate_assignment"
+EXCHANGE_LAB_PLUGINS = ("@jupyter/nbgrader:assignment-list", "@jupyter/nbgrader:menu")
+EXCHANGE_SERVER_EXTENSIONS = ("nbgrader.server_extensions.assignment_list",)
+"""What students use on a hub with nbgrader's exchange: the Assignment List (fetch, submit, fetch feedback)."""
 
 
 VALIDATE_CONFIG = """\
@@ -79,14 +84,16 @@ def student_pyproject(pyproject: str) -> str:
     return re.sub(r"\n\[tool\.pytest\.ini_options\]\n.*?(?=\n\[(?!\[)|\Z)", "\n", pyproject, flags=re.DOTALL).rstrip() + "\n"
 
 
-def write_jupyter_config(folder: Path) -> None:
+def write_jupyter_config(folder: Path, exchange: bool = False) -> None:
     """Jupyter configuration that keeps Validate, lists what it finds in the order to fix it, and turns the
-    instructor tools off."""
+    instructor tools off; with ``exchange`` (a hub with nbgrader's exchange), the Assignment List stays on."""
+    kept = EXCHANGE_LAB_PLUGINS if exchange else ()
     (folder / "labconfig").mkdir(parents=True)
-    (folder / "labconfig" / "page_config.json").write_text(
-        json.dumps({"disabledExtensions": {plugin: True for plugin in INSTRUCTOR_LAB_PLUGINS}}, indent=2) + "\n"
+    (folder / "labconfig" / "page_config.json").write_text(json.dumps(
+        {"disabledExtensions": {plugin: True for plugin in INSTRUCTOR_LAB_PLUGINS if plugin not in kept}}, indent=2) + "\n"
     )
-    extensions = {name: False for name in INSTRUCTOR_SERVER_EXTENSIONS} | {VALIDATE_SERVER_EXTENSION: True}
+    extensions = ({name: False for name in INSTRUCTOR_SERVER_EXTENSIONS} | {VALIDATE_SERVER_EXTENSION: True}
+                  | {name: True for name in EXCHANGE_SERVER_EXTENSIONS if exchange})
     (folder / "jupyter_server_config.json").write_text(
         json.dumps({"ServerApp": {"jpserver_extensions": extensions}}, indent=2) + "\n"
     )
