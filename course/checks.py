@@ -45,7 +45,8 @@ def require(*functions: Callable) -> None:
         names = [getattr(f, "__name__", "") for f in functions]
         # and the blanks those call (a fairness review: a figure's note named kalman_step, run_rank2 and run_rank4,
         # but not the joseph_covariance they call, which was the one at fault)
-        failing = _not_passing(list(dict.fromkeys(names + [c for name in names for c in _calls(name)])))
+        # the blanks they call first: a student starts with those (a fairness review: joseph_covariance came last)
+        failing = _not_passing(list(dict.fromkeys([c for name in names for c in reversed(_calls(name))] + names)))
         if failing:
             w = _upstream(failing)
             print(wrap(f"Note: {w['your']} {w['does']} not pass {w['its']} visible checks yet, so what this cell "

@@ -283,7 +283,8 @@ VISIBLY_FAILED = {
     "castaway-bob": ("joseph_covariance/swapped-transposes", "run_rank2/restarts", "run_rank4/flow-at-new-time",
                      "run_rank4/handout-Q", "joseph_covariance/right-not-transposed", "kalman_step/input-inside-A",
                      "run_rank2/global-sigma-gps", "run_rank4/flow-at-fix", "run_rank4/flow-at-predicted-position",
-                     "run_rank4/position-noise", "kalman_step/if-u", "run_rank4/global-sigma-gps"),
+                     "run_rank4/position-noise", "kalman_step/if-u", "run_rank4/global-sigma-gps",
+                     "run_rank4/global-sigma-F", "run_rank4/global-sigma-F-spread"),
     "nonlinear-filters": ("moment_error/unweighted", "moment_error/degree-at-most", "bootstrap_pf_step/bearing-not-wrapped",
                           "bootstrap_pf_step/noise-before-f", "unscented_points/centre-weight-one-over-n-plus-kappa",
                           "ekf_update/angle-index-hard-coded", "ekf_update/wraps-every-component",
@@ -302,7 +303,8 @@ non-diagonal S_Q and a non-diagonal S_R. castaway-bob's run_rank4/position-noise
 found case (d) too loose for it (8e-8 of the variance, under the default rtol of 1e-7). castaway-bob's kalman_step/if-u
 passed them, as every u they gave had one entry, until the fairness review of the messages added a u of two.
 castaway-bob's run_rank4/global-sigma-gps passed them until the fairness review of castaway-bob's checks (helper-42)
-found that no case of run_rank4 gave another sigma_gps (case (g) now does)."""
+found that no case of run_rank4 gave another sigma_gps (case (g) now does); its sigma_F ones until the second round
+of that review found the same of sigma_F (case (h))."""
 
 VISIBLE_MESSAGES = {
     "train-kf": {"nees/root": ("take no square root", None),

@@ -132,6 +132,14 @@ MISTAKES = (
             "var_w = sigma_F**2 / (1.0 - alpha**2)", "var_w = sigma_F**2",
             hint="Your run_rank4 behaves as if the first velocity variance were sigma_F^2, one step of the random "
                  "force: Bob's velocity starts from its stationary spread, sigma_F^2 / (1 - alpha^2)."),
+    Mistake("run_rank4", "global-sigma-F", "builds Q from the notebook's SIGMA_F instead of the argument sigma_F",
+            "Q = np.diag([0.0, 0.0, sigma_F**2, sigma_F**2])", "Q = np.diag([0.0, 0.0, SIGMA_F**2, SIGMA_F**2])",
+            hint="Your run_rank4 behaves as if Q came from the notebook's SIGMA_F instead of the argument sigma_F: "
+                 "build Q = diag(0, 0, sigma_F^2, sigma_F^2) from the argument."),
+    Mistake("run_rank4", "global-sigma-F-spread", "takes the first velocity variance from the notebook's SIGMA_F",
+            "var_w = sigma_F**2 / (1.0 - alpha**2)", "var_w = SIGMA_F**2 / (1.0 - alpha**2)",
+            hint="Your run_rank4 behaves as if the first velocity variance came from the notebook's SIGMA_F: "
+                 "sigma_w^2 = sigma_F^2 / (1 - alpha^2), with the argument sigma_F."),
     Mistake("run_rank4", "ignores-current", "never passes the current to the step", "Q, R, u=u)", "Q, R, u=None)",
             hint="Your run_rank4 behaves as if the current were never passed to the step."),
     Mistake("track_rmse", "per-axis", "averages over both coordinates: the RMSE per axis, 1/sqrt(2) too small",
