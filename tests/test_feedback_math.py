@@ -14,7 +14,8 @@ import pytest
 from autograder import cells
 from autograder.labs import all_labs
 from autograder.pipeline import mathml
-from autograder.pipeline.inert_html import MAX_MARKDOWN_CHARS, inert_markdown, rendered
+from autograder.pipeline import inert_html
+from autograder.pipeline.inert_html import MAX_MARKDOWN_CHARS, InertHtml, inert_markdown, rendered
 from autograder.pipeline.sanitise import sanitise_math
 
 
@@ -173,3 +174,25 @@ def test_a_markdown_cell_too_long_to_render_quickly_is_shown_as_text():
     start = time.monotonic()
     assert mathml.formulas("\\(" + "x" * 1_000_000) == [("\\(" + "x" * 1_000_000, None)]
     assert time.monotonic() - start < 1
+
+
+def test_a_tag_or_any_command_that_copies_markup_leaves_its_formula_as_text():
+    """The re-attack of issue 36's review: \\tag copies its argument into <mtext> as \\text did, and nested <mover>
+    stacks of tall <mspace> lifted a forged '24.0 of 24.0 points' over the summary. A formula in which a < makes
+    elements is text, whichever command copied it; a < in math is one <mo>, as \\lt is."""
+    lifted = (r"$x\tag{</mtext><mpadded/width='0'/height='0'/depth='0'><mover><mspace/height='9.90em'/>"
+              r"<mtext>24.0 of 24.0 points</mtext></mover></mpadded><mtext>}$ and $\frac{a<b}{c}$")
+    page = page_of(lifted)
+    assert all(tag not in ("mpadded", "mspace", "mover") for tag, _ in parsed(page).elements), page
+    assert page.count("<math") == 1, "only the honest fraction is MathML"
+
+
+def test_a_notebooks_markdown_renders_within_its_time_budget(monkeypatch):
+    """The same re-attack: the cap on a cell does not cap a notebook (twelve cells of 10,000 characters took 40 s of the
+    grader's process); the cells after MARKDOWN_SECONDS is spent are shown as text."""
+    monkeypatch.setattr(inert_html, "MARKDOWN_SECONDS", 0.2)
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_markdown_cell("[`" * 2_000) for _ in range(40)])
+    start = time.monotonic()
+    InertHtml().preprocess(nb, {})
+    assert time.monotonic() - start < 5
+    assert nb.cells[-1].source.startswith("<div><pre>"), nb.cells[-1].source[:80]

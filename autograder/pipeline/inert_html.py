@@ -27,6 +27,7 @@ from __future__ import annotations
 import base64
 import binascii
 import re
+import time
 
 from nbconvert.exporters import HTMLExporter
 from nbconvert.filters.strings import strip_files_prefix
@@ -67,11 +68,17 @@ shown as text. nbconvert's Markdown takes time quadratic in some texts: 30,000 c
 150,000 took two minutes of a grading worker (an adversarial review of issue 36)."""
 
 
-def inert_markdown(cell: NotebookNode) -> None:
-    """Make ``cell`` (Markdown) render to sanitised HTML (see the module's doc)."""
+MARKDOWN_SECONDS = 10.0
+"""The time one notebook's Markdown may take to render (a lab's takes well under a second); the cells after it is
+spent are shown as text. The cap on a cell does not cap a notebook: twelve cells of 10,000 characters each took 40 s
+of the grader's process (the re-attack of issue 36's review)."""
+
+
+def inert_markdown(cell: NotebookNode, render: bool = True) -> None:
+    """Make ``cell`` (Markdown) render to sanitised HTML (see the module's doc); without ``render``, show it as text."""
     attachments = cell.get("attachments")
     try:
-        page = rendered(cell.source, attachments) if len(cell.source) <= MAX_MARKDOWN_CHARS else None
+        page = rendered(cell.source, attachments) if render and len(cell.source) <= MAX_MARKDOWN_CHARS else None
     except Exception:  # noqa: BLE001 (nbconvert cannot render it, e.g. an attachment it names is missing: show it as text)
         page = None
     clean = sanitise(page) if page is not None else None
@@ -109,9 +116,15 @@ def inert_output(output: NotebookNode) -> bool:
 class InertHtml(NbGraderPreprocessor):
     """Markdown, raw cells and outputs whose every rendering is sanitised (see the module doc)."""
 
+    def preprocess(self, nb: NotebookNode, resources: dict) -> tuple[NotebookNode, dict]:
+        self._markdown_seconds = 0.0
+        return super().preprocess(nb, resources)
+
     def preprocess_cell(self, cell: NotebookNode, resources: dict, index: int) -> tuple[NotebookNode, dict]:
         if cell.cell_type == "markdown":
-            inert_markdown(cell)
+            start = time.monotonic()
+            inert_markdown(cell, render=self._markdown_seconds < MARKDOWN_SECONDS)
+            self._markdown_seconds += time.monotonic() - start
         elif cell.cell_type == "raw":
             cell.source = sanitise(cell.source)
         elif cell.cell_type == "code":

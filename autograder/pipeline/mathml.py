@@ -164,8 +164,9 @@ def start_page() -> None:
     _budget.seconds = PAGE_SECONDS
 
 
-TEXT_COMMAND = re.compile(r"\\(?:text[a-z]*|mbox|operatorname)(?![A-Za-z])")
-"""The control words whose argument latex2mathml copies into ``<mtext>`` as it is, markup included."""
+TEXT_COMMAND = re.compile(r"\\(?:text[a-z]*|mbox|operatorname|tag)(?![A-Za-z])")
+"""The control words whose argument latex2mathml copies into ``<mtext>`` as it is, markup included (\\tag too: the
+re-attack of issue 36's review)."""
 MARKUP = re.compile(r"<")
 """What opens a tag in the converter's output (a formula's own < is made &lt; outside such an argument)."""
 
@@ -181,9 +182,17 @@ def mathml(tex: str, display: bool) -> str | None:
         check = _Elements()
         check.feed(markup)
         check.close()
+        if "<" in tex and _tags(markup) != _tags(convert(tex.replace("<", r"\lt "), display="block" if display else "inline")):
+            # a < that made elements: some command copied its argument as markup (in math, < and \lt are one <mo>)
+            return None
     except Exception:  # noqa: BLE001 (latex2mathml, and the check of what it made, raise many kinds: show the TeX)
         return None
     return markup if check.clean else None
+
+
+def _tags(markup: str) -> list[str]:
+    """The element names of ``markup``, in order."""
+    return re.findall(r"<\s*([A-Za-z][\w-]*)", markup)
 
 
 def formulas(text: str) -> list[tuple[str, str | None]]:
