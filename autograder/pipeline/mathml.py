@@ -113,14 +113,17 @@ def attribute(name: str, value: str) -> str | None:
 
 
 class _Elements(HTMLParser):
-    """Whether markup holds only elements on TAGS, and no comment, declaration or instruction."""
+    """The names of markup's elements in order (``tags``), and whether it holds only elements on TAGS and no
+    comment, declaration or instruction (``clean``)."""
 
     def __init__(self) -> None:
         super().__init__(convert_charrefs=True)
         self.clean = True
+        self.tags: list[str] = []
 
     def handle_starttag(self, tag: str, attrs: list) -> None:
         self.clean &= tag in TAGS
+        self.tags.append(tag)
 
     def handle_startendtag(self, tag: str, attrs: list) -> None:
         self.handle_starttag(tag, attrs)
@@ -177,22 +180,23 @@ def mathml(tex: str, display: bool) -> str | None:
     # that move them over the page (an adversarial review of issue 36: <mpadded voffset> over the score)
     if not convertible(tex) or (TEXT_COMMAND.search(tex) and MARKUP.search(tex)):
         return None
+    mode = "block" if display else "inline"
     try:
-        markup = convert(tex, display="block" if display else "inline")
-        check = _Elements()
-        check.feed(markup)
-        check.close()
-        if "<" in tex and _tags(markup) != _tags(convert(tex.replace("<", r"\lt "), display="block" if display else "inline")):
-            # a < that made elements: some command copied its argument as markup (in math, < and \lt are one <mo>)
+        markup = convert(tex, display=mode)
+        check = _parsed(markup)
+        # a < that made elements: some command copied its argument as markup (in math, < and \lt are one <mo>)
+        if "<" in tex and check.tags != _parsed(convert(tex.replace("<", r"\lt "), display=mode)).tags:
             return None
     except Exception:  # noqa: BLE001 (latex2mathml, and the check of what it made, raise many kinds: show the TeX)
         return None
     return markup if check.clean else None
 
 
-def _tags(markup: str) -> list[str]:
-    """The element names of ``markup``, in order."""
-    return re.findall(r"<\s*([A-Za-z][\w-]*)", markup)
+def _parsed(markup: str) -> _Elements:
+    check = _Elements()
+    check.feed(markup)
+    check.close()
+    return check
 
 
 def formulas(text: str) -> list[tuple[str, str | None]]:
