@@ -157,12 +157,12 @@ def test_status_reports_what_this_machine_offers():
     assert can_unshare, "this machine makes no network namespaces: the sandbox cannot cut the network here"
     found = sandbox.status()
     assert (found.landlock_abi, found.network_namespace, found.complete) == (raw, True, True)
-    assert found.summary == (f"Landlock ABI {raw} (files) and private network and PID namespaces (no network, and no "
-                             "process outlives the kernel)")
+    assert found.summary == (f"Landlock ABI {raw} (files) and private network and PID namespaces (no network, no "
+                             f"process outlives the kernel, and at most {sandbox.MAX_TASKS} processes in it)")
 
 
 @pytest.mark.parametrize("value, layers, starts, ends", [
-    ("on", ("files", "network"), "Landlock ABI", "PID namespaces (no network, and no process outlives the kernel)"),
+    ("on", ("files", "network"), "Landlock ABI", "(no network, no process outlives the kernel, and at most 256 processes in it)"),
     ("off", (), "NOT SANDBOXED: Landlock turned off (KIT_SANDBOX=off), and network namespace turned off",
      "the grading kernel can read every file the grader's user can, and use the network"),
     ("files", ("files",), "PARTLY SANDBOXED: Landlock ABI", "the grading kernel can use the network"),

@@ -13,7 +13,9 @@ Two layers of the Linux kernel confine the kernel process, applied by a launcher
   process left in the namespace, so nothing the kernel starts (a daemon that left its process
   group, a fork bomb) outlives it, and its own IPC namespace, so that no System V shared memory
   or message queue does either. The launcher stays, as the kernel's manager's process, and waits.
-  Run by a plain user, the kernel may have at most MAX_TASKS processes and threads.
+  The kernel may have at most MAX_TASKS processes and threads. Linux exempts root from that cap, so
+  a kernel started by root runs as a user of its own (``kernel_uid``), which is root in the
+  kernel's user namespace and no one outside it.
 
 ``python -m autograder.kernel.sandbox --read P ... --write P ... -- CMD ARGS...`` is the launcher. It never
 refuses: a layer the OS does not offer is left out, and it says so on stderr. ``status()`` says what
@@ -55,9 +57,13 @@ CLONE_NEWPID = 0x20000000
 CLONE_NEWUSER = 0x10000000
 PR_SET_NO_NEW_PRIVS = 38
 MAX_TASKS = 256
-"""The most processes and threads that a kernel run by a plain user may have at once (RLIMIT_NPROC,
-which Linux counts per user namespace, so per kernel here): a fork bomb stops there. Linux exempts
-root from the limit."""
+"""The most processes and threads that a kernel may have at once (RLIMIT_NPROC, which Linux counts
+per user namespace, so per kernel here): a fork bomb stops there. Linux exempts root's user ID from
+the limit, so a kernel started by root runs as a user of its own (``kernel_uid``)."""
+KERNEL_UIDS_FROM = 2**30
+"""A kernel started by root runs as user ``KERNEL_UIDS_FROM`` + its launcher's process ID, which no
+other running kernel has (process IDs are below 2**22), and which names no account: no file outside
+the kernel's folders belongs to it."""
 
 READ = AccessFS.READ_FILE | AccessFS.READ_DIR | AccessFS.EXECUTE
 """What a read path allows: read files and list folders, run programs."""
@@ -122,8 +128,12 @@ def status() -> SandboxStatus:
         network_part = f"network namespace turned off ({SWITCH}={os.environ.get(SWITCH)})"
     elif netns_problem is not None:
         network_part = f"no network namespace ({netns_problem})"
+    elif not processes_capped():
+        network_part = ("private network and PID namespaces (no network, and no process outlives the kernel; "
+                        "as root's, its processes are not capped)")
     else:
-        network_part = "private network and PID namespaces (no network, and no process outlives the kernel)"
+        network_part = (f"private network and PID namespaces (no network, no process outlives the kernel, and at "
+                        f"most {MAX_TASKS} processes in it)")
     if files and network:
         summary = f"{files_part} and {network_part}"
     elif files or network:
@@ -142,6 +152,27 @@ def landlock_abi() -> int:
         return landlockpy.abi_version()
     except OSError:  # refused otherwise than by a kernel without Landlock: a container's seccomp filter
         return 0
+
+
+@cache
+def processes_capped() -> bool:
+    """Whether a kernel started here gets the MAX_TASKS cap on its processes: True for a plain user,
+    and for root when its kernels can run as a user of their own (tried in a child process, which
+    enters the namespaces and exits)."""
+    if os.getuid() != 0:
+        return True
+    if sys.platform != "linux":
+        return False
+    pid = os.fork()
+    if pid == 0:
+        try:
+            enter_network_namespace()
+            outside = Path("/proc/self/uid_map").read_text().split()[1:2]  # "0 <uid outside> 1"
+        except OSError:
+            os._exit(1)
+        os._exit(0 if outside not in ([], ["0"]) else 1)
+    _, wait_status = os.waitpid(pid, 0)
+    return os.waitstatus_to_exitcode(wait_status) == 0
 
 
 @cache
@@ -190,17 +221,65 @@ def _check(result: int, call: str) -> None:
 def enter_network_namespace() -> None:
     """Move this process into new network and IPC namespaces (System V shared memory, semaphores and
     message queues, which would outlive the kernel and be shared with other kernels, die with the
-    last process in it), and the children it starts from now on into a new PID namespace. First into a new user namespace where this user is itself, where the OS
-    allows one (for root too: root inside holds no capability over the machine); without the uid
-    map, which some systems refuse, it shows as nobody and still works. Raises OSError when the
-    namespaces cannot be made."""
-    uid, gid = os.getuid(), os.getgid()
-    if _libc().unshare(CLONE_NEWUSER) == 0:
-        with contextlib.suppress(OSError):
-            Path("/proc/self/setgroups").write_text("deny")
-            Path("/proc/self/uid_map").write_text(f"{uid} {uid} 1")
-            Path("/proc/self/gid_map").write_text(f"{gid} {gid} 1")
+    last process in it), and the children it starts from now on into a new PID namespace. First into
+    a new user namespace, where the OS allows one: a plain user is itself there; root becomes
+    ``kernel_uid()``, which is root inside and holds no capability over the machine. Without the
+    uid map, which some systems refuse, the process shows as nobody and still works. Raises
+    OSError when the namespaces cannot be made."""
+    if os.getuid() == 0:
+        _enter_user_namespace_as(kernel_uid())
+    elif _libc().unshare(CLONE_NEWUSER) == 0:
+        _map_own_ids()
     _check(_libc().unshare(CLONE_NEWNET | CLONE_NEWPID | CLONE_NEWIPC), "unshare(CLONE_NEWNET | CLONE_NEWPID | CLONE_NEWIPC)")
+
+
+def kernel_uid() -> int:
+    """The user a kernel started by root runs as, outside its user namespace: ``KERNEL_UIDS_FROM``
+    plus this process's ID."""
+    return KERNEL_UIDS_FROM + os.getpid()
+
+
+def _map_own_ids() -> None:
+    """In a user namespace just made: be there who this process is outside (when the OS allows it)."""
+    uid, gid = os.geteuid(), os.getegid()
+    with contextlib.suppress(OSError):
+        Path("/proc/self/setgroups").write_text("deny")
+        Path("/proc/self/uid_map").write_text(f"{uid} {uid} 1")
+        Path("/proc/self/gid_map").write_text(f"{gid} {gid} 1")
+
+
+def _enter_user_namespace_as(uid: int) -> None:
+    """Run by root: enter a new user namespace and become ``uid`` (user and group), which is root
+    inside it. Root outside is mapped too (as user 1), so that the capabilities the process holds
+    inside still reach root's files, as they did: the kernel reads a Python installation in /root,
+    and Landlock, not ownership, decides what it may touch. But Linux counts its processes against
+    RLIMIT_NPROC, as it does not root's, and it can signal no process of root's. Only a process
+    outside the namespace may write such a map: a helper child writes it, once this process has
+    entered. Where that fails, this process maps root to itself as a plain user would."""
+    ready, go = os.pipe()
+    helper = os.fork()
+    if helper == 0:  # the helper: wait for the namespace, then map it
+        os.close(go)
+        entered = os.read(ready, 1) == b"y"
+        parent, mapping = os.getppid(), f"0 {uid} 1\n1 0 1\n"
+        try:
+            if entered:
+                Path(f"/proc/{parent}/uid_map").write_text(mapping)
+                Path(f"/proc/{parent}/gid_map").write_text(mapping)
+        except OSError:
+            os._exit(1)
+        os._exit(0 if entered else 1)
+    os.close(ready)
+    entered = _libc().unshare(CLONE_NEWUSER) == 0
+    os.write(go, b"y" if entered else b"n")
+    os.close(go)
+    mapped = os.waitstatus_to_exitcode(os.waitpid(helper, 0)[1]) == 0
+    if mapped:
+        os.setgroups([])
+        os.setresgid(0, 0, 0)
+        os.setresuid(0, 0, 0)
+    elif entered:
+        _map_own_ids()
 
 
 def run_below_namespace_init() -> None:
@@ -265,7 +344,7 @@ def restrict_files(read: list[str], write: list[str]) -> list[str]:
 
 def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS) -> list[str]:
     """Apply the sandbox's ``layers`` to this process: the network and PID namespaces (returning in
-    a grandchild, see ``run_below_namespace_init``, capped at MAX_TASKS tasks unless run by root),
+    a grandchild, see ``run_below_namespace_init``, capped at MAX_TASKS tasks),
     no core dumps, no_new_privs, then Landlock. Returns what could not be applied, one sentence each (empty when all
     was)."""
     if sys.platform != "linux":
@@ -278,8 +357,8 @@ def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS)
             problems.append(f"no network namespace, the kernel has the network ({_namespace_error(error.errno)})")
         else:
             run_below_namespace_init()
-            if os.getuid() != 0:  # a plain user got here through its own user namespace
-                resource.setrlimit(resource.RLIMIT_NPROC, (MAX_TASKS, MAX_TASKS))
+            # counted in the kernel's own user namespace; not for root's user ID, which Linux exempts
+            resource.setrlimit(resource.RLIMIT_NPROC, (MAX_TASKS, MAX_TASKS))
     # no core dumps: a crash would write the kernel's memory (up to its 4 GiB) to disk, in its folder,
     # or outside the sandbox where a helper collects cores (systemd-coredump, apport)
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
