@@ -527,6 +527,32 @@ def test_without_landlocks_signal_scope_the_kernel_still_signals_nothing_outside
     assert done.stdout.split() == ["ProcessLookupError", "ProcessLookupError"], done.stderr
 
 
+def test_a_kernel_cannot_reach_the_sockets_in_another_kernels_folder():
+    """Landlock (up to ABI 7) does not control connecting to a Unix socket by its path, and a kernel
+    started by root holds capabilities over root's files: it could connect to the grader's socket for
+    another kernel, in that kernel's private folder, by its path. Run by root, the launcher gives
+    each kernel's folders (``--own``) to the kernel's own user with mode 0700, over which no other
+    kernel holds a capability: the connection is refused (EACCES). On the code before, it connected.
+    Run by a plain user, every kernel is that user, and README states the gap (Named Unix sockets)."""
+    read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable), "/usr/lib", "/lib", "/lib64",
+                        "/etc/ld.so.cache") if os.path.exists(p)]
+    with tempfile.TemporaryDirectory(prefix="kit-test-") as first, tempfile.TemporaryDirectory(prefix="kit-test-") as second:
+        listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        listener.bind(os.path.join(first, "s"))  # as the grader binds its socket in the first kernel's folder
+        listener.listen(1)
+        try:
+            started = subprocess.run([*sandbox.launcher_command(read, [first], sandbox.LAYERS, [first]), sys.executable, "-I", "-c", ""],
+                                     capture_output=True, text=True, timeout=60)
+            probe = ("import socket\ntry:\n    socket.socket(socket.AF_UNIX).connect(" + repr(os.path.join(first, "s"))
+                     + ")\n    print('connected')\nexcept OSError as error:\n    print(error.errno)\n")
+            command = [*sandbox.launcher_command(read, [second], sandbox.LAYERS, [second]), sys.executable, "-I", "-c", probe]
+            done = subprocess.run(command, capture_output=True, text=True, timeout=60, cwd=second)
+        finally:
+            listener.close()
+    assert started.returncode == 0 and done.returncode == 0 and done.stderr == "", (started.stderr, done.stderr)
+    assert done.stdout.strip() == (str(errno.EACCES) if os.getuid() == 0 else "connected")
+
+
 def test_a_crashing_kernel_dumps_no_core():
     """A kernel that raises its core size limit and crashes wrote its memory (up to 4 GiB) into its
     folder (the core pattern here), or, where a helper collects cores (systemd-coredump, apport),

@@ -183,7 +183,8 @@ class SandboxedKernelManager(AsyncKernelManager):
         # log, which a kernel could read typeahead from, truncate, flood or write escape codes to (what a
         # kernel prints reaches the notebook through its messages, not through these)
         kw.update(stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        return [*launcher_command(read, write, wanted_layers()), *kernel_cmd], kw
+        own = [str(self._private), kw["cwd"]]  # closed to other kernels when root grades (sandbox.confine)
+        return [*launcher_command(read, write, wanted_layers(), own), *kernel_cmd], kw
 
     async def _async_shutdown_kernel(self, now: bool = False, restart: bool = False) -> None:
         """Stop the kernel at once (SIGKILL to its process group), whatever ``now`` says: it has

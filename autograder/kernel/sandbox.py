@@ -342,14 +342,22 @@ def restrict_files(read: list[str], write: list[str]) -> list[str]:
     return skipped
 
 
-def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS) -> list[str]:
+def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS, own: tuple[str, ...] = ()) -> list[str]:
     """Apply the sandbox's ``layers`` to this process: the network and PID namespaces (returning in
     a grandchild, see ``run_below_namespace_init``, capped at MAX_TASKS tasks),
-    no core dumps, no_new_privs, then Landlock. Returns what could not be applied, one sentence each (empty when all
+    no core dumps, no_new_privs, then Landlock. Run by root with the network layer, first give the
+    folders ``own`` to the kernel's own user (``kernel_uid``): with mode 0700 they are then closed to
+    every other kernel, whose capabilities reach only root's files and its own (Landlock does not
+    control connecting to a Unix socket by its path; this keeps a kernel from the sockets in another
+    kernel's private folder). Returns what could not be applied, one sentence each (empty when all
     was)."""
     if sys.platform != "linux":
         return [f"not applied: {', '.join(layers)} confinement needs Linux"] if layers else []
     problems = []
+    if "network" in layers and os.getuid() == 0:
+        for folder in own:
+            os.chown(folder, kernel_uid(), kernel_uid(), follow_symlinks=False)
+            os.chmod(folder, 0o700, follow_symlinks=False)
     if "network" in layers:
         try:
             enter_network_namespace()
@@ -388,6 +396,8 @@ def main(argv: list[str] | None = None) -> None:
                         help="a path it may read and write beneath")
     parser.add_argument("--without", action="append", default=[], choices=LAYERS,
                         help="a layer to leave out")
+    parser.add_argument("--own", action="append", default=[], metavar="FOLDER",
+                        help="run by root: a folder to give to the kernel's own user (mode 0700)")
     parser.add_argument("command", nargs=argparse.REMAINDER, help="-- CMD ARGS...")
     args = parser.parse_args(argv)
     command = args.command[1:] if args.command[:1] == ["--"] else args.command
@@ -397,19 +407,20 @@ def main(argv: list[str] | None = None) -> None:
     if program is None:
         parser.error(f"{command[0]}: no such program")
     layers = tuple(layer for layer in LAYERS if layer not in args.without)
-    for problem in confine(args.read, args.write, layers):
+    for problem in confine(args.read, args.write, layers, tuple(args.own)):
         print(f"sandbox: {problem}", file=sys.stderr)
     sys.stderr.flush()
     os.execv(program, command)
 
 
-def launcher_command(read: list[str], write: list[str], layers: tuple[str, ...]) -> list[str]:
-    """The launcher's command line for these paths and layers, up to ``--``: the command it
-    confines follows. It runs isolated (``-I``), so that nothing in the working directory or the
-    environment can stand in for the modules it imports."""
+def launcher_command(read: list[str], write: list[str], layers: tuple[str, ...], own: list[str] = ()) -> list[str]:
+    """The launcher's command line for these paths, layers and folders of the kernel's own (see
+    ``confine``), up to ``--``: the command it confines follows. It runs isolated (``-I``), so that
+    nothing in the working directory or the environment can stand in for the modules it imports."""
     command = [sys.executable, "-I", str(Path(__file__).resolve())]
     command += [arg for path in read for arg in ("--read", path)]
     command += [arg for path in write for arg in ("--write", path)]
+    command += [arg for path in own for arg in ("--own", path)]
     command += [arg for layer in LAYERS if layer not in layers for arg in ("--without", layer)]
     return [*command, "--"]
 
