@@ -6,6 +6,9 @@ import ast
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+from autograder.integrity.rules import KNOWN_MODULE_NAMES, REEXPORTED_MODULES
+from autograder.integrity.syntax import local_names
+
 if TYPE_CHECKING:
     from autograder.integrity.scan import Scan
 
@@ -51,6 +54,8 @@ class Walker:
             args = node.args
             params = {a.arg for a in args.posonlyargs + args.args + args.kwonlyargs}
             params |= {a.arg for a in (args.vararg, args.kwarg) if a is not None}
+            if not isinstance(node, ast.Lambda):  # and what its body binds: a nested ``def open`` is its own there
+                params |= local_names(node)
             inner = Context(context.top, context.owner, context.params + (frozenset(params),), context.allowed)
         for child in ast.iter_child_nodes(node):
             self.visit(child, inner)
@@ -69,8 +74,10 @@ class Walker:
         root = self.scan.modules.get(node.id)
         if root is None:
             root = {"np": "numpy", "plt": "matplotlib.pyplot"}.get(node.id) or (
-                node.id if node.id in ("sys", "os", "builtins", "numpy", "scipy", "math", "importlib", "inspect",
-                                       "gc", "types", "course", "solutions", "autograder", "IPython") else None)
+                node.id if node.id in KNOWN_MODULE_NAMES else None)
         if root is None:
             return None
-        return ".".join([root] + parts[::-1])
+        path = ".".join([root] + parts[::-1]).split(".")
+        # a module another one holds (np.os.system): read from the last such module on
+        inner = [i for i, part in enumerate(path) if i > 0 and part in REEXPORTED_MODULES]
+        return ".".join(path[inner[-1]:] if inner else path)
