@@ -1,8 +1,8 @@
 """The Kubernetes recipe (deploy/kubernetes/): its manifests parse, and hold what lets them run (issue 35).
 
 No cluster is reachable from the tests, and no container runtime runs here: these checks read the files.
-The manifests also passed `kubernetes-validate --strict` (PyPI) against Kubernetes 1.30, 1.33 and 1.37,
-run by hand (deploy/kubernetes/README.md). Checked here: the grading Job is Indexed with N pods for
+The manifests also passed `kubernetes-validate --strict` (PyPI) against Kubernetes 1.30 to 1.37, run by
+hand (deploy/kubernetes/README.md). Checked here: the grading Job is Indexed with N pods for
 `--shard $((JOB_COMPLETION_INDEX + 1))/N`, retries each index on its own, ends after the Slurm
 script's time, refuses a partial sandbox and lets the sandbox make its namespaces; a pod's cores fit
 a 16-vCPU node and equal its `--jobs`, its memory limit is 4 GiB per kernel and 4 GiB more, and its
