@@ -23,7 +23,7 @@ import socket
 import subprocess
 import tempfile
 import time
-from collections.abc import Iterator
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -181,7 +181,7 @@ def running_cluster() -> Iterator[Cluster]:
         start("munged", "munged", "--foreground", f"--socket={socket_path}", f"--key-file={key}",
               f"--pid-file={folder / 'munged.pid'}", f"--log-file={folder / 'munged.log'}",
               f"--seed-file={folder / 'munged.seed'}")
-        _wait_for(lambda: socket_path.exists(), daemons[-1], folder / "munged.out", "munged did not create its socket")
+        _wait_for(socket_path.exists, daemons, "munged did not create its socket", folder / "munged.out")
         cluster.config.write_text(configuration(folder, cluster.cpus, (free_port(), free_port())))
         start("slurmctld", "slurmctld", "-D", "-f", str(cluster.config))
         start("slurmd", "slurmd", "-D", "-N", NODE, "-f", str(cluster.config))
@@ -191,8 +191,7 @@ def running_cluster() -> Iterator[Cluster]:
                                   capture_output=True, text=True, timeout=30)
             return done.returncode == 0 and done.stdout.strip() == "idle"
 
-        _wait_for(idle, None, folder / "slurmd.log", "the node did not become idle", daemons,
-                  folder / "slurmctld.log")
+        _wait_for(idle, daemons, "the node did not become idle", folder / "slurmctld.log", folder / "slurmd.log")
         yield cluster
     finally:
         if len(daemons) == 3:
@@ -201,21 +200,20 @@ def running_cluster() -> Iterator[Cluster]:
             with contextlib.suppress(ClusterUnavailable):
                 _wait_for(lambda: not subprocess.run(["squeue", "--noheader"], env=cluster.environment(),
                                                      capture_output=True, text=True, timeout=30).stdout.strip(),
-                          None, folder / "slurmd.log", "")
+                          daemons, "jobs were left")
         for daemon in reversed(daemons):
             _stop(daemon)
         shutil.rmtree(folder, ignore_errors=True)
 
 
-def _wait_for(ready, process: subprocess.Popen | None, log: Path, what: str,
-              daemons: list[subprocess.Popen] = (), other_log: Path | None = None) -> None:
-    """Wait until ``ready()``; raise ClusterUnavailable, with the end of ``log``, if a daemon exits or after
-    START_TIMEOUT."""
+def _wait_for(ready: Callable[[], bool], daemons: list[subprocess.Popen], what: str, *logs: Path) -> None:
+    """Wait until ``ready()``; raise ClusterUnavailable saying ``what``, with the end of each log, if one of the
+    ``daemons`` exits or after START_TIMEOUT."""
     deadline = time.monotonic() + START_TIMEOUT
     while time.monotonic() < deadline:
         if ready():
             return
-        if any(p.poll() is not None for p in (*daemons, *([process] if process else []))):
+        if any(daemon.poll() is not None for daemon in daemons):
             break
         time.sleep(0.5)
-    raise ClusterUnavailable(f"{what}:\n{_tail(log)}\n{_tail(other_log) if other_log else ''}")
+    raise ClusterUnavailable("\n".join([f"{what}:", *map(_tail, logs)]))

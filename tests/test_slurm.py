@@ -7,7 +7,7 @@ the solved notebook), two in each of two shards, each task one core. Its baselin
 own, and its export equals the baseline, row for row. Then task 1 is rerun as README says (`sbatch
 --array=1 grade.sh`) and cancelled (`scancel JOB_1`) while it grades a submission: the export fails and
 names that submission; rerun once more, the export equals the baseline again, and every run of task 1
-kept its log. Each submission is graded four times: 5.7 minutes on two cores that a benchmark kept busy.
+kept its log. Each submission is graded four times: 2.8 minutes on two cores beside a benchmark.
 
 It needs Debian's slurm-wlm and munge, and root (slurmd runs jobs as their user): without them it is
 skipped on a user's machine and fails in CI (tests/machine_needs.py).
