@@ -23,6 +23,7 @@ import yaml
 from sqlalchemy.engine import make_url
 
 from autograder.labs import ROOT
+from autograder.pipeline.grading_secret import ENVIRONMENT_VARIABLE
 
 RECIPE = ROOT / "deploy" / "kubernetes"
 GIB = 2**30
@@ -65,6 +66,13 @@ def image_user() -> int:
     return int(re.search(r"^USER (\d+)", (RECIPE / "Containerfile").read_text(), re.M).group(1))
 
 
+def image_group() -> int:
+    recipe = (RECIPE / "Containerfile").read_text()
+    gid = re.search(r"^USER \d+:(\d+)$", recipe, re.M).group(1)
+    assert f"groupadd --gid {gid} grader" in recipe
+    return int(gid)
+
+
 def test_the_grading_job_runs_one_shard_per_index_retried_on_its_own():
     job = manifest("grade-job.yaml")
     assert (job["apiVersion"], job["kind"]) == ("batch/v1", "Job")
@@ -97,13 +105,27 @@ def test_a_grading_pod_runs_as_the_images_user_and_lets_the_sandbox_make_its_nam
     spec, container = pod(manifest("grade-job.yaml"))
     context = spec["securityContext"]
     assert context["runAsNonRoot"] is True and context["runAsUser"] == image_user() != 0
+    assert context["runAsGroup"] == context["fsGroup"] == image_group()
     assert context["seccompProfile"]["type"] in ("Unconfined", "Localhost")  # RuntimeDefault forbids unshare()
     assert context["appArmorProfile"]["type"] in ("Unconfined", "Localhost")
     assert container["securityContext"]["allowPrivilegeEscalation"] is False
     assert container["securityContext"]["capabilities"]["drop"] == ["ALL"]
     secret = {"secretKeyRef": {"name": "gradebook", "key": "url"}}
-    assert container["env"] == [{"name": "GRADEBOOK_URL", "valueFrom": secret}]
+    assert container["env"][0] == {"name": "GRADEBOOK_URL", "valueFrom": secret}
     assert spec["imagePullSecrets"]  # the image is in a private registry
+
+
+@pytest.mark.parametrize("name", ["grade-job.yaml", "export-job.yaml"])
+def test_every_pod_reads_the_one_grading_secret_from_a_kubernetes_secret(name):
+    """The image holds no grading secret and its course root is read-only: grading there without
+    KIT_GRADING_SECRET_FILE failed (tried as uid 10001, deploy/kubernetes/README.md)."""
+    spec, container = pod(manifest(name))
+    named = {e["name"]: e.get("value") for e in container["env"]}[ENVIRONMENT_VARIABLE]
+    mount = next(m for m in container["volumeMounts"] if named.startswith(m["mountPath"] + "/"))
+    volume = next(v for v in spec["volumes"] if v["name"] == mount["name"])
+    assert volume["secret"]["secretName"] == "grading-secret" and mount["readOnly"] is True
+    assert volume["secret"]["defaultMode"] & 0o040 and spec["securityContext"]["fsGroup"] == image_group()
+    assert "kubectl create secret generic grading-secret --from-file=secret=" in (RECIPE / "README.md").read_text()
 
 
 def test_the_export_job_reads_what_the_shards_wrote():
