@@ -199,10 +199,24 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     "plt.imread('../../other/x.png')": [None],
     "np.lib.format.open_memmap('/tmp/x.npy')": [None],
     "p = print\nname = '__se' + 'lf__'\ngetattr(p, name)": [None],
+    # routes of the re-attack (helper-54), unflagged on c7463c6: a definition after the use, or deleted;
+    # code in a pickle; builtins reached through a module that holds it; getattr handed to another function
+    "exec('1')\ndef exec(*a):\n    pass": [None],
+    "def exec(*a):\n    pass\ndel exec\nexec('1')": [None],
+    "def helper(c):\n    exec(c)\nhelper('1')\ndef exec(*a):\n    pass": [None],
+    "g = globals()\ng['__builtins__']\ndef globals():\n    return {}": [None],
+    "import pickle\npickle.loads(b'x')": [None],
+    "np.core.numeric.builtins.exec('1')": [None],
+    "import pydoc\npydoc.locate('os.system')": [None],
+    "import operator\noperator.attrgetter('os')(np)": [None],
+    "import functools\nfunctools.reduce(getattr, ['os', 'system'], np)": [None],
+    "object.__getattribute__(np, 'os')": [None],
     # and what stays honest: a nested function of a builtin's name is its own, an alias of print is print
     "def f():\n    def open(x):\n        return x\n    return open(1)": [],
     "log = print\nlog('RMSE', 1.0)": [],
     "def g(x, fn=print):\n    fn(x)": [],
+    "def vars():\n    return {}\nprint(vars())": [],
+    "print(sorted([3, 1], key=len))": [],
 }
 
 

@@ -424,6 +424,40 @@ def test_a_restarted_kernel_keeps_its_files(tmp_path):
     assert "".join(asyncio.run(run())) == "wrote\nwrote\n"
 
 
+def test_a_restart_writes_nothing_where_the_kernel_before_put_a_link(tmp_path):
+    """On a restart the manager copied Matplotlib's font list into the private folder's matplotlib/
+    again; the kernel before had replaced that folder with a link to a file of the grader's, and the
+    grader, as root, overwrote the file with the font list (a re-attack of issue 29). The font list
+    is now copied only into the folder just made. On the code before, the file held the font list."""
+    victim = tmp_path / "gradebook.db"
+    victim.write_text("grades")
+    code = (f"import os, shutil\nfolder = os.environ['MPLCONFIGDIR']\nshutil.rmtree(folder)\n"
+            f"os.symlink({str(victim)!r}, folder)\nprint('linked')")
+
+    async def run() -> str:
+        """What the first kernel printed; the second only starts."""
+        manager = SandboxedKernelManager(kernel_name="python3")
+        await manager.start_kernel(cwd=str(tmp_path / "work"), extra_arguments=KERNEL_ARGUMENTS)
+        printed: list[str] = []
+        try:
+            client = manager.client()
+            client.start_channels()
+            try:
+                await client.wait_for_ready(timeout=120)
+                await client.execute_interactive(code, timeout=120, output_hook=lambda msg: printed.append(
+                    msg["content"]["text"] if msg["msg_type"] == "stream" else ""))
+            finally:
+                client.stop_channels()
+            await manager.restart_kernel(now=True)
+        finally:
+            await manager.shutdown_kernel()
+        return "".join(printed)
+
+    (tmp_path / "work").mkdir()
+    assert asyncio.run(run()) == "linked\n"
+    assert victim.read_text() == "grades"
+
+
 def test_the_grader_and_the_kernel_meet_on_a_unix_socket_in_the_private_folder(graded_class):
     """How the grader will serve the comparison: a socket it makes in the private folder."""
     servers: list[socket.socket] = []

@@ -17,6 +17,7 @@ from autograder.integrity.rules import (
     NUMPY_WRITES,
     OS_FILE_READS,
     OS_FILE_WRITES,
+    PASSED_BUILTINS,
     PATH_GENERIC_METHODS,
     PATH_READ_METHODS,
     PATH_WRITE_METHODS,
@@ -47,6 +48,11 @@ class CallRules(Walker):
         func = node.func
         if self.magic(node, context):
             return False
+        for arg in [*node.args, *(kw.value for kw in node.keywords)]:  # reduce(getattr, ...), map(open, ...)
+            name = self.scan.builtin_aliases.get(arg.id, arg.id) if isinstance(arg, ast.Name) else None
+            if name in PASSED_BUILTINS and (arg.id in self.scan.builtin_aliases or not self.shadowed(arg.id, context)):
+                self.hit(node, "reference", f"passes {name} to another function, where the scan cannot follow "
+                                            "what it reaches", context)
         if isinstance(func, ast.Name) and (func.id in self.scan.builtin_aliases or not self.shadowed(func.id, context)):
             name = self.scan.builtin_aliases.get(func.id, func.id)  # o = open (or def f(o=open)): o(...) is open(...)
             if name in ("getattr", "hasattr", "setattr", "delattr") and len(node.args) >= 2:

@@ -76,7 +76,7 @@ exists, or ``filename=``; ``url=`` fetches): the scan reads that argument as a f
 REFERENCE_ATTRIBUTES = frozenset({
     "f_back", "f_globals", "f_locals", "f_builtins", "f_code", "tb_frame", "gi_frame", "cr_frame", "ag_frame",
     "_getframe", "_current_frames", "__globals__", "__closure__", "__code__", "__subclasses__", "__self__",
-    "__import__", "__loader__", "__spec__", "__file__", "__path__", "__cached__", "__wrapped__",
+    "__import__", "__loader__", "__spec__", "__file__", "__path__", "__cached__", "__wrapped__", "__getattribute__",
 })
 """Attribute names that reach the hidden tests' variables or the reference, on any object."""
 SHARED_ATTRIBUTES = frozenset({"__builtins__", "__setattr__", "__delattr__"})
@@ -89,6 +89,13 @@ MODULE_REFERENCE = {
     "traceback": {"walk_stack", "walk_tb"},
     "types": {"FunctionType", "CodeType", "MethodType", "LambdaType", "ModuleType"},
     "gc": {"get_objects", "get_referrers", "get_referents"},
+    # code the scan cannot read: a pickle runs any callable it names, exec among them (a re-attack of issue 29)
+    "pickle": {"loads", "load", "Unpickler"},
+    "marshal": {"loads", "load"},
+    "pydoc": {"locate"},
+    "operator": {"attrgetter", "methodcaller"},
+    "builtins": {"exec", "eval", "compile", "__import__", "open", "getattr", "setattr", "delattr", "globals", "vars",
+                 "locals", "breakpoint", "__dict__"},
 }
 """Module attributes that are routes to the reference or to the hidden tests' variables. Not
 ``inspect.getsource``: it reads the source of an object the kernel already holds, and no object of the
@@ -115,12 +122,16 @@ ALLOWED_MODULE_STORES = frozenset({"matplotlib.rcParams", "matplotlib.pyplot.rcP
 IMAGE_READERS = frozenset({"matplotlib.pyplot.imread", "matplotlib.image.imread", "matplotlib.pyplot.imsave",
                            "matplotlib.image.imsave"})
 """Matplotlib's functions that read or write an image file by its name."""
+PASSED_BUILTINS = frozenset({"getattr", "setattr", "delattr", "open", "vars", "globals", "locals", "__import__"})
+"""Builtins whose use the scan checks where they are called: handed to another function as a value
+(``functools.reduce(getattr, ["os", "system"], np)``), they reach what the scan cannot see."""
 BUILTIN_NAMES = frozenset(dir(builtins))
 """The builtins' names: an attribute of one, by a computed name, can be the builtins module itself."""
 KNOWN_MODULE_NAMES = frozenset({"sys", "os", "builtins", "numpy", "scipy", "math", "importlib", "inspect", "gc",
                                 "types", "course", "solutions", "autograder", "IPython"})
 """Names the scan reads as these modules even where the cell did not import them (the set-up cell may have)."""
-REEXPORTED_MODULES = frozenset({"os", "sys", "builtins", "importlib", "gc", "subprocess", "shutil", "ctypes", "inspect"})
+REEXPORTED_MODULES = frozenset({"os", "sys", "builtins", "importlib", "gc", "subprocess", "shutil", "ctypes", "inspect",
+                                "pickle", "marshal", "pydoc", "operator"})
 """Modules that other modules hold as attributes (``numpy.os``, ``scipy.sys``): a path through one of
 them is read as the module's own (``np.os.system`` as ``os.system``)."""
 

@@ -192,10 +192,16 @@ class Scan:
         self.modules.update(self.locked_imports)
         for _, _, tree in self.cells:
             self._collect_imports(tree, self.modules)
-        # the names a cell's own code defines at module level: a method or a nested function of the
-        # same name as a builtin (``class T: def exec(self)``) does not stand for it at module level
-        self.defined = {node.name for _, _, tree in self.cells for node in tree.body
-                        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))}
+        # where the cells' own code first defines a name at module level, (cell, line): from there on the
+        # name is the notebook's own. A method or a nested function of a builtin's name (``class T: def
+        # exec(self)``) does not count, nor a definition after the code that uses the name, nor one of a
+        # name that is also bound otherwise or deleted anywhere (``del exec``, ``exec = ...``, an import)
+        self.defined: dict[str, tuple[int, int]] = {}
+        for order, (_, _, tree) in enumerate(self.cells):
+            for node in tree.body:
+                if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                    self.defined.setdefault(node.name, (order, node.lineno))
+        self.rebound = {name for _, _, tree in self.cells for name in _bound_otherwise(tree)}
         self.builtin_aliases = self._collect_aliases()
         self.uses = self._top_level_uses()
         self.hits: list[Hit] = []
@@ -229,7 +235,7 @@ class Scan:
                     name = value.id
                     if name in self.modules or name in KNOWN_MODULE_NAMES:
                         self.modules.setdefault(alias, self.modules.get(name, name))
-                    elif name in BUILTIN_NAMES and name not in self.defined:
+                    elif name in BUILTIN_NAMES and name not in self.defined:  # an alias of the notebook's own is its own
                         aliases[alias] = aliases.get(name, name)
         return aliases
 
@@ -260,11 +266,11 @@ class Scan:
     # -- results ---------------------------------------------------------------------------------
 
     def findings(self) -> list[Finding]:
-        for label, blank, tree in self.cells:
-            Visitor(self, label).run(tree)
+        for order, (label, blank, tree) in enumerate(self.cells):
+            Visitor(self, label, order).run(tree)
             self._swallow_all(label, tree)
             self._rebinds_helpers(label, tree)
-            self._namespace_uses(label, tree)
+            self._namespace_uses(label, tree, order)
         out: list[Finding] = []
         seen = set()
         for hit in self.hits:
@@ -313,7 +319,13 @@ class Scan:
                                       "every error, so the cell can never fail", body[0], None))
                 return
 
-    def _namespace_uses(self, label: str, tree: ast.Module) -> None:
+    def own_definition(self, name: str, order: int, line: int) -> bool:
+        """Whether ``name``, used in the statement at ``line`` of the ``order``-th cell, is a function
+        or class the notebook defined at module level before it, and never bound otherwise."""
+        defined = self.defined.get(name)
+        return defined is not None and name not in self.rebound and (order, line) > defined
+
+    def _namespace_uses(self, label: str, tree: ast.Module, order: int) -> None:
         """globals(), vars() and locals() used for anything but their names: the values hold
         ``__builtins__`` (exec, open, __import__), which no plain name reaches. Allowed: ``len``,
         ``sorted`` and the like, ``in``, iteration, ``.keys()``, and a key that is a constant name
@@ -325,7 +337,8 @@ class Scan:
                                                                                    ast.Lambda)) for inner in ast.walk(scope)}
             for node in parents:
                 if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in NAMESPACE_CALLS
-                        and node.func.id not in self.defined and not (node.func.id == "vars" and node.args)
+                        and not self.own_definition(node.func.id, order, stmt.lineno)
+                        and not (node.func.id == "vars" and node.args)
                         and not (node.func.id in ("locals", "vars") and node in in_functions)):
                     continue
                 found = _namespace_use(node.func.id, node, parents)
@@ -363,3 +376,17 @@ def _plain_bindings(node: ast.AST) -> list[tuple[str, ast.Name]]:
         pairs += [(a, d) for a, d in zip(args.kwonlyargs, args.kw_defaults) if d is not None]
         return [(a.arg, d) for a, d in pairs if isinstance(d, ast.Name)]
     return []
+
+
+def _bound_otherwise(tree: ast.AST) -> set[str]:
+    """The names that ``tree`` binds or unbinds otherwise than by a definition: assignments and
+    deletions (anywhere), imports, ``global`` declarations, loop and ``with`` targets."""
+    names = set()
+    for node in ast.walk(tree):
+        if isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
+            names.add(node.id)
+        elif isinstance(node, (ast.Import, ast.ImportFrom)):
+            names.update((a.asname or a.name).split(".")[0] for a in node.names)
+        elif isinstance(node, ast.Global):
+            names.update(node.names)
+    return names

@@ -25,9 +25,10 @@ class Walker:
     """Walks one cell's tree with its context (top-level statement, enclosing def, parameters) and calls
     a ``visit_<Node>`` method for each node; the rules (autograder/integrity/visitor.py) define them."""
 
-    def __init__(self, scan: "Scan", cell: str):
+    def __init__(self, scan: "Scan", cell: str, order: int = 0):
         self.scan = scan
         self.cell = cell
+        self.order = order  # the cell's place among the scanned cells, which run in this order
         self.skip: set[int] = set()  # ids of nodes already handled (magic calls' get_ipython)
         self.docstrings: set[int] = set()
 
@@ -61,7 +62,12 @@ class Walker:
             self.visit(child, inner)
 
     def shadowed(self, name: str, context: Context) -> bool:
-        return name in self.scan.defined or any(name in p for p in context.params)
+        """Whether ``name`` here is the notebook's own, not a builtin's: a parameter or a name its
+        enclosing function binds, or a module-level definition that comes before this statement and
+        is never rebound or deleted."""
+        if any(name in p for p in context.params):
+            return True
+        return context.top is not None and self.scan.own_definition(name, self.order, context.top.lineno)
 
     def module_of(self, node: ast.AST) -> str | None:
         """The dotted path an expression names, if it is rooted at an imported name (np.testing -> numpy.testing)."""

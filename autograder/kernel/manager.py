@@ -174,11 +174,13 @@ class SandboxedKernelManager(AsyncKernelManager):
         _refuse_course_root([*read, *self.write_paths, *([kw["cwd"]] if kw.get("cwd") else [])])
         if self._private is None:  # a restart keeps the folder and the connection file
             self._private = self._make_private_folder()
+            # only into the folder just made: after a restart, the kernel before may have put a link in its place,
+            # and the grader would write where the link points
+            fonts = font_cache(tuple(read))
+            if fonts is not None:
+                shutil.copy(fonts, self._private / "matplotlib")
         kw["cwd"] = str(Path(kw.get("cwd") or self._private).resolve())
         write = self.kernel_write_paths(kw["cwd"])
-        fonts = font_cache(tuple(read))
-        if fonts is not None:
-            shutil.copy(fonts, self._private / "matplotlib")
         kernel_cmd, kw = await super()._async_pre_start_kernel(**kw)
         # the grader's environment may hold secrets (GRADEBOOK_URL with a password, PGPASSWORD, the
         # grading secret's file): the kernel gets only what a Python program needs to run alike

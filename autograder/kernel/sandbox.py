@@ -75,6 +75,12 @@ by path. Landlock controls none of the first (and truncation only from ABI 3, Li
 could use them on any file it can name that it owns, or, started by root, on which its capabilities
 hold (root's files): make ``solutions/`` readable by every user, make /etc/shadow readable, or lock
 the grader out of its own code. A seccomp filter makes each fail with EPERM."""
+RING_AND_WATCH_CALLS = ("io_uring_setup", "io_uring_enter", "io_uring_register", "inotify_init", "inotify_init1",
+                        "inotify_add_watch", "fanotify_init", "fanotify_mark")
+"""io_uring, whose operations (an xattr set among them) are not system calls, so that the filter never
+sees them: a re-attack set an xattr through it, and wrote ACLs on the grader's own files; and inotify
+and fanotify, which Landlock does not control: a kernel watched folders it may not read, and saw every
+other kernel's private folder made in /tmp. The seccomp filter refuses them (EPERM)."""
 IDENTITY_CALLS = ("setuid", "setgid", "setreuid", "setregid", "setresuid", "setresgid", "setfsuid", "setfsgid",
                   "setgroups", "add_key", "request_key", "keyctl")
 """The system calls that change who a process is, and the kernel's keyrings. Started by root, the
@@ -405,12 +411,13 @@ def drop_capabilities() -> None:
 
 def forbid_attribute_changes() -> None:
     """Load a seccomp filter into this process and its children under which every call of
-    ``ATTRIBUTE_CALLS`` and ``IDENTITY_CALLS`` (and ``NEWER_ATTRIBUTE_CALLS``) fails with EPERM; other calls are unchanged.
+    ``ATTRIBUTE_CALLS``, ``IDENTITY_CALLS`` and ``RING_AND_WATCH_CALLS`` (and ``NEWER_ATTRIBUTE_CALLS``) fails
+    with EPERM; other calls are unchanged.
     Needs no_new_privs set first. Raises OSError, or RuntimeError when libseccomp is missing."""
     import pyseccomp  # here, not at the top: the launcher still starts, and says so, without libseccomp
 
     rules = pyseccomp.SyscallFilter(pyseccomp.ALLOW)
-    for name in (*ATTRIBUTE_CALLS, *IDENTITY_CALLS):
+    for name in (*ATTRIBUTE_CALLS, *IDENTITY_CALLS, *RING_AND_WATCH_CALLS):
         number = pyseccomp.resolve_syscall(pyseccomp.Arch.NATIVE, name)
         if number >= 0:  # a call this architecture has
             rules.add_rule(pyseccomp.ERRNO(errno.EPERM), number)
