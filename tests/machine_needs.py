@@ -22,12 +22,13 @@ from pathlib import Path
 
 import pytest
 
-import slurm_cluster
 
 RUN_EVERY_TEST = "KIT_RUN_EVERY_TEST"
 """Set to 1 (``.ci/run`` does): a test whose need is missing fails instead of being skipped."""
 SKIPPED = "Not run on this machine: "
 """How every skip reason of a missing need begins (the summary finds them by it)."""
+SLURM_PROGRAMS = ("munged", "slurmctld", "slurmd", "sbatch", "scancel", "scontrol", "sinfo", "squeue")
+"""munge's and Slurm's daemons and commands, which tests/slurm_cluster.py starts and runs."""
 
 
 def _chromium_present() -> bool:
@@ -60,7 +61,7 @@ NEEDS: dict[str, Need] = {
         "a single-node Slurm that the test starts on 127.0.0.1 (Debian's slurm-wlm, 22.05, and munge), for README's "
         "Slurm array",
         "`sudo apt-get install --no-install-recommends slurm-wlm munge`",
-        slurm_cluster.present),
+        lambda: all(shutil.which(program) for program in SLURM_PROGRAMS)),
     "root": Need(
         "to run as root, since the hub recipe's test adds local users and the hub starts each user's server as that "
         "user (CI runs as root)",

@@ -27,9 +27,10 @@ from collections.abc import Callable, Iterator
 from dataclasses import dataclass
 from pathlib import Path
 
+from machine_needs import SLURM_PROGRAMS
+
 START_TIMEOUT = 60.0
 """Seconds for munged to answer and for the node to be idle in its partition."""
-PROGRAMS = ("munged", "slurmctld", "slurmd", "sbatch", "scancel", "scontrol", "sinfo", "squeue")
 NODE = "localhost"
 FINISHED = ("COMPLETED", "FAILED", "CANCELLED", "TIMEOUT", "NODE_FAIL", "OUT_OF_MEMORY", "PREEMPTED", "BOOT_FAIL",
             "DEADLINE")
@@ -41,7 +42,7 @@ class ClusterUnavailable(RuntimeError):
 
 def present() -> bool:
     """Whether munge's and Slurm's daemons and commands are installed."""
-    return all(shutil.which(program) for program in PROGRAMS)
+    return all(shutil.which(program) for program in SLURM_PROGRAMS)
 
 
 @dataclass(frozen=True)
@@ -153,7 +154,7 @@ def running_cluster() -> Iterator[Cluster]:
     """Start munged, slurmctld and slurmd on 127.0.0.1 in a new folder; yield the Cluster, idle."""
     from postgres_server import free_port
 
-    missing = [program for program in PROGRAMS if not shutil.which(program)]
+    missing = [program for program in SLURM_PROGRAMS if not shutil.which(program)]
     if missing:
         raise ClusterUnavailable(f"{', '.join(missing)} not found: install Debian's slurm-wlm and munge")
     if os.geteuid() != 0:
