@@ -1,7 +1,7 @@
 """Suspicious code in a submission, found before grading and flagged for the instructor's review.
 
 Grading no longer depends on it for correctness. The hidden tests compare in the grader's process
-(autograder/pipeline/compare.py), so nothing the student's kernel does can change a verdict; the sandbox
+(autograder/pipeline/check_runner.py), so nothing the student's kernel does can change a verdict; the sandbox
 (autograder/kernel/sandbox.py) keeps the kernel from the reference's files, the gradebook and other
 students' folders. What the scan adds is a record: an attempt to cheat is worth an instructor's
 attention even when it gained nothing, and where the OS cannot sandbox the kernel, the scan's
