@@ -29,8 +29,8 @@ from nbformat.v4 import new_code_cell, new_notebook
 
 from autograder.kernel import manager, sandbox
 from autograder.labs import ROOT
-from autograder.kernel.sandbox import SandboxedKernelManager, launcher_command
-from autograder.kernel.manager import PRIVATE_PARENT
+from autograder.kernel.manager import PRIVATE_PARENT, SandboxedKernelManager
+from autograder.kernel.sandbox import launcher_command
 from autograder.kernel.remove_tree import remove_tree
 
 KERNEL_ARGUMENTS = ["--HistoryManager.hist_file=:memory:", "--IPKernelApp.log_level=ERROR"]
@@ -478,3 +478,4 @@ def test_a_kernel_imports_the_course_package_of_the_root_being_graded(graded_cla
         manager.course_site.cache_clear()
     path, marker = printed.strip().split("|")
     assert marker == "the other checkout" and path == str((other / "course" / "__init__.py").resolve()), printed
+

@@ -97,7 +97,7 @@ class CallRules(Walker):
     def display_reader(self, func: ast.AST, context: Context) -> bool:
         """Whether ``func`` is one of IPython.display's classes that read the file a string names."""
         if isinstance(func, ast.Name):
-            path = None if self.shadowed(func.id, context) else self.scan.modules.get(func.id)
+            path = None if self.shadowed(func.id, context) else self.modules.get(func.id)
         else:
             path = self.module_of(func)
         return path is not None and path.rpartition(".")[0] == DISPLAY_MODULE and path.rpartition(".")[2] in DISPLAY_READERS

@@ -41,7 +41,6 @@ import ast
 import functools
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from nbformat import NotebookNode
 
@@ -49,10 +48,8 @@ from autograder import cells
 from autograder.integrity.rules import NAMESPACE_CALLS, NAMESPACE_NAME_USES, NAMESPACE_WRITES, is_check_helper
 from autograder.integrity.syntax import bound_names, catches_everything, does_nothing, local_names, parse
 from autograder.integrity.visitor import Visitor
+from autograder.integrity.walker import Hit
 from autograder.labs import Lab
-
-if TYPE_CHECKING:
-    from autograder.integrity.walker import Context
 
 
 MAX_SCANNED_CELL_CHARS = 100_000
@@ -71,16 +68,6 @@ class Finding:
     """The blanks whose points it games; None means every autograded blank of the lab."""
     reason: str
     """One sentence for the instructor's review."""
-
-
-@dataclass
-class Hit:
-    cell: str
-    node: ast.AST
-    kind: str  # "reference" or "local": charge the blanks that use it; "shared": every blank; "none": no points
-    what: str
-    top: ast.stmt | None
-    owner: str | None
 
 
 def static_findings(nb: NotebookNode, lab: Lab) -> list[Finding]:
@@ -235,7 +222,7 @@ class Scan:
 
     def findings(self) -> list[Finding]:
         for label, blank, tree in self.cells:
-            Visitor(self, label).run(tree)
+            Visitor(label, self.hits, self.modules, self.defined).run(tree)
             self._swallow_all(label, tree)
             self._rebinds_helpers(label, tree)
             self._namespace_uses(label, tree)
@@ -271,9 +258,6 @@ class Scan:
         if cell_blank is not None:
             return (cell_blank,)
         return None
-
-    def hit(self, cell: str, node: ast.AST, kind: str, what: str, context: "Context") -> None:
-        self.hits.append(Hit(cell, node, kind, what, context.top, context.owner))
 
     # -- whole-cell rules --------------------------------------------------------------------------
 

@@ -4,10 +4,18 @@ from __future__ import annotations
 
 import ast
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from autograder.integrity.scan import Scan
+
+@dataclass
+class Hit:
+    """A rule broken at ``node`` of cell ``cell``: what it does, and whose points it games."""
+
+    cell: str
+    node: ast.AST
+    kind: str  # "reference" or "local": charge the blanks that use it; "shared": every blank; "none": no points
+    what: str
+    top: ast.stmt | None
+    owner: str | None
 
 
 @dataclass
@@ -22,9 +30,14 @@ class Walker:
     """Walks one cell's tree with its context (top-level statement, enclosing def, parameters) and calls
     a ``visit_<Node>`` method for each node; the rules (autograder/integrity/visitor.py) define them."""
 
-    def __init__(self, scan: "Scan", cell: str):
-        self.scan = scan
+    def __init__(self, cell: str, hits: list[Hit], modules: dict[str, str], defined: set[str]):
         self.cell = cell
+        self.hits = hits
+        """Where each rule broken is recorded: the scan's list (autograder/integrity/scan.py)."""
+        self.modules = modules
+        """Name bound by an import in the notebook -> dotted module or object path."""
+        self.defined = defined
+        """The names of the functions and classes the notebook's scanned cells define."""
         self.skip: set[int] = set()  # ids of nodes already handled (magic calls' get_ipython)
         self.docstrings: set[int] = set()
 
@@ -38,7 +51,7 @@ class Walker:
             self.visit(stmt, Context(top=stmt, owner=owner))
 
     def hit(self, node, kind, what, context):
-        self.scan.hit(self.cell, node, kind, what, context)
+        self.hits.append(Hit(self.cell, node, kind, what, context.top, context.owner))
 
     def visit(self, node: ast.AST, context: Context) -> None:
         if id(node) in self.skip:
@@ -56,7 +69,7 @@ class Walker:
             self.visit(child, inner)
 
     def shadowed(self, name: str, context: Context) -> bool:
-        return name in self.scan.defined or any(name in p for p in context.params)
+        return name in self.defined or any(name in p for p in context.params)
 
     def module_of(self, node: ast.AST) -> str | None:
         """The dotted path an expression names, if it is rooted at an imported name (np.testing -> numpy.testing)."""
@@ -66,7 +79,7 @@ class Walker:
             node = node.value
         if not isinstance(node, ast.Name):
             return None
-        root = self.scan.modules.get(node.id)
+        root = self.modules.get(node.id)
         if root is None:
             root = {"np": "numpy", "plt": "matplotlib.pyplot"}.get(node.id) or (
                 node.id if node.id in ("sys", "os", "builtins", "numpy", "scipy", "math", "importlib", "inspect",
