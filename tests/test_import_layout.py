@@ -9,6 +9,7 @@ is the lower layer. Counted are the imports a module makes when it is imported (
 from __future__ import annotations
 
 import ast
+import re
 from pathlib import Path
 
 from autograder.labs import ROOT
@@ -113,3 +114,14 @@ def test_a_circle_is_found_through_type_checking_and_a_module_getattr(tmp_path):
     assert graph["autograder.lazy"] == {"autograder.scan"}
     assert circles(graph) == [["autograder.manager", "autograder.sandbox"], ["autograder.scan", "autograder.walker"]]
 
+
+
+def test_readmes_layout_table_names_every_module_of_each_package_it_lists():
+    """README's "Where things are" draws the layout of autograder/ (issue 32): each package's row names each
+    of its modules."""
+    rows = re.findall(r"^\s*\| `autograder/(\w+)/` \|(.*)$", (ROOT / "README.md").read_text(), re.MULTILINE)
+    assert {package for package, _ in rows} == {p.parent.name for p in (ROOT / PACKAGE).glob("*/__init__.py")}
+    unnamed = {package: sorted({p.stem for p in (ROOT / PACKAGE / package).glob("*.py")} - {"__init__"}
+                               - set(re.findall(r"`(\w+)", row)))
+               for package, row in rows}
+    assert not any(unnamed.values()), f"modules that README's 'Where things are' does not name: {unnamed}"
