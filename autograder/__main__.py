@@ -155,12 +155,12 @@ def main(argv: list[str] | None = None) -> int:
     elif args.command == "grade":
         from autograder.pipeline.grading import SandboxIncomplete
         from autograder.pipeline.grading import grade as grade_submissions
-        from autograder.pipeline.shards import NotShared
+        from autograder.pipeline.shards import NotShared, TooFewConnections
 
         try:
             graded = grade_submissions(args.submissions.resolve(), args.workdir.resolve(), args.out, args.jobs,
                                        args.shard, args.require_sandbox)
-        except (NotShared, SandboxIncomplete) as error:
+        except (NotShared, SandboxIncomplete, TooFewConnections) as error:
             print(f"grade: {error}", file=sys.stderr)
             return 1
         if graded.problems():

@@ -73,11 +73,13 @@ async def main(runs: int) -> None:
     print(f"sandbox: {status().summary}")
     times: dict[str, list[tuple[float, float]]] = {name: [] for name in MANAGERS}
     with tempfile.TemporaryDirectory(prefix="kit-bench-") as tmp:
-        folder = Path(tmp)
-        await one_start(MANAGERS["sandboxed (ipc)"], folder)  # makes the sandbox's font cache
+        # a working folder for each kernel, as grading gives each submission its own: run by root, a sandboxed
+        # kernel's folder becomes its own user's, and the next kernel could not replace the figure it saved
+        folders = (Path(tempfile.mkdtemp(dir=tmp)) for _ in iter(int, 1))
+        await one_start(MANAGERS["sandboxed (ipc)"], next(folders))  # makes the sandbox's font cache
         for _ in range(runs):
             for name, make in MANAGERS.items():
-                times[name].append(await one_start(make, folder))
+                times[name].append(await one_start(make, next(folders)))
     print(f"median of {runs} starts      to first reply   to end of first cell (NumPy, SciPy, a figure)")
     for name, pairs in times.items():
         ready = statistics.median(r for r, _ in pairs)

@@ -22,6 +22,8 @@ from pathlib import Path
 
 import pytest
 
+import slurm_cluster
+
 RUN_EVERY_TEST = "KIT_RUN_EVERY_TEST"
 """Set to 1 (``.ci/run`` does): a test whose need is missing fails instead of being skipped."""
 SKIPPED = "Not run on this machine: "
@@ -54,6 +56,11 @@ NEEDS: dict[str, Need] = {
         "JupyterHub's proxy, configurable-http-proxy (Node.js), for the hub recipe's test",
         "`sudo apt-get install --no-install-recommends nodejs npm && sudo npm install -g configurable-http-proxy`",
         lambda: shutil.which("configurable-http-proxy") is not None),
+    "slurm": Need(
+        "a single-node Slurm that the test starts on 127.0.0.1 (Debian's slurm-wlm, 22.05, and munge), for README's "
+        "Slurm array",
+        "`sudo apt-get install --no-install-recommends slurm-wlm munge`",
+        slurm_cluster.present),
     "root": Need(
         "to run as root, since the hub recipe's test adds local users and the hub starts each user's server as that "
         "user (CI runs as root)",

@@ -168,8 +168,9 @@ def _tail(path: Path, lines: int = 20) -> str:
 
 
 @contextlib.contextmanager
-def running_server() -> Iterator[str]:
-    """Start a PostgreSQL server on 127.0.0.1 and yield the SQLAlchemy URL of an empty database."""
+def running_server(settings: dict[str, str] | None = None) -> Iterator[str]:
+    """Start a PostgreSQL server on 127.0.0.1, with ``settings`` (name -> value, as ``postgres -c``) on top
+    of the test server's own, and yield the SQLAlchemy URL of an empty database."""
     binaries = find_binaries()
     account = server_account()
     user = account.pw_name if account else "the current user"
@@ -214,7 +215,8 @@ def running_server() -> Iterator[str]:
                 server = subprocess.Popen(
                     [bindir / "postgres", "-D", data, "-p", str(port), "-c", "listen_addresses=127.0.0.1",
                      "-c", "unix_socket_directories=", "-c", "fsync=off", "-c", "synchronous_commit=off",
-                     "-c", "full_page_writes=off"],
+                     "-c", "full_page_writes=off",
+                     *[option for name, value in (settings or {}).items() for option in ("-c", f"{name}={value}")]],
                     cwd=folder, env=env, stdin=subprocess.DEVNULL, stdout=log_handle, stderr=subprocess.STDOUT,
                     **as_account,
                 )
@@ -272,15 +274,24 @@ def _stop(server: subprocess.Popen) -> None:
             server.wait()
 
 
-@pytest.fixture(scope="module")
-def postgres_url() -> Iterator[str]:
-    """A fixture: the SQLAlchemy URL of an empty database on a PostgreSQL server of the test module's
-    own (``running_server``). Without a server the test fails, saying what to install; it never skips."""
-    reason = None
-    try:
-        with running_server() as url:
-            yield url
-    except ServerUnavailable as error:
-        reason = str(error)
-    if reason:  # outside the except block, so that the reason is reported once
-        pytest.fail(reason, pytrace=False)
+def server_fixture(settings: dict[str, str] | None = None):
+    """A module-scoped fixture: the SQLAlchemy URL of an empty database on a PostgreSQL server of the test
+    module's own (``running_server``, with ``settings``). Without a server the test fails, saying what to
+    install; it never skips."""
+
+    @pytest.fixture(scope="module")
+    def fixture() -> Iterator[str]:
+        reason = None
+        try:
+            with running_server(settings) as url:
+                yield url
+        except ServerUnavailable as error:
+            reason = str(error)
+        if reason:  # outside the except block, so that the reason is reported once
+            pytest.fail(reason, pytrace=False)
+
+    return fixture
+
+
+postgres_url = server_fixture()
+"""The fixture of the test modules that need a server with the test server's settings."""

@@ -32,6 +32,7 @@ from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import landlockpy
+import pyseccomp
 import nbformat
 import pytest
 from nbconvert.exporters import HTMLExporter
@@ -485,6 +486,7 @@ def test_a_fork_bomb_in_a_kernel_stops_at_its_cap(grader):
     with tempfile.TemporaryDirectory(prefix="kit-test-") as tmp:  # /tmp, where nobody may look
         folder = Path(tmp)
         shutil.copytree(Path(landlockpy.__file__).parent, folder / "landlockpy")
+        shutil.copy(pyseccomp.__file__, folder)  # the launcher's other import
         shutil.copy(sandbox.__file__, folder)
         (folder / "bomb.py").write_text(FORK_BOMB.replace("MAX_TASKS", str(sandbox.MAX_TASKS)))
         made = folder / "made"
@@ -525,6 +527,120 @@ def test_without_landlocks_signal_scope_the_kernel_still_signals_nothing_outside
         sleeper.kill()
         sleeper.wait()
     assert done.stdout.split() == ["ProcessLookupError", "ProcessLookupError"], done.stderr
+
+
+def test_a_kernel_cannot_reach_the_sockets_in_another_kernels_folder():
+    """Landlock (up to ABI 7) does not control connecting to a Unix socket by its path, and a kernel
+    started by root holds capabilities over root's files: it could connect to the grader's socket for
+    another kernel, in that kernel's private folder, by its path. Run by root, the launcher gives
+    each kernel's folders (``--own``) to the kernel's own user with mode 0700, over which no other
+    kernel holds a capability: the connection is refused (EACCES). On the code before, it connected.
+    Run by a plain user, every kernel is that user, and README states the gap (Named Unix sockets)."""
+    read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable), "/usr/lib", "/lib", "/lib64",
+                        "/etc/ld.so.cache") if os.path.exists(p)]
+    with tempfile.TemporaryDirectory(prefix="kit-test-") as first, tempfile.TemporaryDirectory(prefix="kit-test-") as second:
+        listener = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
+        listener.bind(os.path.join(first, "s"))  # as the grader binds its socket in the first kernel's folder
+        listener.listen(1)
+        try:
+            started = subprocess.run([*sandbox.launcher_command(read, [first], sandbox.LAYERS, [first]), sys.executable, "-I", "-c", ""],
+                                     capture_output=True, text=True, timeout=60)
+            probe = ("import socket\ntry:\n    socket.socket(socket.AF_UNIX).connect(" + repr(os.path.join(first, "s"))
+                     + ")\n    print('connected')\nexcept OSError as error:\n    print(error.errno)\n")
+            command = [*sandbox.launcher_command(read, [second], sandbox.LAYERS, [second]), sys.executable, "-I", "-c", probe]
+            done = subprocess.run(command, capture_output=True, text=True, timeout=60, cwd=second)
+        finally:
+            listener.close()
+    assert started.returncode == 0 and done.returncode == 0 and done.stderr == "", (started.stderr, done.stderr)
+    assert done.stdout.strip() == (str(errno.EACCES) if os.getuid() == 0 else "connected")
+
+
+ATTRIBUTE_PROBE = """import ctypes, os, sys
+outside, readable = sys.argv[1], sys.argv[2]
+libc = ctypes.CDLL(None, use_errno=True)
+def raw(number, *args):
+    if libc.syscall(number, *args) == -1:
+        raise OSError(ctypes.get_errno(), "")
+fd = os.open(readable, os.O_RDONLY)
+attempts = {
+    "chmod": lambda: os.chmod(outside, 0o644),
+    "fchmod of a file open for reading": lambda: os.fchmod(fd, 0o777),
+    "fchmodat2": lambda: raw(452, -100, outside.encode(), 0o644, 0),
+    "chown": lambda: os.chown(outside, os.getuid(), os.getgid()),
+    "fchown": lambda: os.fchown(fd, os.getuid(), os.getgid()),
+    "utime": lambda: os.utime(outside, (0, 0)),
+    "setxattr": lambda: os.setxattr(readable, "user.kit", b"x"),
+    "removexattr": lambda: os.removexattr(readable, "user.kit"),
+    "truncate": lambda: os.truncate(outside, 0),
+}
+for name, attempt in attempts.items():
+    try:
+        attempt()
+        print(name, "ok")
+    except OSError as error:
+        print(name, error.errno)
+"""
+"""Tries to change the mode, owner, times and extended attributes of a file outside the kernel's
+paths (its first argument) and of a file it may read (its second), and prints each errno."""
+
+
+def test_a_kernel_changes_no_files_mode_owner_times_attributes_or_length():
+    """Landlock does not control chmod, chown, utime or xattrs (nor truncate before ABI 3): a kernel could make any file it can
+    name that it owns, or (started by root) that root owns, readable by every user (solutions/,
+    /etc/shadow), or lock the grader out of its own code; with a file it may read, fchmod works on
+    the descriptor. A seccomp filter refuses each call (EPERM), and the files stay as they were. On
+    the code before, every call succeeded (run by root; a plain user owns the files here)."""
+    with tempfile.TemporaryDirectory(prefix="kit-test-") as folder:
+        outside, readable = Path(folder) / "outside.txt", Path(folder) / "readable" / "lab.py"
+        readable.parent.mkdir()
+        for path in (outside, readable):
+            path.write_text("x")
+            path.chmod(0o600)
+        before = [(path.stat().st_mode, path.stat().st_mtime) for path in (outside, readable)]
+        read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable), "/usr/lib", "/lib", "/lib64",
+                            "/etc/ld.so.cache", str(readable.parent)) if os.path.exists(p)]
+        command = [*sandbox.launcher_command(read, [], sandbox.LAYERS), sys.executable, "-I", "-c", ATTRIBUTE_PROBE,
+                   str(outside), str(readable)]
+        done = subprocess.run(command, capture_output=True, text=True, timeout=60)
+        after = [(path.stat().st_mode, path.stat().st_mtime) for path in (outside, readable)]
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    seen = dict(line.rsplit(" ", 1) for line in done.stdout.splitlines())
+    assert seen == dict.fromkeys(seen, str(errno.EPERM)) and len(seen) == 9, seen
+    assert after == before
+
+
+IDENTITY_PROBE = """import ctypes, os, platform
+libc = ctypes.CDLL(None, use_errno=True)
+keyctl = {"x86_64": 250, "aarch64": 219}[platform.machine()]
+def call(attempt):
+    try:
+        attempt()
+        return "ok"
+    except OSError as error:
+        return str(error.errno)
+def get_keyring_id():
+    if libc.syscall(keyctl, 0, -4, 0) == -1:  # KEYCTL_GET_KEYRING_ID of the user's keyring
+        raise OSError(ctypes.get_errno(), "")
+effective = next(line.split()[1] for line in open("/proc/self/status") if line.startswith("CapEff"))
+print(call(lambda: os.setresuid(1, 1, 1)), call(lambda: os.setgroups([0])), call(get_keyring_id), effective)
+"""
+"""Tries to become user 1 (root outside, for a kernel started by root), to change its groups and
+to reach its user's keyring, and prints each errno and its effective capabilities."""
+
+
+def test_a_kernel_cannot_change_who_it_is_nor_reach_a_keyring():
+    """Started by root, a kernel is root in its user namespace, where user 1 is root outside: with
+    ``setresuid(1)`` it became root again, free of the cap on its processes (an adversarial review
+    forked 400). A user's keyring outlives the kernel, a channel from one submission's kernel to the
+    next. The seccomp filter refuses both (EPERM), and the kernel keeps only CAP_DAC_OVERRIDE and
+    CAP_DAC_READ_SEARCH (bits 1 and 2: 0x6). On the code before, both calls succeeded, with every
+    capability."""
+    read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable), "/usr/lib", "/lib", "/lib64",
+                        "/etc/ld.so.cache", "/proc/self") if os.path.exists(p)]
+    command = [*sandbox.launcher_command(read, [], sandbox.LAYERS), sys.executable, "-I", "-c", IDENTITY_PROBE]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    assert done.stdout.split() == [str(errno.EPERM)] * 3 + ["0000000000000006"]
 
 
 def test_a_crashing_kernel_dumps_no_core():

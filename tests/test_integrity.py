@@ -182,6 +182,27 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     "np.save('../../../gradebook.npy', np.zeros(1))": [None],
     "x = open(name).read()": [None],
     "fig, ax = plt.subplots()\nfig.savefig(f'figure_{1}.png')": [],
+    # routes of issue 29's adversarial review (helper-53), each unflagged on 4813b9a: a method of the
+    # builtin's name shadowed it everywhere; aliases, from-imports and re-exported modules hid the module;
+    # some readers were not checked; getattr on an alias of a builtin passed as the student's own object
+    "class T:\n    def exec(self):\n        pass\nexec('1')": [None],
+    "class T:\n    def open(self):\n        pass\nopen('/etc/shadow')": [None],
+    "from os import chmod\nchmod('/etc/shadow', 0o644)": [None],
+    "from os import getxattr\ngetxattr('/work/x', 'user.k')": [None],
+    "o = open\no('/work/solutions/x.py').read()": [None],
+    "def f(o=open):\n    return o('/etc/shadow').read()": [None],
+    "x = sys\nx.modules": [None],
+    "q = os\nq.system('ls')": [None],
+    "np.os.system('ls')": [None],
+    "import io\nio.FileIO('/etc/shadow')": [None],
+    "from scipy.io import loadmat\nloadmat('/etc/passwd')": [None],
+    "plt.imread('../../other/x.png')": [None],
+    "np.lib.format.open_memmap('/tmp/x.npy')": [None],
+    "p = print\nname = '__se' + 'lf__'\ngetattr(p, name)": [None],
+    # and what stays honest: a nested function of a builtin's name is its own, an alias of print is print
+    "def f():\n    def open(x):\n        return x\n    return open(1)": [],
+    "log = print\nlog('RMSE', 1.0)": [],
+    "def g(x, fn=print):\n    fn(x)": [],
 }
 
 

@@ -28,7 +28,8 @@ def test_ci_installs_every_need_and_runs_every_test_with_readmes_command():
     assert export < script.index(readme_command), "KIT_RUN_EVERY_TEST must be set before the test command"
     assert "apt-get install" in script and "chromium" in script.split(readme_command)[0]
     assert "npm install --global --silent configurable-http-proxy" in script.split(readme_command)[0]
-    assert set(NEEDS) == {"chromium", "configurable-http-proxy", "root"}, (
+    assert "apt-get install -y -qq --no-install-recommends slurm-wlm munge" in script.split(readme_command)[0]
+    assert set(NEEDS) == {"chromium", "configurable-http-proxy", "slurm", "root"}, (
         "a new need must be installed by .ci/run (and listed in README)")
 
 
@@ -46,3 +47,15 @@ def test_under_ci_a_missing_chromium_fails_the_browser_tests_before_they_start_a
     run = _pytest("tests/test_student_browser.py", "-q", CHROMIUM="/nonexistent/chromium", **{RUN_EVERY_TEST: "1"})
     assert run.returncode == 1, run.stdout[-3000:]
     assert "Cannot run here, and CI runs every test" in run.stdout and "skipped" not in run.stdout.splitlines()[-1]
+
+
+def test_without_slurm_its_test_is_skipped_naming_it_and_under_ci_it_fails():
+    """No Slurm on the PATH (its programs are looked up there, as on a user's machine without the packages)."""
+    path = {"PATH": "/nonexistent"}
+    run = _pytest("tests/test_slurm.py", "-q", **path)
+    assert run.returncode == 0, run.stdout[-3000:]
+    section = run.stdout.split("tests that did not run on this machine", 1)[1]
+    assert "apt-get install --no-install-recommends slurm-wlm munge" in section and "tests/test_slurm.py" in section
+    assert "1 skipped" in run.stdout.splitlines()[-1]
+    run = _pytest("tests/test_slurm.py", "-q", **path, **{RUN_EVERY_TEST: "1"})
+    assert run.returncode == 1 and "Cannot run here, and CI runs every test" in run.stdout, run.stdout[-3000:]

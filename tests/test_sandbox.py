@@ -22,6 +22,7 @@ from collections.abc import Callable, Iterator
 from pathlib import Path
 
 import landlockpy
+import pyseccomp
 import nbformat
 import pytest
 from nbclient import NotebookClient
@@ -158,7 +159,7 @@ def test_status_reports_what_this_machine_offers():
     assert can_unshare, "this machine makes no network namespaces: the sandbox cannot cut the network here"
     found = sandbox.status()
     assert (found.landlock_abi, found.network_namespace, found.complete) == (raw, True, True)
-    assert found.summary == (f"Landlock ABI {raw} (files) and private network and PID namespaces (no network, no "
+    assert found.summary == (f"Landlock ABI {raw} and a seccomp filter (files) and private network and PID namespaces (no network, no "
                              f"process outlives the kernel, and at most {sandbox.MAX_TASKS} processes in it)")
 
 
@@ -391,6 +392,39 @@ def test_nbclient_runs_a_notebook_in_the_sandbox(graded_class):
     assert nb.cells[2].outputs[0]["text"] == "42\n"
 
 
+def test_a_restarted_kernel_keeps_its_files(tmp_path):
+    """The grader restarts a kernel that timed out or died, in the same folders. Run by root, a kernel
+    is a user of its own, and only its own files are its to replace: the restarted kernel is the
+    same user, so it replaces what the first one wrote, in its working folder and its private one.
+    (With a user ID per launch, the restarted kernel's write failed with PermissionError.)"""
+    code = ("import os\nfor folder in ('.', os.environ['TMPDIR']):\n    with open(os.path.join(folder, 'kept.txt'), 'w') as f:"
+            "\n        f.write(str(os.getpid()))\nprint('wrote')")
+
+    async def run() -> list[str]:
+        """What each of the two kernels printed."""
+        manager = SandboxedKernelManager(kernel_name="python3")
+        await manager.start_kernel(cwd=str(tmp_path), extra_arguments=KERNEL_ARGUMENTS)
+        printed: list[str] = []
+        try:
+            for start in range(2):
+                if start:
+                    await manager.restart_kernel(now=True)
+                client = manager.client()
+                client.start_channels()
+                try:
+                    await client.wait_for_ready(timeout=120)
+                    reply = await client.execute_interactive(code, timeout=120, output_hook=lambda msg: printed.append(
+                        msg["content"]["text"] if msg["msg_type"] == "stream" else ""))
+                    assert reply["content"]["status"] == "ok", reply["content"]["evalue"]
+                finally:
+                    client.stop_channels()
+        finally:
+            await manager.shutdown_kernel()
+        return printed
+
+    assert "".join(asyncio.run(run())) == "wrote\nwrote\n"
+
+
 def test_the_grader_and_the_kernel_meet_on_a_unix_socket_in_the_private_folder(graded_class):
     """How the grader will serve the comparison: a socket it makes in the private folder."""
     servers: list[socket.socket] = []
@@ -442,6 +476,7 @@ def test_the_launcher_confines_a_plain_user_too(tcp_server):
         folder = Path(tmp)
         folder.chmod(0o755)
         shutil.copytree(Path(landlockpy.__file__).parent, folder / "landlockpy")
+        shutil.copy(pyseccomp.__file__, folder)  # the launcher's other import
         shutil.copy(sandbox.__file__, folder)
         allowed, secret = folder / "allowed", folder / "secret.txt"
         allowed.mkdir()

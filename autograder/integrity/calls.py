@@ -3,11 +3,12 @@
 from __future__ import annotations
 
 import ast
-import builtins
 import copy
 
 from autograder.integrity.rules import (
+    BUILTIN_NAMES,
     CODE_MAGICS,
+    IMAGE_READERS,
     DISPLAY_MODULE,
     DISPLAY_READERS,
     FORBIDDEN_DUNDERS,
@@ -38,9 +39,6 @@ from autograder.integrity.syntax import (
 from autograder.integrity.walker import Context, Walker
 
 
-BUILTIN_NAMES = frozenset(dir(builtins))
-"""The builtins' names: an attribute of one, by a computed name, can be the builtins module itself."""
-
 
 class CallRules(Walker):
     """Calls: files opened, attributes reached by name, IPython magics and shell commands."""
@@ -49,8 +47,8 @@ class CallRules(Walker):
         func = node.func
         if self.magic(node, context):
             return False
-        if isinstance(func, ast.Name) and not self.shadowed(func.id, context):
-            name = func.id
+        if isinstance(func, ast.Name) and (func.id in self.builtin_aliases or not self.shadowed(func.id, context)):
+            name = self.builtin_aliases.get(func.id, func.id)  # o = open (or def f(o=open)): o(...) is open(...)
             if name in ("getattr", "hasattr", "setattr", "delattr") and len(node.args) >= 2:
                 self.dynamic_attribute(node, name, context)
             elif name == "vars" and node.args and self.module_of(node.args[0]) is not None:
@@ -63,10 +61,12 @@ class CallRules(Walker):
         if self.display_reader(func, context):
             for arg in (node.args[:1] + [kw.value for kw in node.keywords if kw.arg in ("data", "filename", "url")]):
                 self.display_argument(node, arg, context)
-        elif isinstance(func, ast.Attribute):
+        elif isinstance(func, ast.Attribute) or (isinstance(func, ast.Name) and func.id in self.modules
+                                                   and not self.shadowed(func.id, context)):
+            # os.chmod(...), and chmod(...) after ``from os import chmod``
             path = self.module_of(func)
-            method = func.attr
-            if path in ("io.open", "codecs.open"):
+            method = func.attr if isinstance(func, ast.Attribute) else (path or "").rpartition(".")[2]
+            if path in ("io.open", "io.FileIO", "codecs.open", "numpy.lib.format.open_memmap"):
                 self.file_access(node, first_arg(node, "file"), open_writes(node, 1), context)
             elif path is not None and path.startswith("os.") and path.count(".") == 1 and method in OS_FILE_WRITES:
                 for arg in node.args[:2]:
@@ -82,6 +82,10 @@ class CallRules(Walker):
             elif path is not None and path.startswith("sqlite3."):
                 if node.args:
                     self.file_access(node, node.args[0], True, context)
+            elif path is not None and (path.startswith("scipy.io.") or path in IMAGE_READERS):
+                self.file_access(node, first_arg(node, "file_name"), method.startswith(("save", "write")), context)
+            elif not isinstance(func, ast.Attribute):
+                pass  # the rules below are for methods
             elif method in ("savefig", "tofile") and node.args:
                 self.file_access(node, node.args[0], True, context)
             elif method in PATH_READ_METHODS | PATH_WRITE_METHODS:
@@ -130,7 +134,8 @@ class CallRules(Walker):
             if path is not None:
                 self.check_path(f"{path}.{attr}", node, context, store=store)
         elif self.module_of(target) is not None or isinstance(target, ast.Call) or (
-                isinstance(target, ast.Name) and target.id in BUILTIN_NAMES and not self.shadowed(target.id, context)):
+                isinstance(target, ast.Name) and not self.shadowed(target.id, context)
+                and (target.id in BUILTIN_NAMES or target.id in self.builtin_aliases)):
             # a module, a call's result, or a builtin (print.__self__ is the builtins module)
             kind = "shared" if store else "reference"
             self.hit(node, kind, f"uses {name} with a computed attribute name on {self.module_of(target) or 'an object'}",

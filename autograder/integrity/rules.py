@@ -3,6 +3,7 @@ to reach the reference, tamper with the machinery that runs the tests, or fool a
 
 from __future__ import annotations
 
+import builtins
 import os
 import re
 
@@ -102,14 +103,26 @@ MODULE_SHARED = {
 """Module attributes that tamper with the kernel or the machine."""
 OS_FILE_WRITES = frozenset({"remove", "unlink", "rename", "renames", "replace", "rmdir", "removedirs", "makedirs",
                             "mkdir", "symlink", "link", "chmod", "chown", "lchown", "truncate", "utime", "open",
-                            "write", "mkfifo", "mknod"})
-OS_FILE_READS = frozenset({"listdir", "scandir", "walk", "fwalk", "stat", "lstat"})
+                            "write", "mkfifo", "mknod", "setxattr", "removexattr", "lchmod", "chflags",
+                            "lchflags"})
+OS_FILE_READS = frozenset({"listdir", "scandir", "walk", "fwalk", "stat", "lstat", "getxattr", "listxattr"})
 NUMPY_READS = frozenset({"load", "loadtxt", "genfromtxt", "fromfile", "memmap", "fromregex"})
 NUMPY_WRITES = frozenset({"save", "savez", "savez_compressed", "savetxt"})
 PATH_READ_METHODS = frozenset({"read_text", "read_bytes"})
 PATH_WRITE_METHODS = frozenset({"write_text", "write_bytes", "touch", "unlink", "symlink_to", "hardlink_to"})
 PATH_GENERIC_METHODS = frozenset({"open", "rename", "replace", "mkdir", "rmdir", "chmod", "iterdir", "glob", "rglob"})
 ALLOWED_MODULE_STORES = frozenset({"matplotlib.rcParams", "matplotlib.pyplot.rcParams"})
+IMAGE_READERS = frozenset({"matplotlib.pyplot.imread", "matplotlib.image.imread", "matplotlib.pyplot.imsave",
+                           "matplotlib.image.imsave"})
+"""Matplotlib's functions that read or write an image file by its name."""
+BUILTIN_NAMES = frozenset(dir(builtins))
+"""The builtins' names: an attribute of one, by a computed name, can be the builtins module itself."""
+KNOWN_MODULE_NAMES = frozenset({"sys", "os", "builtins", "numpy", "scipy", "math", "importlib", "inspect", "gc",
+                                "types", "course", "solutions", "autograder", "IPython"})
+"""Names the scan reads as these modules even where the cell did not import them (the set-up cell may have)."""
+REEXPORTED_MODULES = frozenset({"os", "sys", "builtins", "importlib", "gc", "subprocess", "shutil", "ctypes", "inspect"})
+"""Modules that other modules hold as attributes (``numpy.os``, ``scipy.sys``): a path through one of
+them is read as the module's own (``np.os.system`` as ``os.system``)."""
 
 SAFE_LINE_MAGICS = frozenset({"matplotlib", "xmode", "precision", "pprint", "who", "whos", "who_ls", "pinfo",
                               "pinfo2", "psearch", "lsmagic", "magic", "time", "timeit", "autoreload", "history",

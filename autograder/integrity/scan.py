@@ -45,7 +45,14 @@ from pathlib import Path
 from nbformat import NotebookNode
 
 from autograder import cells
-from autograder.integrity.rules import NAMESPACE_CALLS, NAMESPACE_NAME_USES, NAMESPACE_WRITES, is_check_helper
+from autograder.integrity.rules import (
+    BUILTIN_NAMES,
+    KNOWN_MODULE_NAMES,
+    NAMESPACE_CALLS,
+    NAMESPACE_NAME_USES,
+    NAMESPACE_WRITES,
+    is_check_helper,
+)
 from autograder.integrity.syntax import bound_names, catches_everything, does_nothing, local_names, parse
 from autograder.integrity.visitor import Visitor
 from autograder.integrity.walker import Hit
@@ -172,8 +179,11 @@ class Scan:
         self.modules.update(self.locked_imports)
         for _, _, tree in self.cells:
             self._collect_imports(tree, self.modules)
-        self.defined = {node.name for _, _, tree in self.cells for node in ast.walk(tree)
+        # the names a cell's own code defines at module level: a method or a nested function of the
+        # same name as a builtin (``class T: def exec(self)``) does not stand for it at module level
+        self.defined = {node.name for _, _, tree in self.cells for node in tree.body
                         if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef))}
+        self.builtin_aliases = self._collect_aliases()
         self.uses = self._top_level_uses()
         self.hits: list[Hit] = []
 
@@ -193,6 +203,22 @@ class Scan:
                 for alias in node.names:
                     if alias.name != "*":
                         into[alias.asname or alias.name] = f"{node.module}.{alias.name}"
+
+    def _collect_aliases(self) -> dict[str, str]:
+        """Plain aliases ``a = b`` (and parameters whose default is a name, ``def f(o=open)``) anywhere
+        in the cells, followed so that the rules see through them:
+        an alias of a module (``x = sys``, or an imported name) goes into ``modules``; an alias of a
+        builtin (``o = open``, ``g = getattr``) is returned, alias -> builtin."""
+        aliases: dict[str, str] = {}
+        for _, _, tree in self.cells:
+            for node in ast.walk(tree):
+                for alias, value in _plain_bindings(node):
+                    name = value.id
+                    if name in self.modules or name in KNOWN_MODULE_NAMES:
+                        self.modules.setdefault(alias, self.modules.get(name, name))
+                    elif name in BUILTIN_NAMES and name not in self.defined:
+                        aliases[alias] = aliases.get(name, name)
+        return aliases
 
     def _top_level_uses(self) -> dict[str, set[str]]:
         """Top-level name -> the global names its definition refers to (all cells, all definitions)."""
@@ -222,7 +248,7 @@ class Scan:
 
     def findings(self) -> list[Finding]:
         for label, blank, tree in self.cells:
-            Visitor(label, self.hits, self.modules, self.defined).run(tree)
+            Visitor(label, self.hits, self.modules, self.defined, self.builtin_aliases).run(tree)
             self._swallow_all(label, tree)
             self._rebinds_helpers(label, tree)
             self._namespace_uses(label, tree)
@@ -306,3 +332,18 @@ class Scan:
                 self.hits.append(Hit(label, stmt, "none", f"redefines {name}, which the given code imports "
                                       f"({self.locked_imports[name]}); visible checks that use it stop checking, "
                                       "hidden tests are unaffected", stmt, None))
+
+
+def _plain_bindings(node: ast.AST) -> list[tuple[str, ast.Name]]:
+    """(name, value) for each name that ``node`` binds to another name: ``a = b``, and a function's
+    parameters whose default is a name."""
+    if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name) \
+            and isinstance(node.value, ast.Name):
+        return [(node.targets[0].id, node.value)]
+    if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda)):
+        args = node.args
+        positional = args.posonlyargs + args.args
+        pairs = list(zip(positional[len(positional) - len(args.defaults):], args.defaults))
+        pairs += [(a, d) for a, d in zip(args.kwonlyargs, args.kw_defaults) if d is not None]
+        return [(a.arg, d) for a, d in pairs if isinstance(d, ast.Name)]
+    return []

@@ -5,6 +5,9 @@ from __future__ import annotations
 import ast
 from dataclasses import dataclass
 
+from autograder.integrity.rules import KNOWN_MODULE_NAMES, REEXPORTED_MODULES
+from autograder.integrity.syntax import local_names
+
 
 @dataclass
 class Hit:
@@ -30,14 +33,17 @@ class Walker:
     """Walks one cell's tree with its context (top-level statement, enclosing def, parameters) and calls
     a ``visit_<Node>`` method for each node; the rules (autograder/integrity/visitor.py) define them."""
 
-    def __init__(self, cell: str, hits: list[Hit], modules: dict[str, str], defined: set[str]):
+    def __init__(self, cell: str, hits: list[Hit], modules: dict[str, str], defined: set[str],
+                 builtin_aliases: dict[str, str]):
         self.cell = cell
         self.hits = hits
         """Where each rule broken is recorded: the scan's list (autograder/integrity/scan.py)."""
         self.modules = modules
         """Name bound by an import in the notebook -> dotted module or object path."""
         self.defined = defined
-        """The names of the functions and classes the notebook's scanned cells define."""
+        """The names of the functions and classes the notebook's scanned cells define at module level."""
+        self.builtin_aliases = builtin_aliases
+        """Name bound to a builtin in the notebook (``o = open``) -> the builtin's name."""
         self.skip: set[int] = set()  # ids of nodes already handled (magic calls' get_ipython)
         self.docstrings: set[int] = set()
 
@@ -64,6 +70,8 @@ class Walker:
             args = node.args
             params = {a.arg for a in args.posonlyargs + args.args + args.kwonlyargs}
             params |= {a.arg for a in (args.vararg, args.kwarg) if a is not None}
+            if not isinstance(node, ast.Lambda):  # and what its body binds: a nested ``def open`` is its own there
+                params |= local_names(node)
             inner = Context(context.top, context.owner, context.params + (frozenset(params),), context.allowed)
         for child in ast.iter_child_nodes(node):
             self.visit(child, inner)
@@ -82,8 +90,10 @@ class Walker:
         root = self.modules.get(node.id)
         if root is None:
             root = {"np": "numpy", "plt": "matplotlib.pyplot"}.get(node.id) or (
-                node.id if node.id in ("sys", "os", "builtins", "numpy", "scipy", "math", "importlib", "inspect",
-                                       "gc", "types", "course", "solutions", "autograder", "IPython") else None)
+                node.id if node.id in KNOWN_MODULE_NAMES else None)
         if root is None:
             return None
-        return ".".join([root] + parts[::-1])
+        path = ".".join([root] + parts[::-1]).split(".")
+        # a module another one holds (np.os.system): read from the last such module on
+        inner = [i for i, part in enumerate(path) if i > 0 and part in REEXPORTED_MODULES]
+        return ".".join(path[inner[-1]:] if inner else path)

@@ -8,6 +8,7 @@ sandbox's launcher in front of the kernel's command.
 from __future__ import annotations
 
 import atexit
+import itertools
 import os
 import shutil
 import site
@@ -27,9 +28,11 @@ from traitlets import CaselessStrEnum, Integer, List, Type, Unicode
 
 from autograder.labs import ROOT
 from autograder.kernel.remove_tree import remove_tree
-from autograder.kernel.sandbox import launcher_command, wanted_layers
+from autograder.kernel.sandbox import KERNEL_UIDS_FROM, launcher_command, wanted_layers
 
 PRIVATE_PARENT = "/tmp"
+_KERNELS_STARTED = itertools.count()
+"""How many kernel managers of this process have made a private folder (for their kernels' user IDs)."""
 """Where each kernel's private folder is made: a short path, since a Unix socket's path is at most 107 bytes."""
 
 
@@ -127,6 +130,7 @@ class SandboxedKernelManager(AsyncKernelManager):
     write_paths = List(Unicode(), help="Further paths the kernel may read and write beneath.").tag(config=True)
 
     _private: Path | None = None
+    _uid: int | None = None
 
     @property
     def private_folder(self) -> Path | None:
@@ -149,7 +153,16 @@ class SandboxedKernelManager(AsyncKernelManager):
         private = Path(tempfile.mkdtemp(prefix="kit-", dir=PRIVATE_PARENT))
         for name in ("tmp", "home", "ipython", "matplotlib", "runtime"):
             (private / name).mkdir()
+        # IPython's profile, made here as IPython would make it: the kernel may not chmod (sandbox.ATTRIBUTE_CALLS),
+        # and IPython copies a README into a startup folder it has just made with shutil.copy, which does
+        profile = private / "ipython" / "profile_default"
+        for name in ("startup", "log", "security", "pid"):
+            (profile / name).mkdir(mode=0o700, parents=True)
+        (profile / "startup" / "README").touch()
         weakref.finalize(self, remove_tree, private)
+        # when root grades, the kernel's own user ID, the same after a restart (its files stay its own), and
+        # no other live manager's: this process's ID (below 2**22) and a count of its managers, modulo 256
+        self._uid = KERNEL_UIDS_FROM + (os.getpid() % 2**22 << 8) + next(_KERNELS_STARTED) % 256
         self.connection_file = str(private / "kernel.json")
         self.ip = str(private / "ipc")
         return private
@@ -183,7 +196,8 @@ class SandboxedKernelManager(AsyncKernelManager):
         # log, which a kernel could read typeahead from, truncate, flood or write escape codes to (what a
         # kernel prints reaches the notebook through its messages, not through these)
         kw.update(stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
-        return [*launcher_command(read, write, wanted_layers()), *kernel_cmd], kw
+        own = [str(self._private), kw["cwd"]]  # closed to other kernels when root grades (sandbox.confine)
+        return [*launcher_command(read, write, wanted_layers(), own, self._uid), *kernel_cmd], kw
 
     async def _async_shutdown_kernel(self, now: bool = False, restart: bool = False) -> None:
         """Stop the kernel at once (SIGKILL to its process group), whatever ``now`` says: it has

@@ -5,7 +5,9 @@ Two layers of the Linux kernel confine the kernel process, applied by a launcher
 
 - files: a Landlock ruleset (``landlockpy``) lets the process read only beneath the read paths
   and read and write only beneath the write paths; everything else on the filesystem is closed,
-  even to root. It also keeps the process from signalling or tracing processes outside it;
+  even to root. It also keeps the process from signalling or tracing processes outside it. Landlock
+  does not control a file's mode, owner, times or extended attributes: a seccomp filter
+  (``pyseccomp``, over the system's libseccomp) refuses every call that changes them;
 - network: a private network namespace, whose only interface is a loopback that is down. The
   process also gets its own user namespace where the OS allows one, so that a kernel started by
   root holds no capability over the machine (loading kernel modules, mounting, raw devices), and
@@ -14,15 +16,15 @@ Two layers of the Linux kernel confine the kernel process, applied by a launcher
   group, a fork bomb) outlives it, and its own IPC namespace, so that no System V shared memory
   or message queue does either. The launcher stays, as the kernel's manager's process, and waits.
   The kernel may have at most MAX_TASKS processes and threads. Linux exempts root from that cap, so
-  a kernel started by root runs as a user of its own (``kernel_uid``), which is root in the
-  kernel's user namespace and no one outside it.
+  a kernel started by root runs as a user of its own (``--uid``), which is root in the kernel's
+  user namespace and no one outside it.
 
 ``python -m autograder.kernel.sandbox --read P ... --write P ... -- CMD ARGS...`` is the launcher. It never
 refuses: a layer the OS does not offer is left out, and it says so on stderr. ``status()`` says what
 this OS offers, in a sentence for the grader's output. ``SandboxedKernelManager``
 (autograder/kernel/manager.py, which imports this module, never the other way) starts Jupyter kernels
-through the launcher. The launcher imports only the standard library and ``landlockpy``: it runs at
-every kernel start, and importing jupyter_client would add a third of a second to each.
+through the launcher. The launcher imports only the standard library, ``landlockpy`` and ``pyseccomp``: it
+runs at every kernel start, and importing jupyter_client would add a third of a second to each.
 
 The environment variable ``KIT_SANDBOX`` turns layers off: ``off`` (none), or the layers to keep,
 ``files`` or ``network``. Unset, or ``on``: both.
@@ -56,14 +58,36 @@ CLONE_NEWNET = 0x40000000
 CLONE_NEWPID = 0x20000000
 CLONE_NEWUSER = 0x10000000
 PR_SET_NO_NEW_PRIVS = 38
+PR_CAPBSET_DROP = 24
 MAX_TASKS = 256
 """The most processes and threads that a kernel may have at once (RLIMIT_NPROC, which Linux counts
 per user namespace, so per kernel here): a fork bomb stops there. Linux exempts root's user ID from
 the limit, so a kernel started by root runs as a user of its own (``kernel_uid``)."""
 KERNEL_UIDS_FROM = 2**30
-"""A kernel started by root runs as user ``KERNEL_UIDS_FROM`` + its launcher's process ID, which no
-other running kernel has (process IDs are below 2**22), and which names no account: no file outside
-the kernel's folders belongs to it."""
+"""The user IDs of kernels started by root are ``KERNEL_UIDS_FROM`` and above (below 2**31): IDs that
+name no account, so that no file outside a kernel's own folders belongs to one."""
+
+ATTRIBUTE_CALLS = ("chmod", "fchmod", "fchmodat", "fchmodat2", "chown", "fchown", "lchown", "fchownat",
+                   "utime", "utimes", "futimesat", "utimensat", "setxattr", "lsetxattr", "fsetxattr",
+                   "removexattr", "lremovexattr", "fremovexattr", "truncate")
+"""The system calls that change a file's mode, owner, times or extended attributes, and ``truncate``
+by path. Landlock controls none of the first (and truncation only from ABI 3, Linux 6.2), so a kernel
+could use them on any file it can name that it owns, or, started by root, on which its capabilities
+hold (root's files): make ``solutions/`` readable by every user, make /etc/shadow readable, or lock
+the grader out of its own code. A seccomp filter makes each fail with EPERM."""
+IDENTITY_CALLS = ("setuid", "setgid", "setreuid", "setregid", "setresuid", "setresgid", "setfsuid", "setfsgid",
+                  "setgroups", "add_key", "request_key", "keyctl")
+"""The system calls that change who a process is, and the kernel's keyrings. Started by root, the
+kernel is root in its user namespace, where user 1 is root outside: ``setresuid(1)`` made it root
+again, free of the cap on processes. A keyring belongs to a user and outlives the kernel, so it would
+carry data from one submission's kernel to the next. The seccomp filter makes each fail with EPERM."""
+KEPT_CAPABILITIES = (1, 2)
+"""CAP_DAC_OVERRIDE and CAP_DAC_READ_SEARCH: the only capabilities the kernel keeps in its user
+namespace (the rest leave its bounding set), so that, started by root, it still reads the Python
+installation in a folder closed to others, where Landlock allows."""
+NEWER_ATTRIBUTE_CALLS = {0xC000003E: (463, 466), 0xC00000B7: (463, 466)}
+"""setxattrat and removexattrat (Linux 6.13), by number on x86-64 and arm64 (AUDIT_ARCH values),
+where libseccomp may not know their names yet."""
 
 READ = AccessFS.READ_FILE | AccessFS.READ_DIR | AccessFS.EXECUTE
 """What a read path allows: read files and list folders, run programs."""
@@ -115,15 +139,19 @@ def status() -> SandboxStatus:
     abi = landlock_abi()
     netns_problem = network_namespace_problem()
     wanted = wanted_layers()
-    files = abi > 0 and "files" in wanted
+    filter_problem = attribute_filter_problem()
+    files = abi > 0 and filter_problem is None and "files" in wanted
     network = netns_problem is None and "network" in wanted
     if "files" not in wanted:
         files_part = f"Landlock turned off ({SWITCH}={os.environ.get(SWITCH)})"
     elif abi == 0:
         files_part = ("Landlock unavailable (the Linux kernel lacks it or does not enable it, or a container "
                       "forbids it: it needs Linux 5.13 or later with landlock among its lsm= boot options)")
+    elif filter_problem is not None:
+        files_part = (f"Landlock ABI {abi} (files) but no seccomp filter ({filter_problem}), so the kernel can "
+                      "change the mode, owner and times of files it can name")
     else:
-        files_part = f"Landlock ABI {abi} (files)"
+        files_part = f"Landlock ABI {abi} and a seccomp filter (files)"
     if "network" not in wanted:
         network_part = f"network namespace turned off ({SWITCH}={os.environ.get(SWITCH)})"
     elif netns_problem is not None:
@@ -152,6 +180,28 @@ def landlock_abi() -> int:
         return landlockpy.abi_version()
     except OSError:  # refused otherwise than by a kernel without Landlock: a container's seccomp filter
         return 0
+
+
+@cache
+def attribute_filter_problem() -> str | None:
+    """None when ``forbid_attribute_changes`` works here (tried in a child process, which exits);
+    otherwise why not, in words."""
+    if sys.platform != "linux":
+        return "seccomp is a Linux feature"
+    pid = os.fork()
+    if pid == 0:
+        try:
+            set_no_new_privs()
+            forbid_attribute_changes()
+        except RuntimeError:  # pyseccomp's word for a missing libseccomp
+            os._exit(100)
+        except OSError:
+            os._exit(101)
+        os._exit(0)
+    code = os.waitstatus_to_exitcode(os.waitpid(pid, 0)[1])
+    if code == 0:
+        return None
+    return "libseccomp is not installed" if code == 100 else "the OS refused it"
 
 
 @cache
@@ -218,25 +268,26 @@ def _check(result: int, call: str) -> None:
         raise OSError(code, f"{call}: {os.strerror(code)}")
 
 
-def enter_network_namespace() -> None:
+def enter_network_namespace(uid: int | None = None) -> None:
     """Move this process into new network and IPC namespaces (System V shared memory, semaphores and
     message queues, which would outlive the kernel and be shared with other kernels, die with the
     last process in it), and the children it starts from now on into a new PID namespace. First into
     a new user namespace, where the OS allows one: a plain user is itself there; root becomes
-    ``kernel_uid()``, which is root inside and holds no capability over the machine. Without the
+    ``kernel_uid(uid)``, which is root inside and holds no capability over the machine. Without the
     uid map, which some systems refuse, the process shows as nobody and still works. Raises
     OSError when the namespaces cannot be made."""
     if os.getuid() == 0:
-        _enter_user_namespace_as(kernel_uid())
+        _enter_user_namespace_as(kernel_uid(uid))
     elif _libc().unshare(CLONE_NEWUSER) == 0:
         _map_own_ids()
     _check(_libc().unshare(CLONE_NEWNET | CLONE_NEWPID | CLONE_NEWIPC), "unshare(CLONE_NEWNET | CLONE_NEWPID | CLONE_NEWIPC)")
 
 
-def kernel_uid() -> int:
-    """The user a kernel started by root runs as, outside its user namespace: ``KERNEL_UIDS_FROM``
-    plus this process's ID."""
-    return KERNEL_UIDS_FROM + os.getpid()
+def kernel_uid(chosen: int | None = None) -> int:
+    """The user a kernel started by root runs as, outside its user namespace: ``chosen`` (the
+    launcher's ``--uid``, which a kernel manager keeps for its kernel's restarts), or else
+    ``KERNEL_UIDS_FROM`` plus this process's ID, which no other running launcher has."""
+    return chosen if chosen is not None else KERNEL_UIDS_FROM + os.getpid()
 
 
 def _map_own_ids() -> None:
@@ -342,23 +393,62 @@ def restrict_files(read: list[str], write: list[str]) -> list[str]:
     return skipped
 
 
-def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS) -> list[str]:
+def drop_capabilities() -> None:
+    """Remove every capability but ``KEPT_CAPABILITIES`` from this process's bounding set, so that the
+    program it runs next holds no other (it needs CAP_SETPCAP, which root has in its namespace; a
+    capability this Linux does not know is skipped)."""
+    last = int(Path("/proc/sys/kernel/cap_last_cap").read_text())
+    for capability in range(last + 1):
+        if capability not in KEPT_CAPABILITIES:
+            _check(_libc().prctl(PR_CAPBSET_DROP, capability, 0, 0, 0), "prctl(PR_CAPBSET_DROP)")
+
+
+def forbid_attribute_changes() -> None:
+    """Load a seccomp filter into this process and its children under which every call of
+    ``ATTRIBUTE_CALLS`` and ``IDENTITY_CALLS`` (and ``NEWER_ATTRIBUTE_CALLS``) fails with EPERM; other calls are unchanged.
+    Needs no_new_privs set first. Raises OSError, or RuntimeError when libseccomp is missing."""
+    import pyseccomp  # here, not at the top: the launcher still starts, and says so, without libseccomp
+
+    rules = pyseccomp.SyscallFilter(pyseccomp.ALLOW)
+    for name in (*ATTRIBUTE_CALLS, *IDENTITY_CALLS):
+        number = pyseccomp.resolve_syscall(pyseccomp.Arch.NATIVE, name)
+        if number >= 0:  # a call this architecture has
+            rules.add_rule(pyseccomp.ERRNO(errno.EPERM), number)
+    for number in NEWER_ATTRIBUTE_CALLS.get(pyseccomp.system_arch(), ()):
+        rules.add_rule(pyseccomp.ERRNO(errno.EPERM), number)
+    rules.load()
+
+
+def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS, own: tuple[str, ...] = (),
+            uid: int | None = None) -> list[str]:
     """Apply the sandbox's ``layers`` to this process: the network and PID namespaces (returning in
     a grandchild, see ``run_below_namespace_init``, capped at MAX_TASKS tasks),
-    no core dumps, no_new_privs, then Landlock. Returns what could not be applied, one sentence each (empty when all
+    no core dumps, no_new_privs, then Landlock. Run by root with the network layer, first give the
+    folders ``own`` to the kernel's own user (``kernel_uid(uid)``): with mode 0700 they are then closed to
+    every other kernel, whose capabilities reach only root's files and its own (Landlock does not
+    control connecting to a Unix socket by its path; this keeps a kernel from the sockets in another
+    kernel's private folder). Returns what could not be applied, one sentence each (empty when all
     was)."""
     if sys.platform != "linux":
         return [f"not applied: {', '.join(layers)} confinement needs Linux"] if layers else []
     problems = []
+    if "network" in layers and os.getuid() == 0:
+        for folder in own:
+            os.chown(folder, kernel_uid(uid), kernel_uid(uid), follow_symlinks=False)
+            os.chmod(folder, 0o700, follow_symlinks=False)
     if "network" in layers:
         try:
-            enter_network_namespace()
+            enter_network_namespace(uid)
         except OSError as error:
             problems.append(f"no network namespace, the kernel has the network ({_namespace_error(error.errno)})")
         else:
             run_below_namespace_init()
             # counted in the kernel's own user namespace; not for root's user ID, which Linux exempts
             resource.setrlimit(resource.RLIMIT_NPROC, (MAX_TASKS, MAX_TASKS))
+            try:
+                drop_capabilities()
+            except OSError as error:
+                problems.append(f"capabilities kept, the kernel is root in its namespace ({error})")
     # no core dumps: a crash would write the kernel's memory (up to its 4 GiB) to disk, in its folder,
     # or outside the sandbox where a helper collects cores (systemd-coredump, apport)
     resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
@@ -367,6 +457,11 @@ def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS)
     except OSError as error:
         problems.append(f"no_new_privs not set ({error})")
     if "files" in layers:
+        try:  # before Landlock: loading libseccomp looks for it with ldconfig, in a temporary folder
+            forbid_attribute_changes()
+        except (OSError, RuntimeError) as error:
+            problems.append("no seccomp filter, the kernel can change the mode, owner and times of files it can "
+                            f"name ({error})")
         try:
             skipped = restrict_files(read, write)
         except OSError as error:
@@ -388,28 +483,38 @@ def main(argv: list[str] | None = None) -> None:
                         help="a path it may read and write beneath")
     parser.add_argument("--without", action="append", default=[], choices=LAYERS,
                         help="a layer to leave out")
+    parser.add_argument("--own", action="append", default=[], metavar="FOLDER",
+                        help="run by root: a folder to give to the kernel's own user (mode 0700)")
+    parser.add_argument("--uid", type=int, metavar="UID",
+                        help=f"run by root: the kernel's own user ID, from {KERNEL_UIDS_FROM} to 2**31 - 1 "
+                             "(default: the first plus the launcher's process ID)")
     parser.add_argument("command", nargs=argparse.REMAINDER, help="-- CMD ARGS...")
     args = parser.parse_args(argv)
     command = args.command[1:] if args.command[:1] == ["--"] else args.command
     if not command:
         parser.error("no command to run: give it after --")
+    if args.uid is not None and not KERNEL_UIDS_FROM <= args.uid < 2**31:
+        parser.error(f"--uid {args.uid}: it is from {KERNEL_UIDS_FROM} to 2**31 - 1")
     program = shutil.which(command[0])
     if program is None:
         parser.error(f"{command[0]}: no such program")
     layers = tuple(layer for layer in LAYERS if layer not in args.without)
-    for problem in confine(args.read, args.write, layers):
+    for problem in confine(args.read, args.write, layers, tuple(args.own), args.uid):
         print(f"sandbox: {problem}", file=sys.stderr)
     sys.stderr.flush()
     os.execv(program, command)
 
 
-def launcher_command(read: list[str], write: list[str], layers: tuple[str, ...]) -> list[str]:
-    """The launcher's command line for these paths and layers, up to ``--``: the command it
-    confines follows. It runs isolated (``-I``), so that nothing in the working directory or the
-    environment can stand in for the modules it imports."""
+def launcher_command(read: list[str], write: list[str], layers: tuple[str, ...], own: list[str] = (),
+                     uid: int | None = None) -> list[str]:
+    """The launcher's command line for these paths, layers, folders of the kernel's own and user ID
+    (see ``confine``), up to ``--``: the command it confines follows. It runs isolated (``-I``), so that
+    nothing in the working directory or the environment can stand in for the modules it imports."""
     command = [sys.executable, "-I", str(Path(__file__).resolve())]
     command += [arg for path in read for arg in ("--read", path)]
     command += [arg for path in write for arg in ("--write", path)]
+    command += [arg for path in own for arg in ("--own", path)]
+    command += ["--uid", str(uid)] if uid is not None else []
     command += [arg for layer in LAYERS if layer not in layers for arg in ("--without", layer)]
     return [*command, "--"]
 

@@ -153,7 +153,9 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     course (a shard's: its own) to ``out_csv`` (default ``workdir/grades.csv``, a shard's
     ``workdir/grades-shard-K-of-N.csv``), prints the table, writes the class report (not for a shard:
     ``report`` after ``export``), and returns the rows, with what it did not grade. With ``require_sandbox``,
-    refuses to start (SandboxIncomplete) unless the grading kernels get every layer of the sandbox.
+    refuses to start (SandboxIncomplete) unless the grading kernels get every layer of the sandbox. With a
+    PostgreSQL gradebook, refuses to start (shards.TooFewConnections) unless its server accepts the
+    connections that grading will open.
     """
     if require_sandbox and not sandbox.status().complete:
         raise SandboxIncomplete(f"{sandbox.status().summary}: grading refuses to start without the whole sandbox "
@@ -172,8 +174,11 @@ def grade(submissions: Path, workdir: Path = ROOT, out_csv: Path | None = None, 
     if exposed:
         print(private_paths.warning(exposed))
     print(sandbox_line())
-    print(f"Setting up the course folder {workdir} for {count(len(labs), 'lab')} (nbgrader generate_assignment).")
     whole_class = class_list(submissions, labs)
+    if shards.is_server(gradebook_url(workdir)):
+        given = sum(shard is None or shard.takes(s) for students in whole_class.values() for s in students)
+        shards.require_connections(gradebook_url(workdir), max(1, min(jobs or default_jobs(), given)))
+    print(f"Setting up the course folder {workdir} for {count(len(labs), 'lab')} (nbgrader generate_assignment).")
     set_up(labs, workdir, whole_class)
     by_lab = import_submissions(submissions, workdir, labs, shard.takes if shard else None)
     if shard is not None:

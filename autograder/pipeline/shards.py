@@ -93,6 +93,48 @@ def require_server(db_url: str) -> None:
                         "database (README: PostgreSQL gradebook). The SQLite gradebook is a file of one machine.")
 
 
+CONNECTIONS_PER_PROCESS = 2
+"""Connections to the gradebook that one grading process holds at once: its submission's lock and nbgrader's
+(measured). ``grade --jobs c`` grades in c processes (one, in its own, with ``--jobs 1``)."""
+
+
+class TooFewConnections(RuntimeError):
+    """The gradebook's server would refuse some of the connections that grading opens; the message says how
+    to raise its limit."""
+
+
+def free_connections(db_url: str) -> tuple[int, int]:
+    """(the server's ``max_connections``, how many more connections it accepts now from the user of
+    ``db_url``): its limit, less the connections open now, this one aside (pg_stat_database counts them
+    for every user; pg_stat_activity hides other users' rows), less the slots that it keeps for
+    superusers (``superuser_reserved_connections``, and ``reserved_connections`` since PostgreSQL 16)
+    unless that user is one."""
+    engine = create_engine(db_url, poolclass=NullPool)
+    try:
+        with engine.connect() as connection:
+            limit, reserved, superuser, in_use = connection.execute(text(
+                "SELECT current_setting('max_connections')::int,"
+                " current_setting('superuser_reserved_connections')::int"
+                " + coalesce(current_setting('reserved_connections', true)::int, 0),"
+                " (SELECT rolsuper FROM pg_roles WHERE rolname = current_user),"
+                " (SELECT sum(numbackends)::int FROM pg_stat_database)")).one()
+    finally:
+        engine.dispose()
+    return limit, limit - (in_use - 1) - (0 if superuser else reserved)
+
+
+def require_connections(db_url: str, processes: int) -> None:
+    """Raise TooFewConnections unless the PostgreSQL server of ``db_url`` accepts, now, the connections
+    that ``processes`` grading processes hold at once."""
+    needed = CONNECTIONS_PER_PROCESS * processes
+    limit, free = free_connections(db_url)
+    if free < needed:
+        raise TooFewConnections(
+            f"the gradebook's server accepts {free} more connections now and grading needs {needed} "
+            f"({processes} processes x {CONNECTIONS_PER_PROCESS}): raise its max_connections from {limit} to "
+            f"{limit + needed - free} or more (README: Large classes), or grade with fewer --jobs.")
+
+
 @contextmanager
 def gradebook_lock(db_url: str, name: str) -> Iterator[None]:
     """Hold the advisory lock ``name`` of the PostgreSQL gradebook at ``db_url`` (waiting for it),
