@@ -12,7 +12,7 @@ ROOT = Path(__file__).resolve().parent
 
 # The grader's process imports the autograder's preprocessors, the hidden tests and the reference
 # `solutions` from here; they are never installed. Grading kernels do not get this path: the hidden
-# tests compare in the grader's process (autograder/pipeline/compare.py), and the kernel needs only `course`.
+# tests compare in the grader's process (autograder/pipeline/check_runner.py), and the kernel needs only `course`.
 sys.path.insert(0, str(ROOT))
 # nbgrader runs `alembic` to create a gradebook; find it beside this Python even in an environment
 # that was not activated (`.venv/bin/python -m autograder ...`).

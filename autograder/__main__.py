@@ -119,7 +119,8 @@ def main(argv: list[str] | None = None) -> int:
     args = build_parser().parse_args(argv)
 
     if args.command == "new":
-        from autograder.authoring.new import new_lab
+        from autograder.authoring.new import new_lab, next_steps
+        from autograder.labs import Lab
 
         try:
             written = new_lab(args.lab, args.topic, args.data)
@@ -127,9 +128,7 @@ def main(argv: list[str] | None = None) -> int:
             print(f"new: {error}", file=sys.stderr)
             return 1
         print("\n".join(f"wrote {path.relative_to(ROOT)}" for path in written))
-        print(f"Next: `python -m autograder build {args.lab}`, then edit the lab (its draft first: "
-              f"solutions/{args.lab.replace('-', '_')}/draft.py), build it again and run `python -m pytest --lab "
-              f"{args.lab}` (docs/adding-a-lab.md).")
+        print(next_steps(Lab(args.lab), args.topic or Lab(args.lab).module))
     elif args.command == "build":
         from autograder.authoring.build import build_lab
         from autograder.labs import Lab

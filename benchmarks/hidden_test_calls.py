@@ -1,7 +1,7 @@
 """What one call of a student's function costs when the hidden test runs in the grader's process
-(autograder/pipeline/compare.py) and the function in a sandboxed grading kernel.
+(autograder/pipeline/check_runner.py) and the function in a sandboxed grading kernel.
 
-Starts one kernel as grading does (SandboxedKernelManager, the kernel-side module sent as source),
+Starts one kernel as grading does (SandboxedKernelManager, the kernel's server sent as source),
 defines an identity function and one that calls a served blank, and times, for arguments of several
 sizes: a call from the grader into the kernel and back, and a call that also calls the grader back
 once (a blank that uses another blank's reference, which the grader first runs on the same
@@ -22,7 +22,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parent.parent
 sys.path.insert(0, str(ROOT))
 
-from autograder.pipeline import compare  # noqa: E402
+from autograder.pipeline import hidden_blocks, kernel_code, kernel_connection  # noqa: E402
+from autograder.pipeline.student_function import StudentFunction  # noqa: E402
 from autograder.kernel.manager import SandboxedKernelManager  # noqa: E402
 
 REPEATS = 200
@@ -72,19 +73,19 @@ def main() -> None:
             if message["parent_header"].get("msg_id") == msg_id:
                 return message["content"]
 
-    assert reply(run(compare.kernel_setup_code()))["status"] == "ok"
+    assert reply(run(kernel_code.kernel_setup_code()))["status"] == "ok"
     assert reply(run(DEFINITIONS))["status"] == "ok"
     rows = []
     for name in ("echo", "uses_other"):
-        listener = compare.Listener(km.private_folder)
-        msg_id = run(compare.serve_code(listener.path, compare.HiddenTest("benchmark", f"check_{name}", name)))
-        peer, why_not = compare.connect(listener, time.monotonic() + 60, lambda: False)
+        listener = kernel_connection.Listener(km.private_folder)
+        msg_id = run(kernel_code.serve_code(listener.path, hidden_blocks.HiddenTest("benchmark", f"check_{name}", name)))
+        peer, why_not = kernel_connection.connect(listener, time.monotonic() + 60, lambda: False)
         assert peer is not None, why_not
         # the grader serves ``other`` to the calls that the reference's own version makes (served_calls.py)
-        student = compare.StudentFunction(peer, name, frozenset({"other"}), {"other": other}, reference=uses_other)
+        student = StudentFunction(peer, name, frozenset({"other"}), {"other": other}, reference=uses_other)
         for label, shape in SIZES.items():
             rows.append((name, label, _median_ms(student, np.ones(shape))))
-        compare.stop(peer)
+        kernel_connection.stop(peer)
         listener.close()
         assert reply(msg_id)["status"] == "ok"
     loop.run_until_complete(km.shutdown_kernel(now=True))

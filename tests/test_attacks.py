@@ -45,12 +45,12 @@ from autograder import cells
 from autograder.pipeline import confined_check, intake, nbgrader_apps
 from autograder.kernel import sandbox
 from autograder.catalogues import submissions
-from autograder.pipeline.compare import MAX_MESSAGE_CHARS, error_output
+from autograder.pipeline.output_caps import MAX_MESSAGE_CHARS, error_output
 from autograder.pipeline.execute import GradingExecute
 from autograder.hidden_tests.isolate import called_blanks
 from solutions.train_kf import hidden_tests as train_kf
 from autograder.pipeline.inert_html import InertHtml
-from autograder.kernel.side import PeerTimeout
+from autograder.kernel.wire import PeerTimeout
 from autograder.labs import get_lab
 from autograder.catalogues.mistakes import catalogue
 from autograder.pipeline.restore import grader_notes

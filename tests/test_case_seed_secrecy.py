@@ -8,7 +8,7 @@ from __future__ import annotations
 import numpy as np
 
 from autograder.hidden_tests import cases
-from autograder.kernel import side
+from autograder.kernel import wire
 from random_draws import random_draws
 from seed_inversion import M32, mix_entropy_fwd, recover_seed_stream
 
@@ -31,7 +31,7 @@ def test_a_hidden_tests_generator_does_not_give_the_submission_seed_back(seed):
     for tail in ([], [0], [99, 0], [4004, 99, 0]):
         words = recover_seed_stream(generator.bit_generator.state, tail)
         assert seed64 not in (words[0] | (words[1] << 32), words[2] | (words[3] << 32)), tail
-    sent = side._seed_sequence_json(generator.bit_generator.seed_seq)
+    sent = wire._seed_sequence_json(generator.bit_generator.seed_seq)
     assert seed64 not in np.atleast_1d(sent["entropy"]).tolist() and sent["spawn_key"] == []
 
 
@@ -40,6 +40,6 @@ def test_a_forged_count_of_children_spawned_is_counted_not_spawned(seed):
     """An adversarial review: a kernel that said its copy of the generator had spawned 2**20 children made the grader
     spawn them all (13 s and 441 MB a call). The count is kept beside the seed sequence, and sent on the next call."""
     given = np.random.default_rng(seed)
-    side._spawn_as_many(given.bit_generator.seed_seq, np.random.SeedSequence(1, n_children_spawned=side.MAX_SPAWNED + 7))
+    wire._spawn_as_many(given.bit_generator.seed_seq, np.random.SeedSequence(1, n_children_spawned=wire.MAX_SPAWNED + 7))
     assert given.bit_generator.seed_seq.n_children_spawned == 0
-    assert side._seed_sequence_json(given.bit_generator.seed_seq)["n_children_spawned"] == side.MAX_SPAWNED
+    assert wire._seed_sequence_json(given.bit_generator.seed_seq)["n_children_spawned"] == wire.MAX_SPAWNED

@@ -1,5 +1,5 @@
-"""Hidden tests compare in the grader's process (autograder/pipeline/compare.py) against the student's
-function in the kernel (autograder/kernel/side.py).
+"""Hidden tests compare in the grader's process (autograder/pipeline/check_runner.py) against the student's
+function in the kernel (autograder/kernel/server.py), over the wire (autograder/kernel/wire.py).
 
 Here the kernel's side runs in a thread of the test process, serving functions from a plain dict
 as the notebook's namespace, over a real Unix socket: what crosses the wire, what comes back, what
@@ -22,12 +22,13 @@ import pytest
 from matplotlib.figure import Figure
 
 from autograder import cells
-from autograder.pipeline import compare, served_calls
+from autograder.pipeline import hidden_blocks, kernel_connection, served_calls
 from autograder.hidden_tests import diagnosis
-from autograder.kernel import side
-from autograder.pipeline.compare import HiddenTest, HiddenTestFormError, StudentFunction
+from autograder.kernel import server, wire
+from autograder.pipeline.hidden_blocks import HiddenTest, HiddenTestFormError
+from autograder.pipeline.student_function import StudentFunction
 from autograder.hidden_tests.isolate import isolate
-from autograder.kernel.side import Codec, Peer, ProtocolError, Wire
+from autograder.kernel.wire import Codec, Peer, ProtocolError, Wire
 from course.falling_object import FilterHistory
 from course.starship import check_band_plot
 from random_draws import random_draws
@@ -37,15 +38,15 @@ class Kernel:
     """The kernel's side of one hidden test, in a thread, serving ``namespace[name]``."""
 
     def __init__(self, namespace: dict, name: str):
-        self.listener = compare.Listener()
-        self.thread = threading.Thread(target=side.serve, args=(self.listener.path, name, namespace),
+        self.listener = kernel_connection.Listener()
+        self.thread = threading.Thread(target=server.serve, args=(self.listener.path, name, namespace),
                                        daemon=True)
         self.thread.start()
-        self.peer, self.why_not = compare.connect(self.listener, None, lambda: not self.thread.is_alive())
+        self.peer, self.why_not = kernel_connection.connect(self.listener, None, lambda: not self.thread.is_alive())
 
     def close(self) -> None:
         if self.peer is not None:
-            compare.stop(self.peer)
+            kernel_connection.stop(self.peer)
         self.thread.join(10)
         self.listener.close()
 
@@ -264,7 +265,7 @@ def test_errors_come_back_by_type_with_the_students_line(kernel):
     with pytest.raises(np.linalg.LinAlgError, match="Singular matrix") as caught:
         student(np.zeros((2, 2)), np.ones(2), "solve")
     assert "line 6" in caught.value.where and "np.linalg.solve(A, b)" in caught.value.where
-    with pytest.raises(side.RaisedElsewhere) as caught:
+    with pytest.raises(wire.RaisedElsewhere) as caught:
         student(np.eye(2), np.ones(2), "custom")
     assert type(caught.value).__name__ == "Oops" and str(caught.value) == "my own error"
 
@@ -350,35 +351,43 @@ def test_a_hostile_kernels_messages_are_refused(header, buffers, match, pair):
 
 def test_an_oversized_message_is_refused_before_it_is_read(pair):
     grader, kernel_end = pair
-    kernel_end.sendall(struct.pack("!QQ", side.MAX_MESSAGE_BYTES + 1, 0))
+    kernel_end.sendall(struct.pack("!QQ", wire.MAX_MESSAGE_BYTES + 1, 0))
     with pytest.raises(ProtocolError, match="larger than the wire allows"):
         Wire(grader).receive()
 
 
 def test_a_silent_kernel_times_out(pair):
-    wire = Wire(pair[0])
-    wire.deadline = time.monotonic() + 0.2
-    with pytest.raises(side.PeerTimeout):
-        wire.receive()
+    receiving = Wire(pair[0])
+    receiving.deadline = time.monotonic() + 0.2
+    with pytest.raises(wire.PeerTimeout):
+        receiving.receive()
 
 
 def test_the_hidden_block_has_one_form():
     code = "from solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate)\n"
-    assert compare.hidden_test(code) == HiddenTest("solutions.train_kf.hidden_tests", "check_kupdate", "kupdate")
+    assert hidden_blocks.hidden_test(code) == HiddenTest("solutions.train_kf.hidden_tests", "check_kupdate", "kupdate")
     for bad in ("from solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(predict)\n",
                 "from solutions.train_kf.reference import kupdate\nkupdate(1)\n",
                 "import os\nfrom solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate)\n",
                 "from solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate, seed=1)\n",
-                "from solutions.train_kf.hidden_tests import check_kupdate as c\nc(kupdate)\n"):
+                "from solutions.train_kf.hidden_tests import check_kupdate as c\nc(kupdate)\n",
+                "from .solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate)\n",
+                "from solutions.train_kf.hidden_tests import check_kupdate, predict\ncheck_kupdate(kupdate)\n",
+                "from solutions.train_kf.hidden_tests import check_kupdate\nresult = check_kupdate(kupdate)\n",
+                "from solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(*kupdate)\n",
+                "from solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate.x)\n",
+                "from solutions.train_kf.hidden_tests import check_kupdate\ncheck_kupdate(kupdate)\ncheck_kupdate(kupdate)\n",
+                "from solutions.Train.hidden_tests import check_kupdate\ncheck_kupdate(kupdate)\n",
+                "check_kupdate(kupdate)\n", ""):
         with pytest.raises(HiddenTestFormError):
-            compare.hidden_test(bad)
+            hidden_blocks.hidden_test(bad)
     source = "validate(kupdate)\n### BEGIN HIDDEN TESTS\n" + code + "### END HIDDEN TESTS\n"
-    assert compare.split(source) == ("validate(kupdate)\n", "\n" + code)
+    assert hidden_blocks.split(source) == ("validate(kupdate)\n", "\n" + code)
 
 
 def test_a_missing_reference_stops_grading_before_any_kernel(monkeypatch):
     test = HiddenTest("solutions.no_such_lab.hidden_tests", "check_f", "f")
-    with pytest.raises(compare.ReferenceUnavailable, match="cannot import solutions.no_such_lab.hidden_tests"):
+    with pytest.raises(hidden_blocks.ReferenceUnavailable, match="cannot import solutions.no_such_lab.hidden_tests"):
         test.load()
 
 
@@ -445,7 +454,7 @@ def test_a_generator_spawns_the_same_children_for_the_same_state_and_new_ones_on
     (first, entropy), (second, _) = student(given), student(given)
     assert student(np.random.default_rng([seed, 4]))[0].tolist() == first.tolist() != second.tolist(), (
         "the same state gives the same child, and the next call a new one, as with the student's own generator")
-    assert side._children_spawned(given.bit_generator.seed_seq) == 2
+    assert wire._children_spawned(given.bit_generator.seed_seq) == 2
     assert seed not in np.atleast_1d(entropy).tolist(), "the kernel never learns the seed: a one-way digest stands in"
 
 

@@ -131,7 +131,7 @@ def _blanks_called(reference, blank: str, blanks: set[str]) -> set[str]:
 @over_labs
 def test_a_blank_that_calls_others_is_graded_after_them(lab):
     """In grading, the grader answers a blank's calls of another blank with the reference only if
-    that blank's own hidden test came earlier (autograder/pipeline/compare.py): a test can then never collect
+    that blank's own hidden test came earlier (autograder/pipeline/student_function.py): a test can then never collect
     the reference's answers for a later one. So the notebook grades the blanks a blank calls first."""
     order = cells.blank_names(cells.read(lab.source_notebook))
     reference = lab.reference()

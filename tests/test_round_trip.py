@@ -12,7 +12,7 @@ import pytest
 
 from autograder.pipeline import grades
 from autograder.catalogues import submissions
-from autograder.pipeline.compare import ReferenceUnavailable
+from autograder.pipeline.hidden_blocks import ReferenceUnavailable
 from autograder.pipeline.execute import GradingExecute
 from autograder.labs import ROOT
 from over_labs import LABS, about

@@ -28,10 +28,11 @@ import pytest
 from nbclient import NotebookClient
 from nbformat.v4 import new_code_cell, new_notebook
 
+from autograder.authoring import build
 from autograder.kernel import manager, sandbox
 from autograder.labs import ROOT
-from autograder.kernel.sandbox import SandboxedKernelManager, launcher_command
-from autograder.kernel.manager import PRIVATE_PARENT
+from autograder.kernel.manager import PRIVATE_PARENT, SandboxedKernelManager
+from autograder.kernel.sandbox import launcher_command
 from autograder.kernel.remove_tree import remove_tree
 
 KERNEL_ARGUMENTS = ["--HistoryManager.hist_file=:memory:", "--IPKernelApp.log_level=ERROR"]
@@ -547,3 +548,15 @@ def test_a_kernel_imports_the_course_package_of_the_root_being_graded(graded_cla
         manager.course_site.cache_clear()
     path, marker = printed.strip().split("|")
     assert marker == "the other checkout" and path == str((other / "course" / "__init__.py").resolve()), printed
+
+
+def test_build_and_grading_kernels_import_the_same_course_package(graded_class, tmp_path):
+    """Issue 32: ``build`` (autograder/authoring/build.py) and grading start their kernels in different ways (a
+    build's kernel runs the hidden blocks, and so imports ``solutions``, which no grading kernel may), but both
+    import this root's ``course``, whatever checkout the environment's ``-e .`` points at."""
+    code = "import os, course\nprint(os.path.realpath(course.__file__))"
+    nb = new_notebook(cells=[new_code_cell(code)], metadata={"kernelspec": build.KERNELSPEC})
+    (tmp_path / "built").mkdir()
+    assert build.execute(nb, tmp_path / "built") == []
+    built = nb.cells[0].outputs[0]["text"].strip()
+    assert built == run_in_kernel(code, graded_class["alice"]).strip() == str((ROOT / "course" / "__init__.py").resolve())

@@ -81,7 +81,16 @@ def _names(nb: NotebookNode, draft: Path) -> list[str]:
 def execute(nb: NotebookNode, folder: Path) -> list[tuple[int, str]]:
     """Run every cell of ``nb`` in place, in a python3 kernel started in ``folder`` with the course root on
     PYTHONPATH (as nbval runs the source notebooks); return (index, what went wrong) of each cell that
-    raised an error or wrote to stderr (nbgrader gives 0 to a test cell that does)."""
+    raised an error or wrote to stderr (nbgrader gives 0 to a test cell that does).
+
+    Not the grader's way of starting a kernel (``SandboxedKernelManager``, autograder/kernel/manager.py),
+    and it cannot be: a source notebook's hidden blocks run here as written, importing ``solutions`` in the
+    kernel, and the grading sandbox refuses a kernel that can read the course root (rule 10). Both kernels
+    import this root's ``course`` all the same: each has it first on its path, ahead of the environment's
+    ``-e .`` (here the root on PYTHONPATH; in grading ``manager.course_site()``, this root's ``course/``
+    alone), which tests/test_sandbox.py checks. One way for both would need ``build`` to run the notebook as
+    grading does (GradingExecute: the hidden blocks run in the build's process against the kernel, with
+    nbgrader's resources and a grading secret) and store that run's outputs in source/."""
     NotebookClient(nb, timeout=CELL_TIMEOUT_S, kernel_name=KERNELSPEC["name"], allow_errors=True,
                    resources={"metadata": {"path": str(folder)}}).execute(env={**os.environ, "PYTHONPATH": str(ROOT)})
     problems = []

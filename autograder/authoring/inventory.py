@@ -21,6 +21,7 @@ CHECK_HELPERS = {"check_array", "check_close", "check_pair", "check_symmetric", 
 class Inventory:
     lab: str
     blanks: int
+    """Blanks, each with its hidden test (check_<blank>, over several random cases)."""
     blank_points: dict[str, float]
     """Each blank's name -> the points of its hidden test, in the notebook's order."""
     blank_mistakes: dict[str, int]
@@ -30,8 +31,6 @@ class Inventory:
     written_points: float
     visible_checks: int
     """Calls of the course.checks helpers in the visible-check cells."""
-    hidden_tests: int
-    """check_<blank> functions, each over several random cases."""
     hidden_assertions: int
     """Check-helper calls that the hidden tests make when they grade the reference."""
     mistakes: int
@@ -97,7 +96,6 @@ def inventory(lab: Lab) -> Inventory:
         written_answers=len(written),
         written_points=sum(points[cells.grade_id(c)] for c in written),
         visible_checks=sum(_helper_calls("\n".join(l for l in c.source.splitlines() if not l.startswith("%"))) for c in visible),
-        hidden_tests=len(blanks),
         hidden_assertions=_assertions_on_reference(lab, hidden, blanks),
         mistakes=sum(mistakes.values()),
         claims={cid: c.summary for cid, c in claims.checks(lab).items()},
@@ -109,9 +107,9 @@ def inventory(lab: Lab) -> Inventory:
 
 def print_inventory(labs: list[Lab]) -> None:
     """Print a summary line per lab, then each lab's blanks by name and the claims it checks."""
-    header = ("lab", "blanks", "points", "written", "visible", "hidden", "hidden", "mistakes", "claims")
-    second = ("", "", "(auto)", "answers (pt)", "checks", "tests", "asserts", "", "")
-    widths = (18, 7, 8, 13, 8, 7, 8, 9, 7)
+    header = ("lab", "blanks", "points", "written", "visible", "hidden", "mistakes", "claims")
+    second = ("", "", "(auto)", "answers (pt)", "checks", "asserts", "", "")
+    widths = (18, 7, 8, 13, 8, 8, 9, 7)
 
     def line(values) -> str:
         return "".join(f"{v:<{w}}" if k == 0 else f"{v:>{w}}" for k, (v, w) in enumerate(zip(values, widths)))
@@ -121,15 +119,15 @@ def print_inventory(labs: list[Lab]) -> None:
     inventories = [inventory(lab) for lab in labs]
     for i in inventories:
         print(line((i.lab, i.blanks, f"{i.autograded_points:g}", f"{i.written_answers} ({i.written_points:g})",
-                    i.visible_checks, i.hidden_tests, i.hidden_assertions, i.mistakes, len(i.claims))))
-    for i in inventories:
+                    i.visible_checks, i.hidden_assertions, i.mistakes, len(i.claims))))
+    for lab, i in zip(labs, inventories):
         print(f"\nThe blanks of {i.lab}, in order (hidden test's points, catalogued mistakes, correct alternatives):")
         name_w = max(len(name) for name in i.blank_points)
         for name, points in i.blank_points.items():
             mistakes = i.blank_mistakes[name]
             print(f"  {name:<{name_w}}  {points:>4g} pt  {count(mistakes, 'mistake'):<12}"
                   f"{count(i.blank_alternatives[name], 'alternative')}")
-        print(f"Claims that {i.lab} states, each recomputed by a check (solutions/{i.lab.replace('-', '_')}/claims.py):")
+        print(f"Claims that {i.lab} states, each recomputed by a check (solutions/{lab.module}/claims.py):")
         for cid, summary in i.claims.items():
             print(textwrap.fill(f"{cid}: {summary}", 100, initial_indent="  ", subsequent_indent="      ",
                                 break_on_hyphens=False))
@@ -140,7 +138,7 @@ def print_inventory(labs: list[Lab]) -> None:
             f"({caught / max(mistakes, 1):.0%}), and the message names the fix (the check's hint) for {fixed} of them "
             f"({fixed / max(mistakes, 1):.0%} of the mistakes). Mutants of the reference (autograder/authoring/mutants.py): {m.mutants}, "
             f"of which the hidden tests kill {m.killed}, {m.equivalent} are listed as equivalent "
-            f"(solutions/{i.lab.replace('-', '_')}/mutants.py) and {len(m.surviving)} survive; the message of {m.narrowed} "
+            f"(solutions/{lab.module}/mutants.py) and {len(m.surviving)} survive; the message of {m.narrowed} "
             f"of the {m.killed} killed ({m.narrowed / max(m.killed, 1):.0%}) narrows the cause (the kinds of case it is "
             f"wrong on, or a catalogued mistake). Of the {m.plausible} killed mutants a student could plausibly write "
             f"(autograder/authoring/mutants.py, PLAUSIBLE), the visible checks fail {m.plausible_seen} "

@@ -2,13 +2,12 @@
 
 The template (``autograder/authoring/template/``, Jinja templates) is a tiny real lab: two blanks with
 visible checks, hidden tests and catalogued mistakes with hints, a claim with its check, a cell whose
-printed numbers nbval checks. Once built (``python -m autograder build <lab>``) it passes every test of
+printed numbers nbval checks, and a written answer with its model answer and rubric. Once built (``python -m autograder build <lab>``) it passes every test of
 a lab, so a maintainer starts from green and edits it into the lab they want.
 """
 
 from __future__ import annotations
 
-import itertools
 import keyword
 import re
 import tomllib
@@ -16,6 +15,7 @@ from datetime import datetime, timedelta
 from pathlib import Path
 
 import jinja2
+import jupytext
 
 from autograder.labs import DUE_DATES, ROOT, Lab
 
@@ -26,21 +26,62 @@ HIDDEN_FILES = ("__init__.py", "draft.py", "reference.py", "hidden_tests.py", "m
                 "mutants.py", "claims.py")
 """What ``new`` writes into ``solutions/<module>/``, each from ``template/<name>.j2``."""
 README = ROOT / "README.md"
-LABS_TABLE_HEADER = "| lab | topic | follows the handout |"
+README_ROW = "readme_row.md.j2"
+"""The template of the new lab's row in README's table of the labs: the template lab's topic, until the
+maintainer writes the lab's own (tests/test_template_text.py fails on a lab that keeps it)."""
 DUE_AFTER = timedelta(weeks=2)
 """A new lab is due this long after the last due date in ``due_dates.toml``."""
-SUMMARY = "the template lab: a parcel's mass from readings of two scales, fused by their precisions"
-"""The new lab's topic in README's table, until the maintainer writes the lab's own."""
-NO_HANDOUT = "none: an original lab"
 TEMPLATE = jinja2.Environment(loader=jinja2.FileSystemLoader(TEMPLATES), undefined=jinja2.StrictUndefined,
                               keep_trailing_newline=True, trim_blocks=True, lstrip_blocks=True)
+
+
+def table_cells(line: str) -> list[str]:
+    """The cells of a row of a Markdown table, stripped (none: the line is no row)."""
+    line = line.strip()
+    return [cell.strip() for cell in line.strip("|").split("|")] if line.startswith("|") else []
+
+
+def labs_table(lines: list[str]) -> range:
+    """The indices, among README's ``lines``, of the rows of its table of the labs: the first table whose
+    first column is headed "lab" (its other columns and their widths may change). Raises ValueError if
+    README has none."""
+    for at, line in enumerate(lines[:-1]):
+        if table_cells(line)[:1] == ["lab"] and set("".join(table_cells(lines[at + 1]))) <= set("-:"):
+            end = at + 2
+            while end < len(lines) and table_cells(lines[end]):
+                end += 1
+            return range(at + 2, end)
+    raise ValueError("README.md has no table of the labs: a Markdown table whose first column is headed 'lab'.")
+
+
+def readme_rows() -> dict[str, list[str]]:
+    """Lab id -> the cells of its row in README's table of the labs (``| `<lab>` | topic | handout |``), in
+    the table's order; a lab listed twice keeps its last row (``readme_labs`` lists both)."""
+    lines = README.read_text().splitlines()
+    return {table_cells(lines[i])[0].strip("`"): table_cells(lines[i]) for i in labs_table(lines)}
 
 
 def readme_labs() -> list[str]:
     """The lab ids that README's table of the labs lists, in its order (rows "| `<lab>` | ... |")."""
     lines = README.read_text().splitlines()
-    rows = itertools.takewhile(lambda line: line.startswith("|"), lines[lines.index(LABS_TABLE_HEADER) + 2:])
-    return [row.split("`")[1] for row in rows]
+    return [table_cells(lines[i])[0].strip("`") for i in labs_table(lines)]
+
+
+def _render(template: str, lab: Lab, topic: str, data: bool = False) -> str:
+    return TEMPLATE.get_template(template).render(lab=lab.id, module=lab.module, topic=topic, data=data)
+
+
+def template_row(lab: Lab) -> list[str]:
+    """The cells of the row that ``new`` writes for ``lab`` in README's table of the labs."""
+    return table_cells(_render(README_ROW, lab, lab.module))
+
+
+def template_story(lab: Lab) -> list[str]:
+    """The lines of the template lab's title and story, as ``new`` writes them for ``lab``: its first
+    Markdown cell up to the first paragraph in bold ("**What you will do**"), blank lines left out."""
+    draft = jupytext.reads(_render("draft.py.j2", lab, lab.module), fmt="py:percent")
+    first = next(cell for cell in draft.cells if cell.cell_type == "markdown").source.splitlines()
+    return [line for line in first[: next(i for i, line in enumerate(first) if line.startswith("**"))] if line.strip()]
 
 
 def _due_dates() -> dict[str, datetime]:
@@ -79,11 +120,28 @@ def _add_due_date(lab: Lab) -> None:
 
 
 def _add_readme_row(lab: Lab) -> None:
-    """Add the lab's row at the end of README's table of the labs."""
+    """Add the lab's row (README_ROW) at the end of README's table of the labs."""
     lines = README.read_text().splitlines(keepends=True)
-    end = lines.index(LABS_TABLE_HEADER + "\n") + 2 + len(readme_labs())
-    lines.insert(end, f"| `{lab.id}` | {SUMMARY} | {NO_HANDOUT} |\n")
+    lines.insert(labs_table(lines).stop, _render(README_ROW, lab, lab.module))
     README.write_text("".join(lines))
+
+
+def next_steps(lab: Lab, topic: str) -> str:
+    """What a maintainer does after ``new`` wrote ``lab`` (with the course module ``course/<topic>.py``), in
+    order, as ``new`` prints it: docs/adding-a-lab.md shows the same text (tests/test_new_lab.py)."""
+    hidden = f"solutions/{lab.module}"
+    steps = [
+        f"python -m autograder build {lab.id}: the template lab's notebooks, which pass every test from here",
+        f"edit course/{topic}.py: the model, the data and the figures that students are given",
+        f"edit {hidden}/reference.py: the reference of every blank",
+        f"edit {hidden}/draft.py: the story, the answer cells (the reference's code), the visible checks, the "
+        "written answers",
+        f"edit {hidden}/hidden_tests.py, then mistakes.py, alternatives.py, mutants.py and claims.py",
+        f"edit {lab.id}'s row in README's table of the labs: its topic, and the handout it follows",
+        f"python -m autograder build {lab.id}: again after each edit of the draft",
+        f"python -m pytest --lab {lab.id} -n 2 --dist loadfile --nbval-lax",
+    ]
+    return "\n".join(["Next, in this order (docs/adding-a-lab.md):", *(f"  {n}. {step}" for n, step in enumerate(steps, 1))])
 
 
 def new_lab(lab_id: str, topic: str | None = None, data: bool = False) -> list[Path]:
@@ -105,7 +163,7 @@ def new_lab(lab_id: str, topic: str | None = None, data: bool = False) -> list[P
         files[ROOT / "tests" / f"test_{lab.module}_reference.py"] = "test_reference.py.j2"
     lab.hidden_folder.mkdir(parents=True)
     for path, template in files.items():
-        path.write_text(TEMPLATE.get_template(template).render(lab=lab.id, module=lab.module, topic=topic, data=data))
+        path.write_text(_render(template, lab, topic, data))
     _add_due_date(lab)
     _add_readme_row(lab)
     return [*files, DUE_DATES, README]

@@ -5,7 +5,7 @@ or the blank release) into a dishonest one. ``tests/test_integrity.py`` checks t
 the way its entry says:
 
 - ``static``: ``integrity.static_findings`` flags it before execution;
-- ``grader``: the hidden tests compare in the grader's process (autograder/pipeline/compare.py), so what it
+- ``grader``: the hidden tests compare in the grader's process (autograder/pipeline/check_runner.py), so what it
   does to the kernel (patched NumPy or helpers, swallowed errors, an object that equals anything,
   a search of the kernel's memory or stack) cannot change a verdict, and it earns nothing unflagged;
 - ``sandbox``: the grading kernel cannot read the reference's files or write outside its folder

@@ -28,11 +28,15 @@ from collections.abc import Iterator
 from dataclasses import dataclass, field
 
 from autograder.hidden_tests.isolate import CallRuleBroken
+from autograder.kernel.wire import PeerGone, PeerTimeout, ProtocolError
+from autograder.pipeline.kernel_connection import KernelStopped
 
 MAX_LISTED = 3
 """The most kinds of failing case a sentence lists; beyond, a list says less than the count alone."""
 NARROWED = ("is right on every case with", "is right on ")
 """How a narrowing sentence begins after the blank's name (the mutation report counts them)."""
+INTERRUPTIONS = (PeerGone, PeerTimeout, ProtocolError, KernelStopped)
+"""What a case never records: the grader's own interruptions, which end the test at once."""
 WRONG_ONLY_ATTRIBUTE = "kit_wrong_only"
 """The attribute of a failed check's exception that holds, when a property splits the cases exactly,
 the cases it was wrong on ("a full R"): the grader records it as data (the class report groups by it)."""
@@ -52,20 +56,6 @@ class _Run:
 _run: _Run | None = None
 
 
-def _interruptions() -> tuple[type[BaseException], ...]:
-    """What a case never records: the grader's own interruptions, which end the test at once."""
-    found: list[type[BaseException]] = []
-    with contextlib.suppress(ImportError):
-        from autograder.kernel.side import PeerGone, PeerTimeout, ProtocolError
-
-        found += [PeerGone, PeerTimeout, ProtocolError]
-    with contextlib.suppress(ImportError):
-        from autograder.pipeline.compare import KernelStopped
-
-        found.append(KernelStopped)
-    return tuple(found)
-
-
 @contextlib.contextmanager
 def case(**properties: str) -> Iterator[None]:
     """One hidden case, described by the properties that set it apart (each a phrase: "a full R")."""
@@ -76,7 +66,7 @@ def case(**properties: str) -> Iterator[None]:
     record = _Case(dict(properties))
     try:
         yield
-    except _interruptions():
+    except INTERRUPTIONS:
         raise
     except Exception as error:  # noqa: BLE001 (a failing case: recorded, the first is raised at the end)
         if not isinstance(error, AssertionError) and record.properties:

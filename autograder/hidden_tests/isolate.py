@@ -1,5 +1,5 @@
-"""Helpers for the hidden tests, which run in the grader's process (autograder/pipeline/compare.py), or in
-the kernel of a source notebook run by hand, where the reference is present.
+"""Helpers for the hidden tests, which run in the grader's process (autograder/pipeline/check_runner.py), or
+in the kernel of a source notebook run by hand, where the reference is present.
 
 Partial credit is isolated: a blank's hidden tests call the student's function with the other
 blanks that the reference's own version of it calls bound to the reference, so that one mistake
@@ -14,14 +14,14 @@ cell ran first; here it is the same every time, and the student is told why.
 
 from __future__ import annotations
 
+import abc
 import contextlib
 import functools
-import sys
 import types
 import warnings
 from typing import Callable, Iterable, Iterator
 
-from autograder.kernel import side
+from autograder.kernel import wire
 from course.checks import changed_arguments_failure, global_random_failure
 
 
@@ -91,6 +91,16 @@ def isolate(func: Callable, reference: types.ModuleType, blanks: Iterable[str], 
     return _observable(_isolated(func, reference, blanks, warnings_fail))
 
 
+class RemoteFunction(abc.ABC):
+    """A student's function that runs elsewhere (in the grading kernel: autograder/pipeline/student_function.py),
+    which ``isolate`` asks for its isolated copy instead of copying it here."""
+
+    @abc.abstractmethod
+    def isolated(self, reference: types.ModuleType, blanks: Iterable[str], warnings_fail: bool) -> Callable:
+        """The same function, seeing the reference's version of the other blanks that the reference's own
+        version calls (``called_blanks``), and failing on a warning if ``warnings_fail``."""
+
+
 def with_globals(function: Callable, names: dict[str, Callable]) -> Callable:
     """A copy of ``function`` that sees ``names`` in place of its module's (anything but a plain
     function is returned as it is)."""
@@ -120,6 +130,13 @@ def warning_failure(name: str, category: str, message: str) -> str:
             f"{cause or 'Find the call that gives it and change it.'}")
 
 
+def fail_if_warned(name: str, caught: list[tuple[str, str]]) -> None:
+    """Raise the AssertionError of a graded function ``name`` that warned (``warning_failure``) for the first of
+    ``caught``, the (category's name, message) of each warning its call gave; return None when there is none."""
+    if caught:
+        raise AssertionError(warning_failure(name, *caught[0]))
+
+
 class CallRuleBroken(AssertionError):
     """A call that broke one of the rules every lab states (no writes into arguments, draws only from rng): its
     numbers may be right, so no sentence on the cases where they are right or wrong is added to it."""
@@ -128,16 +145,16 @@ class CallRuleBroken(AssertionError):
 def _checked(function: Callable, name: str) -> Callable:
     """``function``, failing as graded functions fail when it changes an array argument in place, or draws
     from NumPy's global generator when it is given one: what the kernel reports of each call in grading
-    (autograder/kernel/side.py), found here with the same functions."""
+    (autograder/kernel/wire.py, ``Peer.answer``), found here with the same functions."""
     @functools.wraps(function)
     def call(*args, **kwargs):
-        given = side.arrays_given(args, kwargs)
-        drawn = side.global_random_state()
+        given = wire.arrays_given(args, kwargs)
+        drawn = wire.global_random_state()
         result = function(*args, **kwargs)
-        changed = side.changed_names(function, given, args, kwargs)
+        changed = wire.changed_names(function, given, args, kwargs)
         if changed:
             raise CallRuleBroken(changed_arguments_failure(name, changed))
-        if side.uses_a_generator(args, kwargs) and side.global_random_state() != drawn:
+        if wire.uses_a_generator(args, kwargs) and wire.global_random_state() != drawn:
             raise CallRuleBroken(global_random_failure(name))
         return result
 
@@ -146,8 +163,7 @@ def _checked(function: Callable, name: str) -> Callable:
 
 def _isolated(func: Callable, reference: types.ModuleType, blanks: Iterable[str], warnings_fail: bool) -> Callable:
     """``isolate``'s copy of ``func``, not yet observable."""
-    compare = sys.modules.get("autograder.pipeline.compare")  # imported by the grader only, not in a kernel run by hand
-    if compare is not None and isinstance(func, compare.StudentFunction):  # grading: the function is in the kernel
+    if isinstance(func, RemoteFunction):  # grading: the function is in the kernel
         return func.isolated(reference, blanks, warnings_fail)
     if not isinstance(func, types.FunctionType):
         raise AssertionError(f"{func!r} should be a function defined with `def`.")
@@ -161,8 +177,7 @@ def _isolated(func: Callable, reference: types.ModuleType, blanks: Iterable[str]
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             result = copy(*args, **kwargs)
-        if caught:
-            raise AssertionError(warning_failure(func.__name__, caught[0].category.__name__, str(caught[0].message)))
+        fail_if_warned(func.__name__, [(w.category.__name__, str(w.message)) for w in caught])
         return result
 
     return without_warnings

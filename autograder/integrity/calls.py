@@ -49,12 +49,12 @@ class CallRules(Walker):
         if self.magic(node, context):
             return False
         for arg in [*node.args, *(kw.value for kw in node.keywords)]:  # reduce(getattr, ...), map(open, ...)
-            name = self.scan.builtin_aliases.get(arg.id, arg.id) if isinstance(arg, ast.Name) else None
-            if name in PASSED_BUILTINS and (arg.id in self.scan.builtin_aliases or not self.shadowed(arg.id, context)):
+            name = self.builtin_aliases.get(arg.id, arg.id) if isinstance(arg, ast.Name) else None
+            if name in PASSED_BUILTINS and (arg.id in self.builtin_aliases or not self.shadowed(arg.id, context)):
                 self.hit(node, "reference", f"passes {name} to another function, where the scan cannot follow "
                                             "what it reaches", context)
-        if isinstance(func, ast.Name) and (func.id in self.scan.builtin_aliases or not self.shadowed(func.id, context)):
-            name = self.scan.builtin_aliases.get(func.id, func.id)  # o = open (or def f(o=open)): o(...) is open(...)
+        if isinstance(func, ast.Name) and (func.id in self.builtin_aliases or not self.shadowed(func.id, context)):
+            name = self.builtin_aliases.get(func.id, func.id)  # o = open (or def f(o=open)): o(...) is open(...)
             if name in ("getattr", "hasattr", "setattr", "delattr") and len(node.args) >= 2:
                 self.dynamic_attribute(node, name, context)
             elif name == "vars" and node.args and self.module_of(node.args[0]) is not None:
@@ -67,7 +67,7 @@ class CallRules(Walker):
         if self.display_reader(func, context):
             for arg in (node.args[:1] + [kw.value for kw in node.keywords if kw.arg in ("data", "filename", "url")]):
                 self.display_argument(node, arg, context)
-        elif isinstance(func, ast.Attribute) or (isinstance(func, ast.Name) and func.id in self.scan.modules
+        elif isinstance(func, ast.Attribute) or (isinstance(func, ast.Name) and func.id in self.modules
                                                    and not self.shadowed(func.id, context)):
             # os.chmod(...), and chmod(...) after ``from os import chmod``
             path = self.module_of(func)
@@ -107,7 +107,7 @@ class CallRules(Walker):
     def display_reader(self, func: ast.AST, context: Context) -> bool:
         """Whether ``func`` is one of IPython.display's classes that read the file a string names."""
         if isinstance(func, ast.Name):
-            path = None if self.shadowed(func.id, context) else self.scan.modules.get(func.id)
+            path = None if self.shadowed(func.id, context) else self.modules.get(func.id)
         else:
             path = self.module_of(func)
         return path is not None and path.rpartition(".")[0] == DISPLAY_MODULE and path.rpartition(".")[2] in DISPLAY_READERS
@@ -141,7 +141,7 @@ class CallRules(Walker):
                 self.check_path(f"{path}.{attr}", node, context, store=store)
         elif self.module_of(target) is not None or isinstance(target, ast.Call) or (
                 isinstance(target, ast.Name) and not self.shadowed(target.id, context)
-                and (target.id in BUILTIN_NAMES or target.id in self.scan.builtin_aliases)):
+                and (target.id in BUILTIN_NAMES or target.id in self.builtin_aliases)):
             # a module, a call's result, or a builtin (print.__self__ is the builtins module)
             kind = "shared" if store else "reference"
             self.hit(node, kind, f"uses {name} with a computed attribute name on {self.module_of(target) or 'an object'}",

@@ -1,7 +1,7 @@
 """Suspicious code in a submission, found before grading and flagged for the instructor's review.
 
 Grading no longer depends on it for correctness. The hidden tests compare in the grader's process
-(autograder/pipeline/compare.py), so nothing the student's kernel does can change a verdict; the sandbox
+(autograder/pipeline/check_runner.py), so nothing the student's kernel does can change a verdict; the sandbox
 (autograder/kernel/sandbox.py) keeps the kernel from the reference's files, the gradebook and other
 students' folders. What the scan adds is a record: an attempt to cheat is worth an instructor's
 attention even when it gained nothing, and where the OS cannot sandbox the kernel, the scan's
@@ -41,7 +41,6 @@ import ast
 import functools
 from dataclasses import dataclass
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from nbformat import NotebookNode
 
@@ -56,10 +55,8 @@ from autograder.integrity.rules import (
 )
 from autograder.integrity.syntax import bound_names, catches_everything, does_nothing, local_names, parse
 from autograder.integrity.visitor import Visitor
+from autograder.integrity.walker import Definitions, Hit
 from autograder.labs import Lab
-
-if TYPE_CHECKING:
-    from autograder.integrity.walker import Context
 
 
 MAX_SCANNED_CELL_CHARS = 100_000
@@ -78,16 +75,6 @@ class Finding:
     """The blanks whose points it games; None means every autograded blank of the lab."""
     reason: str
     """One sentence for the instructor's review."""
-
-
-@dataclass
-class Hit:
-    cell: str
-    node: ast.AST
-    kind: str  # "reference" or "local": charge the blanks that use it; "shared": every blank; "none": no points
-    what: str
-    top: ast.stmt | None
-    owner: str | None
 
 
 def static_findings(nb: NotebookNode, lab: Lab) -> list[Finding]:
@@ -201,7 +188,8 @@ class Scan:
             for node in tree.body:
                 if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
                     self.defined.setdefault(node.name, (order, node.lineno))
-        self.rebound = {name for _, _, tree in self.cells for name in _bound_otherwise(tree)}
+        rebound = frozenset(name for _, _, tree in self.cells for name in _bound_otherwise(tree))
+        self.definitions = Definitions(self.defined, rebound)
         self.builtin_aliases = self._collect_aliases()
         self.uses = self._top_level_uses()
         self.hits: list[Hit] = []
@@ -267,7 +255,7 @@ class Scan:
 
     def findings(self) -> list[Finding]:
         for order, (label, blank, tree) in enumerate(self.cells):
-            Visitor(self, label, order).run(tree)
+            Visitor(label, self.hits, self.modules, self.definitions, self.builtin_aliases, order).run(tree)
             self._swallow_all(label, tree)
             self._rebinds_helpers(label, tree)
             self._namespace_uses(label, tree, order)
@@ -304,9 +292,6 @@ class Scan:
             return (cell_blank,)
         return None
 
-    def hit(self, cell: str, node: ast.AST, kind: str, what: str, context: "Context") -> None:
-        self.hits.append(Hit(cell, node, kind, what, context.top, context.owner))
-
     # -- whole-cell rules --------------------------------------------------------------------------
 
     def _swallow_all(self, label: str, tree: ast.Module) -> None:
@@ -318,12 +303,6 @@ class Scan:
                 self.hits.append(Hit(label, body[0], "none", "wraps the whole cell in a try/except that discards "
                                       "every error, so the cell can never fail", body[0], None))
                 return
-
-    def own_definition(self, name: str, order: int, line: int) -> bool:
-        """Whether ``name``, used in the statement at ``line`` of the ``order``-th cell, is a function
-        or class the notebook defined at module level before it, and never bound otherwise."""
-        defined = self.defined.get(name)
-        return defined is not None and name not in self.rebound and (order, line) > defined
 
     def _namespace_uses(self, label: str, tree: ast.Module, order: int) -> None:
         """globals(), vars() and locals() used for anything but their names: the values hold
@@ -337,7 +316,7 @@ class Scan:
                                                                                    ast.Lambda)) for inner in ast.walk(scope)}
             for node in parents:
                 if not (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id in NAMESPACE_CALLS
-                        and not self.own_definition(node.func.id, order, stmt.lineno)
+                        and not self.definitions.own_before(node.func.id, order, stmt.lineno)
                         and not (node.func.id == "vars" and node.args)
                         and not (node.func.id in ("locals", "vars") and node in in_functions)):
                     continue

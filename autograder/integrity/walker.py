@@ -4,13 +4,36 @@ from __future__ import annotations
 
 import ast
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 from autograder.integrity.rules import KNOWN_MODULE_NAMES, REEXPORTED_MODULES
 from autograder.integrity.syntax import local_names
 
-if TYPE_CHECKING:
-    from autograder.integrity.scan import Scan
+
+@dataclass
+class Hit:
+    """A rule broken at ``node`` of cell ``cell``: what it does, and whose points it games."""
+
+    cell: str
+    node: ast.AST
+    kind: str  # "reference" or "local": charge the blanks that use it; "shared": every blank; "none": no points
+    what: str
+    top: ast.stmt | None
+    owner: str | None
+
+
+@dataclass(frozen=True)
+class Definitions:
+    """Where the cells' own code first defines each name at module level, (cell, line), and the names
+    also bound otherwise or deleted anywhere (``del exec``, ``exec = ...``, an import)."""
+
+    first: dict[str, tuple[int, int]]
+    rebound: frozenset[str]
+
+    def own_before(self, name: str, order: int, line: int) -> bool:
+        """Whether ``name``, used in the statement at ``line`` of the ``order``-th cell, is a function or
+        class the notebook defined at module level before it, and never bound otherwise."""
+        first = self.first.get(name)
+        return first is not None and name not in self.rebound and (order, line) > first
 
 
 @dataclass
@@ -25,10 +48,19 @@ class Walker:
     """Walks one cell's tree with its context (top-level statement, enclosing def, parameters) and calls
     a ``visit_<Node>`` method for each node; the rules (autograder/integrity/visitor.py) define them."""
 
-    def __init__(self, scan: "Scan", cell: str, order: int = 0):
-        self.scan = scan
+    def __init__(self, cell: str, hits: list[Hit], modules: dict[str, str], defined: Definitions,
+                 builtin_aliases: dict[str, str], order: int = 0):
         self.cell = cell
-        self.order = order  # the cell's place among the scanned cells, which run in this order
+        self.order = order
+        """The cell's place among the scanned cells, which run in this order."""
+        self.hits = hits
+        """Where each rule broken is recorded: the scan's list (autograder/integrity/scan.py)."""
+        self.modules = modules
+        """Name bound by an import in the notebook -> dotted module or object path."""
+        self.defined = defined
+        """The functions and classes the notebook's scanned cells define at module level, and where."""
+        self.builtin_aliases = builtin_aliases
+        """Name bound to a builtin in the notebook (``o = open``) -> the builtin's name."""
         self.skip: set[int] = set()  # ids of nodes already handled (magic calls' get_ipython)
         self.docstrings: set[int] = set()
 
@@ -42,7 +74,7 @@ class Walker:
             self.visit(stmt, Context(top=stmt, owner=owner))
 
     def hit(self, node, kind, what, context):
-        self.scan.hit(self.cell, node, kind, what, context)
+        self.hits.append(Hit(self.cell, node, kind, what, context.top, context.owner))
 
     def visit(self, node: ast.AST, context: Context) -> None:
         if id(node) in self.skip:
@@ -64,10 +96,10 @@ class Walker:
     def shadowed(self, name: str, context: Context) -> bool:
         """Whether ``name`` here is the notebook's own, not a builtin's: a parameter or a name its
         enclosing function binds, or a module-level definition that comes before this statement and
-        is never rebound or deleted."""
+        is never rebound or deleted (a method or nested function of the name does not count)."""
         if any(name in p for p in context.params):
             return True
-        return context.top is not None and self.scan.own_definition(name, self.order, context.top.lineno)
+        return context.top is not None and self.defined.own_before(name, self.order, context.top.lineno)
 
     def module_of(self, node: ast.AST) -> str | None:
         """The dotted path an expression names, if it is rooted at an imported name (np.testing -> numpy.testing)."""
@@ -77,7 +109,7 @@ class Walker:
             node = node.value
         if not isinstance(node, ast.Name):
             return None
-        root = self.scan.modules.get(node.id)
+        root = self.modules.get(node.id)
         if root is None:
             root = {"np": "numpy", "plt": "matplotlib.pyplot"}.get(node.id) or (
                 node.id if node.id in KNOWN_MODULE_NAMES else None)

@@ -1,3 +1,3 @@
-"""The grading kernel: what runs inside it (``side``: the student's end of a hidden test and the
-wire both ends speak), the sandbox it runs in (``sandbox``) and the kernel manager that starts it
-there (``manager``)."""
+"""The grading kernel: what runs inside it (``server``: the kernel's end of a hidden test; ``wire``:
+the protocol both ends speak), the sandbox it runs in (``sandbox``) and the kernel manager that starts
+it there (``manager``)."""

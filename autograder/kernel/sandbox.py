@@ -22,9 +22,9 @@ Two layers of the Linux kernel confine the kernel process, applied by a launcher
 ``python -m autograder.kernel.sandbox --read P ... --write P ... -- CMD ARGS...`` is the launcher. It never
 refuses: a layer the OS does not offer is left out, and it says so on stderr. ``status()`` says what
 this OS offers, in a sentence for the grader's output. ``SandboxedKernelManager``
-(autograder/kernel/manager.py, also importable from here) starts Jupyter kernels through the
-launcher. The launcher imports only the standard library, ``landlockpy`` and ``pyseccomp``: it runs at every
-kernel start, and importing jupyter_client would add a third of a second to each.
+(autograder/kernel/manager.py, which imports this module, never the other way) starts Jupyter kernels
+through the launcher. The launcher imports only the standard library, ``landlockpy`` and ``pyseccomp``: it
+runs at every kernel start, and importing jupyter_client would add a third of a second to each.
 
 The environment variable ``KIT_SANDBOX`` turns layers off: ``off`` (none), or the layers to keep,
 ``files`` or ``network``. Unset, or ``on``: both.
@@ -45,7 +45,7 @@ import sys
 from dataclasses import dataclass
 from functools import cache
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import NoReturn
 
 import landlockpy
 from landlockpy import AccessFS, Scope
@@ -552,15 +552,6 @@ def launcher_command(read: list[str], write: list[str], layers: tuple[str, ...],
     command += ["--uid", str(uid)] if uid is not None else []
     command += [arg for layer in LAYERS if layer not in layers for arg in ("--without", layer)]
     return [*command, "--"]
-
-
-def __getattr__(name: str) -> Any:
-    """``SandboxedKernelManager``, imported from autograder.kernel.manager when first asked for."""
-    if name == "SandboxedKernelManager":
-        from autograder.kernel.manager import SandboxedKernelManager
-
-        return SandboxedKernelManager
-    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 
 if __name__ == "__main__":

@@ -25,8 +25,9 @@ import nbformat
 from nbformat import NotebookNode
 
 from autograder.forked_child import cap_memory, read_all, write_reply
-from autograder.pipeline.compare import KernelStopped, error_output
-from autograder.kernel.side import PeerTimeout
+from autograder.kernel.wire import PeerTimeout
+from autograder.pipeline.kernel_connection import KernelStopped
+from autograder.pipeline.output_caps import error_output
 
 PASSED_ON = {"PeerTimeout": PeerTimeout, "KernelStopped": KernelStopped}
 """What the check may raise for the grader to handle (the kernel is stuck or gone), by name."""

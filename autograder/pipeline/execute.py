@@ -2,7 +2,7 @@
 
 ``GradingExecute`` runs a submission cell by cell, like nbgrader's Execute, and adds:
 
-- hidden tests run in the grader's process, never in the student's kernel (autograder/pipeline/compare.py),
+- hidden tests run in the grader's process, never in the student's kernel (autograder/pipeline/check_runner.py),
   on cases drawn from the submission's own seed, which the kernel never sees (grading_secret.py):
   a test cell's visible part runs in the kernel, then its check runs here against the student's
   function, which the kernel only calls, in a forked child capped in memory and killed at the
@@ -45,8 +45,11 @@ from autograder import cells
 from autograder.kernel import sandbox
 from autograder.kernel.remove_tree import remove_tree
 from autograder.hidden_tests import cases
-from autograder.pipeline import compare, confined_check, grading_secret, verdicts
-from autograder.pipeline.output_caps import OutputBudget
+from autograder.kernel.wire import PeerTimeout
+from autograder.pipeline import confined_check, grading_secret, hidden_blocks, kernel_code, verdicts
+from autograder.pipeline.check_runner import run_check
+from autograder.pipeline.kernel_connection import KernelStopped, Listener, connect, stop
+from autograder.pipeline.output_caps import OutputBudget, cut, error_output
 from autograder.pipeline.restore import NoteKind, add_grader_notes
 
 TIMEOUT_ERROR = "CellTimeoutError"
@@ -72,7 +75,7 @@ class GradingExecute(Execute):
 
     def _setup_code(self) -> list[tuple[str, str]]:
         """(what it is, code) run silently in every new kernel before any student cell."""
-        steps = [("the grader's kernel-side module", compare.kernel_setup_code())]
+        steps = [("the grader's kernel-side module", kernel_code.kernel_setup_code())]
         if self.memory_limit_gb > 0:
             cap = self._memory_bytes()
             steps.append(("the memory cap", f"__import__('resource').setrlimit(__import__('resource').RLIMIT_AS, ({cap}, {cap}))"))
@@ -110,9 +113,9 @@ class GradingExecute(Execute):
         """Execute every code cell, recovering from dead and stuck kernels (see the module doc)."""
         _warn_once_if_not_sandboxed(self.log)
         NotebookClient.__init__(self, nb, km)
-        tests = compare.hidden_tests(nb)
+        tests = hidden_blocks.hidden_tests(nb)
         checks = {index: test.load() for index, test in tests.items()}  # ReferenceUnavailable before any kernel starts
-        compare.prepare(tests.values())
+        hidden_blocks.prepare(tests.values())
         self.reset_execution_trackers()
         self._check_assign_resources(resources)
         with _scratch_copy(self.resources) as scratch:
@@ -122,7 +125,7 @@ class GradingExecute(Execute):
             with cases.seeded(seed):
                 return self._execute_cells(tests, checks)
 
-    def _execute_cells(self, tests: dict[int, compare.HiddenTest], checks: dict) -> tuple[NotebookNode, dict]:
+    def _execute_cells(self, tests: dict[int, hidden_blocks.HiddenTest], checks: dict) -> tuple[NotebookNode, dict]:
         """``preprocess`` in the kernel's folder: every code cell, hidden tests in this process."""
         self._output = OutputBudget(self.max_output_bytes, self.max_notebook_output_bytes)
         self.resources[verdicts.RESOURCES_KEY] = {}
@@ -191,16 +194,16 @@ class GradingExecute(Execute):
         self.set_widgets_metadata()
         return self.nb, self.resources
 
-    def _execute_test_cell(self, cell: NotebookNode, index: int, test: compare.HiddenTest, check, earlier: frozenset[str]) -> None:
+    def _execute_test_cell(self, cell: NotebookNode, index: int, test: hidden_blocks.HiddenTest, check, earlier: frozenset[str]) -> None:
         """Run the visible part of a test cell in the kernel, then its hidden test here
-        (autograder/pipeline/compare.py), and record the grader's verdict (autograder/pipeline/verdicts.py).
+        (autograder/pipeline/check_runner.py), and record the grader's verdict (autograder/pipeline/verdicts.py).
         The cell shows what the visible part showed, made unable to score (``verdicts.display_only``),
         then what the student's function printed during the hidden test, then the hidden test's
         failure if it failed. Raises CellTimeoutError or DeadKernelError as ``execute_cell`` does;
         a visible part that was stopped is left for the caller to report."""
         start = time.monotonic()
         source = cell.source
-        cell.source = compare.split(source)[0]
+        cell.source = hidden_blocks.split(source)[0]
         try:
             self.execute_cell(cell, index, store_history=True)
         finally:
@@ -209,29 +212,29 @@ class GradingExecute(Execute):
             return  # stopped: the caller restarts the kernel and records the failure
         cell.outputs = [verdicts.display_only(o) for o in cell.outputs]
         deadline = start + self.timeout if self.timeout else None
-        listener = compare.Listener(getattr(self.km, "private_folder", None))  # the sandbox lets the kernel reach it
-        msg_id = self.kc.execute(compare.serve_code(listener.path, test), silent=True,
+        listener = Listener(getattr(self.km, "private_folder", None))  # the sandbox lets the kernel reach it
+        msg_id = self.kc.execute(kernel_code.serve_code(listener.path, test), silent=True,
                                  store_history=False, allow_stdin=False)
         try:
-            peer, why_not = compare.connect(listener, deadline, lambda: self._replied(msg_id))
+            peer, why_not = connect(listener, deadline, lambda: self._replied(msg_id))
             printed = room = 0
             mistake = wrong_on = None
             if peer is None:
-                outputs = [compare.error_output("AssertionError", why_not)]
+                outputs = [error_output("AssertionError", why_not)]
             else:
                 try:
                     room = self._output.room(index)
-                    outputs, printed, mistake, wrong_on = confined_check.run(lambda: compare.run_check(peer, test, check, earlier, room),
+                    outputs, printed, mistake, wrong_on = confined_check.run(lambda: run_check(peer, test, check, earlier, room),
                                                           deadline, self._memory_bytes())
-                except compare.KernelStopped:
+                except KernelStopped:
                     if not self._finished_alive(msg_id):
                         raise DeadKernelError("Kernel died") from None
-                    outputs = [compare.error_output(
+                    outputs = [error_output(
                         "AssertionError", f"The hidden test of {test.blank} could not finish: your code ended the "
                         "grader's connection to the kernel (with sys.exit, or by closing sockets).")]
                 finally:
-                    compare.stop(peer)
-        except compare.PeerTimeout:
+                    stop(peer)
+        except PeerTimeout:
             raise CellTimeoutError.error_from_timeout_and_cell("Cell execution timed out", self.timeout, cell) from None
         finally:
             listener.close()
@@ -308,7 +311,7 @@ class GradingExecute(Execute):
         for index, cell in enumerate(self.nb.cells[:upto]):
             if cell.cell_type != "code" or index in failed or time.monotonic() > deadline:
                 continue
-            source = compare.split(cell.source)[0]  # a hidden test never runs in the kernel
+            source = hidden_blocks.split(cell.source)[0]  # a hidden test never runs in the kernel
             msg_id = self.kc.execute(source, silent=True, store_history=False, allow_stdin=False)
             self._stopped.discard(id(cell))
             try:
@@ -340,7 +343,7 @@ class GradingExecute(Execute):
         and results together keep at most ``max_output_bytes`` characters of a cell and
         ``max_notebook_output_bytes`` of the notebook, then the cell says that the rest was dropped
         (the rest of a text is cut, any later output dropped). An error is always kept, its name,
-        message and traceback lines cut to compare.MAX_MESSAGE_CHARS: dropping it would turn a
+        message and traceback lines cut to output_caps.MAX_MESSAGE_CHARS: dropping it would turn a
         failing test cell into a passing one. Widgets' messages (``comm_*``) are dropped: nbclient
         would keep their state, of any size, in the graded notebook, and a malformed one made it
         raise and end the grading of the submission."""
@@ -453,9 +456,9 @@ def _shown_only(cell: NotebookNode) -> None:
 
 
 def _cut_error(content: dict) -> dict:
-    """An error's content with its name, message and traceback lines cut to compare.MAX_MESSAGE_CHARS."""
-    return {**content, **{key: compare.cut(str(content.get(key, ""))) for key in ("ename", "evalue")},
-            "traceback": [compare.cut(str(line)) for line in content.get("traceback", [])]}
+    """An error's content with its name, message and traceback lines cut to output_caps.MAX_MESSAGE_CHARS."""
+    return {**content, **{key: cut(str(content.get(key, ""))) for key in ("ename", "evalue")},
+            "traceback": [cut(str(line)) for line in content.get("traceback", [])]}
 
 
 def _whole_execution_counts(nb: NotebookNode) -> None:

@@ -18,7 +18,8 @@ from tqdm import tqdm
 from autograder import cells, default_jobs, private_paths
 from autograder.kernel import sandbox
 from autograder.labs import ROOT, Lab
-from autograder.pipeline import class_report, compare, late, shards
+from autograder.pipeline import class_report, late, shards
+from autograder.pipeline import hidden_blocks as compare
 from autograder.pipeline.grades import GradeRow, all_graded_labs, read_grades, write_grades
 from autograder.pipeline.intake import SUBMITTED, class_list, graded_from, import_submissions, not_student_ids
 from autograder.pipeline.nbgrader_apps import course_config, feedback_page, generate_release, gradebook_url, run_app

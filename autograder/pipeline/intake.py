@@ -20,6 +20,7 @@ from nbgrader.utils import parse_utc
 from nbformat import NotebookNode
 
 from autograder import cells
+from autograder.kernel.wire import replace_lone_surrogates
 from autograder.labs import DUE_DATES, Lab
 from autograder.pipeline.late import read_due_dates
 from autograder.pipeline.restore import add_grader_notes, forget_grader_notes
@@ -181,10 +182,10 @@ def _valid_unicode(nb: NotebookNode) -> tuple[NotebookNode, int]:
     JSON allows them, but nothing can write them as UTF-8: one in a cell stopped ``grade`` for the whole class
     (adversarial review of issue 31)."""
     text = nbformat.writes(nb)
-    count = sum(1 for ch in text if "\ud800" <= ch <= "\udfff")
-    if not count:
+    valid = replace_lone_surrogates(text)
+    if valid == text:
         return nb, 0
-    return nbformat.reads("".join("\ufffd" if "\ud800" <= ch <= "\udfff" else ch for ch in text), as_version=4), count
+    return nbformat.reads(valid, as_version=4), sum(a != b for a, b in zip(text, valid))
 
 
 def _submission_time(path: Path, required: bool) -> bytes | None:

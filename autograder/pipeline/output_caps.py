@@ -1,13 +1,17 @@
-"""How much output a graded submission keeps: a cap per cell and a cap for the whole notebook.
+"""How much output a graded submission keeps: a cap per cell and a cap for the whole notebook, and a cap
+on each error's message.
 
 ``GradingExecute`` counts here, in characters, everything a submission's cells put out (printed
 text, displayed data, results, and what the student's function printed during its hidden test). It
 asks how much room a cell has left before it keeps an output; the first time a cell's output is cut,
-the cell says so, and the grader's note names the cells that were cut.
+the cell says so, and the grader's note names the cells that were cut. A hidden test keeps what the
+student's function printed in a ``Capped`` stream, and each error's name, message and location is
+``cut`` to MAX_MESSAGE_CHARS.
 """
 
 from __future__ import annotations
 
+import io
 from collections.abc import Callable
 
 from nbformat import NotebookNode
@@ -15,6 +19,8 @@ from nbformat.v4 import new_output
 
 NOTED_LOUD_CELLS = 3
 """How many cells whose output was cut the grader's note names one by one (then it counts the rest)."""
+MAX_MESSAGE_CHARS = 10_000
+"""The most of an error's name, message or location that a test cell keeps."""
 
 
 class OutputBudget:
@@ -53,3 +59,39 @@ class OutputBudget:
                          f"{self.per_cell:,} characters of a cell's output, and {self.per_notebook:,} of the "
                          "whole notebook's.")
         return notes
+
+
+class Capped(io.TextIOBase):
+    """A text stream that keeps the first ``limit`` characters written to it, and counts them all."""
+
+    def __init__(self, limit: int):
+        super().__init__()
+        self.limit, self.written, self.parts = limit, 0, []
+
+    def writable(self) -> bool:
+        return True
+
+    def write(self, text: str) -> int:
+        if self.written < self.limit:
+            self.parts.append(text[: self.limit - self.written])
+        self.written += len(text)
+        return len(text)
+
+    def getvalue(self) -> str:
+        return "".join(self.parts)
+
+
+def cut(text: str) -> str:
+    """``text``, cut to MAX_MESSAGE_CHARS with a note that says so (an error's message, name or line)."""
+    if len(text) <= MAX_MESSAGE_CHARS:
+        return text
+    dropped = len(text) - MAX_MESSAGE_CHARS
+    return f"{text[:MAX_MESSAGE_CHARS]} [... {dropped:,} more characters cut by the grader]"
+
+
+def error_output(ename: str, evalue: str, where: str = "") -> NotebookNode:
+    """An error output as IPython's minimal traceback shows it: one line, plus where it was raised.
+    Each part is cut to MAX_MESSAGE_CHARS: a student's exception can carry megabytes."""
+    ename, evalue, where = (cut(text) for text in (ename, evalue, where))
+    lines = [f"{ename}: {evalue}"] + ([f"(raised {where})"] if where else [])
+    return new_output("error", ename=ename, evalue=evalue, traceback=lines)

@@ -9,14 +9,12 @@ canvas (no display, no pyplot state).
 from __future__ import annotations
 
 from pathlib import Path
-from typing import TYPE_CHECKING
 
 from matplotlib.backends.backend_agg import FigureCanvasAgg
 from matplotlib.colors import to_rgb
 from matplotlib.figure import Figure
 
-if TYPE_CHECKING:
-    from autograder.pipeline.class_report import LabCounts
+from autograder.pipeline.class_counts import LabCounts
 
 FULL_COLOUR, OTHER_COLOUR, NOT_WRITTEN_COLOUR = "#3a8f3a", "#8c8c8c", "#e4e4e4"
 MISTAKE_COLOURS = ("#1f77b4", "#ff7f0e", "#d62728", "#9467bd", "#8c564b", "#e377c2", "#17becf", "#bcbd22",

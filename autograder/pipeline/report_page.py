@@ -12,10 +12,8 @@ from __future__ import annotations
 import base64
 from html import escape
 from pathlib import Path
-from typing import TYPE_CHECKING
 
-if TYPE_CHECKING:
-    from autograder.pipeline.class_report import BlankCounts, LabCounts
+from autograder.pipeline.class_counts import BlankCounts, LabCounts
 
 WRONG_ONLY_LEAD = "wrong only on the cases with"
 """How the detail of a loss grouped by the kind of case alone wrong begins (class_report.WRONG_ONLY)."""

@@ -28,6 +28,7 @@ from nbformat.v4 import new_markdown_cell
 from nbgrader.preprocessors import NbGraderPreprocessor
 
 from autograder import cells
+from autograder.kernel.wire import replace_lone_surrogates
 from autograder.labs import Lab
 from autograder.pipeline import grading_secret
 
@@ -137,8 +138,7 @@ def forget_grader_notes(nb: NotebookNode) -> None:
 def _one_line(text: str) -> str:
     """A note's text on one line, with what no file can store (a lone surrogate, from a file name that is not
     UTF-8) replaced by U+FFFD and control characters (a newline in a file name) by spaces."""
-    text = "".join("\ufffd" if "\ud800" <= ch <= "\udfff" else ch for ch in text)
-    return CONTROL.sub(" ", text)
+    return CONTROL.sub(" ", replace_lone_surrogates(text))
 
 
 def add_grader_notes(nb: NotebookNode, notes: list[str], kind: NoteKind = NoteKind.CHANGE) -> None:

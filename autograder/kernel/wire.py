@@ -1,18 +1,17 @@
-"""The grading kernel's side of a hidden test, and the wire that both sides speak.
+"""The wire that the grader and the grading kernel speak during a hidden test: framing (``Wire``),
+values (``Codec``) and calls both ways (``Peer``).
 
 The grader never runs hidden tests in the student's kernel. For a hidden test of blank ``f``, the
-grader (autograder/pipeline/compare.py) runs the check ``check_f`` in its own process, with the reference,
-and hands it a stand-in for the student's ``f``; each call of the stand-in sends the inputs over a
-Unix socket to the kernel, where :func:`serve` calls the student's ``f`` and sends back only what it
-returned (and what it wrote into a dict, a random generator or an Axes it was given). The kernel
-therefore sees the hidden cases' inputs, never the reference, the expected values or the checks.
-Partial credit stays isolated: inside the kernel, the student's ``f`` sees, in place of the other
-blanks it calls, stand-ins that the grader answers with the reference, only while that test runs,
-and never for ``f`` itself.
+grader (autograder/pipeline/check_runner.py) runs the check ``check_f`` in its own process, with the
+reference, and hands it a stand-in for the student's ``f`` (autograder/pipeline/student_function.py);
+each call of the stand-in sends the inputs over a Unix socket to the kernel, where the kernel's server
+(autograder/kernel/server.py) calls the student's ``f`` and sends back only what it returned (and
+what it wrote into a dict, a random generator or an Axes it was given). The kernel therefore sees the
+hidden cases' inputs, never the reference, the expected values or the checks.
 
 This file is self-contained (the standard library and NumPy; matplotlib only for a plot blank): the
-grader sends its source into each grading kernel, so the kernel never imports ``autograder``. The
-grader imports the same file for the wire.
+grader sends its source into each grading kernel with the server's (autograder/pipeline/kernel_code.py),
+so the kernel never imports ``autograder``. The grader imports the same file for its end of the wire.
 
 The wire carries only data: numbers, strings, NumPy arrays of numbers, tuples, lists, dicts, NumPy
 random generators (their state), the ``course`` package's dataclasses, what a Matplotlib Axes shows
@@ -42,14 +41,13 @@ import warnings
 import numpy as np
 
 FILENAME = "<estimation-lab-kit grading>"
-"""The file name the kernel gives this module's code (its frames are left out of a student's traceback)."""
+"""The file name the kernel gives the wire's and the server's code (their frames are left out of a student's traceback)."""
 MAX_MESSAGE_BYTES = 1 << 30
 """The largest message either side accepts (1 GiB): a larger one is a protocol error."""
 GENERATORS = ("PCG64", "PCG64DXSM")
 """The bit generators whose state crosses the wire: those whose state holds only numbers. MT19937, Philox and SFC64
 keep arrays in theirs, which JSON does not take (a review of issue 30: one returned from the kernel ended its
 connection, and the student was told that their code had); they are refused as unsendable, with a message."""
-"""The bit generators a random generator may travel with."""
 EXCEPTIONS_BY_NAME = {"LinAlgError": np.linalg.LinAlgError}
 """Exceptions outside ``builtins`` that the receiving side re-raises as themselves."""
 
@@ -65,16 +63,19 @@ def _valid_unicode(text: bytes) -> bytes:
     if not LONE_SURROGATE.search(text):
         return text
     decoded = json.loads(text)
-    return json.dumps(_replace_surrogates(decoded), ensure_ascii=True).encode()
+    return json.dumps(replace_lone_surrogates(decoded), ensure_ascii=True).encode()
 
 
-def _replace_surrogates(value):
+def replace_lone_surrogates(value):
+    """``value`` (a string, or lists and dicts of them and of other values) with each lone UTF-16 surrogate in its
+    strings replaced by U+FFFD: what no file can store as UTF-8. The grader's other texts (a submitted notebook,
+    a note that names a file) use it too."""
     if isinstance(value, str):
         return "".join("\ufffd" if "\ud800" <= ch <= "\udfff" else ch for ch in value)
     if isinstance(value, list):
-        return [_replace_surrogates(v) for v in value]
+        return [replace_lone_surrogates(v) for v in value]
     if isinstance(value, dict):
-        return {_replace_surrogates(k): _replace_surrogates(v) for k, v in value.items()}
+        return {replace_lone_surrogates(k): replace_lone_surrogates(v) for k, v in value.items()}
     return value
 
 
@@ -495,11 +496,20 @@ class Peer:
         Returns the decoded answer, after writing back into the dicts, generators and Axes among
         the arguments what the call wrote into them. Raises what the call raised.
         """
+        header, buffers = self.exchange(target, args, kwargs, **options)
+        return self.apply_answer(header, buffers, args, kwargs)
+
+    def exchange(self, target, args: tuple, kwargs: dict, answering: dict | None = None,
+                 **options) -> tuple[dict, list[bytes]]:
+        """Send the call of ``target`` (with ``options`` in its message), and answer the other side's calls
+        until the call's answer arrives; returns that answer's header and buffers, not yet applied
+        (``apply_answer``). ``answering``, when given, becomes ``targets``: what the other side may call here."""
+        if answering is not None:
+            self.targets = dict(answering)
         buffers: list[bytes] = []
         payload = self.codec.encode_arguments(args, kwargs, buffers)
         self.wire.send({"op": "call", "target": _target_json(target), **payload, **options}, buffers)
-        header, buffers = self.serve_until_answer()
-        return self.apply_answer(header, buffers, args, kwargs)
+        return self.serve_until_answer()
 
     def serve_until_answer(self) -> tuple[dict, list[bytes]]:
         """Receive messages, answering calls, until an answer ("return" or "raise") arrives."""
@@ -638,73 +648,3 @@ def _target_key(target):
     if isinstance(target, str):
         return target
     raise ProtocolError(f"a call target {target!r}")
-
-
-# -- the kernel's side --------------------------------------------------------------------------
-
-
-NOT_SERVED = "NotServed"
-"""What the grader raises for a call of a served blank that it leaves to the student's own blank."""
-
-
-def _served_or_own(peer: Peer, name: str, namespace: dict) -> types.FunctionType:
-    """The stand-in for the served blank ``name``: the grader answers the calls that the reference
-    makes too; the student's own ``name`` (from the notebook) answers the others."""
-    stub = peer.stub(("served", name))
-
-    def served_or_own(*args, **kwargs):
-        try:
-            return stub(*args, **kwargs)
-        except RaisedElsewhere as error:
-            if type(error).__name__ != NOT_SERVED:
-                raise
-        own = namespace.get(name)
-        if not callable(own):
-            raise NameError(f"name {name!r} is not defined")
-        return own(*args, **kwargs)
-
-    served_or_own.__name__ = served_or_own.__qualname__ = name
-    return served_or_own
-
-
-def serve(path: str, name: str, namespace: dict | None = None) -> None:
-    """In the grading kernel: connect to the grader at ``path`` and call the student's function
-    ``name`` (from the notebook's namespace) for the grader until it says stop.
-
-    Each call is made on a copy of the function that sees, for each blank the call's message lists
-    as served, a stand-in that the grader answers with the reference; the notebook's own names are
-    left alone.
-    """
-    if namespace is None:
-        namespace = sys.modules["__main__"].__dict__
-        shell = getattr(builtins, "get_ipython", None)
-        if shell is not None:
-            namespace = shell().user_ns
-    sock = socket.socket(socket.AF_UNIX, socket.SOCK_STREAM)
-    sock.connect(path)
-    wire = Wire(sock)
-    try:
-        function = namespace.get(name)
-        if not isinstance(function, types.FunctionType):
-            what = "not defined" if function is None else f"a {type(function).__name__}, not a function"
-            wire.send({"op": "missing", "message": f"{name} is {what}: define it with `def {name}(...)` in its answer cell."}, [])
-            return
-        peer = Peer(wire, capture_output=True)
-        wire.send({"op": "ready"}, [])
-        while True:
-            header, buffers = wire.receive()
-            if header.get("op") == "stop":
-                return
-            if header.get("op") != "call":
-                raise ProtocolError(f"an unexpected message {header.get('op')!r}")
-            served = [str(other) for other in header.get("served", []) if other != name]
-            stand_ins = {other: _served_or_own(peer, other, namespace) for other in served}
-            copy = types.FunctionType(function.__code__, {**function.__globals__, **stand_ins}, function.__name__,
-                                      function.__defaults__, function.__closure__)
-            copy.__kwdefaults__ = function.__kwdefaults__
-            peer.targets["student"] = copy
-            peer.answer(header, buffers)
-    except PeerGone:
-        return
-    finally:
-        sock.close()
