@@ -19,7 +19,7 @@ from autograder import cells, default_jobs, private_paths
 from autograder.kernel import sandbox
 from autograder.labs import ROOT, Lab
 from autograder.pipeline import class_report, late, shards
-from autograder.pipeline import hidden_blocks as compare
+from autograder.pipeline import hidden_blocks
 from autograder.pipeline.grades import GradeRow, all_graded_labs, read_grades, write_grades
 from autograder.pipeline.intake import SUBMITTED, class_list, graded_from, import_submissions, not_student_ids
 from autograder.pipeline.nbgrader_apps import course_config, feedback_page, generate_release, gradebook_url, run_app
@@ -32,11 +32,11 @@ def check_reference_available(labs: list[Lab]) -> None:
     """Refuse to grade unless this process, where the hidden tests compare, imports every hidden test
     of these labs and the reference they use.
 
-    Raises ReferenceUnavailable (from autograder.pipeline.compare) if it cannot.
+    Raises ReferenceUnavailable (from autograder.pipeline.hidden_blocks) if it cannot.
     """
     course_config()  # loading it puts the course root on this process's path, as for plain nbgrader
     for lab in labs:
-        for test in compare.hidden_tests(cells.read(lab.source_notebook)).values():
+        for test in hidden_blocks.hidden_tests(cells.read(lab.source_notebook)).values():
             test.load()
 
 
