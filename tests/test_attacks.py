@@ -635,6 +635,51 @@ reach its user's keyring, to set up an io_uring and an inotify instance, and pri
 its effective capabilities."""
 
 
+CHANNEL_PROBE = """import ctypes, fcntl, os, sys
+libc = ctypes.CDLL(None, use_errno=True)
+libc.mmap.restype = ctypes.c_void_p
+libc.mmap.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_long]
+path = sys.argv[1]
+fd = os.open(path, os.O_RDONLY)
+def check(result):
+    if result == -1:
+        raise OSError(ctypes.get_errno(), "")
+def call(attempt):
+    try:
+        attempt()
+        return "ok"
+    except OSError as error:
+        return str(error.errno)
+page = libc.mmap(None, 4096, 1, 1, fd, 0)  # PROT_READ, MAP_SHARED
+flags = ctypes.c_long(0)
+print(call(lambda: os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_DONTNEED)),
+      call(lambda: check(libc.mincore(ctypes.c_void_p(page), 4096, (ctypes.c_ubyte * 1)()))),
+      call(lambda: check(libc.ioctl(fd, 0x40086602, ctypes.byref(flags)))),
+      call(lambda: fcntl.fcntl(os.open(os.path.dirname(path), os.O_RDONLY), 1026, 0x80000001)),
+      call(lambda: os.preadv(fd, [bytearray(1)], 0, os.RWF_NOWAIT)))
+"""
+"""Tries, on a file it may read: to empty its pages from the cache and to read which are cached, to
+set its flags (chattr), to watch its folder with dnotify, and a read that says whether it was
+cached; prints each errno."""
+
+
+def test_a_kernel_cannot_signal_through_the_page_cache_file_flags_or_dnotify():
+    """A third review (helper-55) passed a classmate's functions between kernels through the page
+    cache of files every kernel may read (fadvise to empty it, mincore to read it back), set flags
+    (chattr) on a plain-user grader's own files for a later kernel, and watched another kernel's reads
+    with dnotify. The seccomp filter refuses each (EPERM). On the code before, every call succeeded."""
+    with tempfile.TemporaryDirectory(prefix="kit-test-") as folder:
+        readable = Path(folder) / "lab.txt"
+        readable.write_bytes(b"x" * 8192)
+        read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable), "/usr/lib", "/lib", "/lib64",
+                            "/etc/ld.so.cache", folder) if os.path.exists(p)]
+        command = [*sandbox.launcher_command(read, [], sandbox.LAYERS), sys.executable, "-I", "-c", CHANNEL_PROBE,
+                   str(readable)]
+        done = subprocess.run(command, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    assert done.stdout.split() == [str(errno.EPERM)] * 5
+
+
 def test_a_kernel_cannot_change_who_it_is_nor_reach_a_keyring_io_uring_or_inotify():
     """Started by root, a kernel is root in its user namespace, where user 1 is root outside: with
     ``setresuid(1)`` it became root again, free of the cap on its processes (an adversarial review
@@ -658,19 +703,24 @@ def test_a_kernel_run_by_root_changes_no_access_time():
     chosen moments (a blank notebook scored 9/9, unflagged, with the sandbox on). Run by root, the
     launcher binds the kernel's paths over themselves with noatime in a mount namespace of its own,
     so a read changes no access time. Run by a plain user the mounts are locked and README states
-    the gap (Covert channels). On the code before, the read set the file's access time to now."""
+    the gap (Covert channels). On the code before, the read set the file's access time to now; with
+    only the kernel's own paths bound noatime (3f70a17), a link outside them still took the time when
+    the kernel read it (a third review passed functions through links' access times)."""
     with tempfile.TemporaryDirectory(prefix="kit-test-") as folder:
-        shared = Path(folder) / "shared.txt"
+        (Path(folder) / "readable").mkdir()
+        shared, link = Path(folder) / "readable" / "shared.txt", Path(folder) / "link"
         shared.write_text("x")
-        os.utime(shared, (1_000_000_000, 2_000_000_000))  # read long ago, written since: a read updates it
+        link.symlink_to(shared)  # outside every path the kernel may read: following it sets its own access time
+        for path in (shared, link):  # read long ago, written since: a read updates it
+            os.utime(path, (1_000_000_000, 2_000_000_000), follow_symlinks=False)
         read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable), "/usr/lib", "/lib", "/lib64",
-                            "/etc/ld.so.cache", folder) if os.path.exists(p)]
-        probe = f"print(open({str(shared)!r}).read())"
+                            "/etc/ld.so.cache", str(shared.parent)) if os.path.exists(p)]
+        probe = f"import os\nprint(open({str(shared)!r}).read(), os.readlink({str(link)!r}) == {str(shared)!r})"
         done = subprocess.run([*sandbox.launcher_command(read, [], sandbox.LAYERS), sys.executable, "-I", "-c", probe],
                               capture_output=True, text=True, timeout=60)
-        atime = shared.stat().st_atime
-    assert done.returncode == 0 and done.stderr == "" and done.stdout == "x\n", done.stderr
-    assert (atime == 1_000_000_000) == (os.getuid() == 0)
+        atimes = [os.stat(path, follow_symlinks=False).st_atime for path in (shared, link)]
+    assert done.returncode == 0 and done.stderr == "" and done.stdout == "x True\n", done.stderr
+    assert (atimes == [1_000_000_000] * 2) == (os.getuid() == 0), atimes
 
 
 def test_a_crashing_kernel_dumps_no_core():

@@ -6,6 +6,11 @@ import ast
 import copy
 
 from autograder.integrity.rules import (
+    ATTRIBUTE_GETTERS,
+    KNOWN_MODULE_NAMES,
+    MODULE_REFERENCE,
+    MODULE_SHARED,
+    REEXPORTED_MODULES,
     BUILTIN_NAMES,
     CODE_MAGICS,
     IMAGE_READERS,
@@ -25,6 +30,7 @@ from autograder.integrity.rules import (
     SAFE_CELL_MAGICS,
     SAFE_LINE_MAGICS,
     SHARED_ATTRIBUTES,
+    TEXT_RUNNERS,
     benign_command,
     path_problem,
 )
@@ -72,6 +78,11 @@ class CallRules(Walker):
             # os.chmod(...), and chmod(...) after ``from os import chmod``
             path = self.module_of(func)
             method = func.attr if isinstance(func, ast.Attribute) else (path or "").rpartition(".")[2]
+            if path in TEXT_RUNNERS:
+                self.text_runner(node, path, first_arg(node, "stmt"), context)
+            if path in ATTRIBUTE_GETTERS and not all(_plain_attribute_name(arg) for arg in node.args[:1]):
+                self.hit(node, "reference", f"uses {path} with a name computed at run time or a special one, which "
+                                            "reaches any attribute", context)
             if path in ("io.open", "io.FileIO", "codecs.open", "numpy.lib.format.open_memmap"):
                 self.file_access(node, first_arg(node, "file"), open_writes(node, 1), context)
             elif path is not None and path.startswith("os.") and path.count(".") == 1 and method in OS_FILE_WRITES:
@@ -103,6 +114,18 @@ class CallRules(Walker):
             elif method == "join" and isinstance(func.value, ast.Constant):
                 self.string(node, fold(node), context)
         return None
+
+    def text_runner(self, node: ast.Call, path: str, code: ast.AST | None, context: Context) -> None:
+        """timeit and the like run a text as code: a function of the notebook's (or a lambda) is honest
+        use; a constant text is flagged for review, at no cost (the scan does not read inside it);
+        anything else, a text computed at run time, costs as exec does."""
+        if code is None or isinstance(code, (ast.Lambda, ast.Attribute)) or (
+                isinstance(code, ast.Name) and code.id in self.defined.first):
+            return
+        if isinstance(code, ast.Constant) and isinstance(code.value, str):
+            self.hit(node, "none", f"gives {path} code as a text, which the scan does not read: look at it", context)
+        else:
+            self.hit(node, "shared", f"runs code from a text ({path}), which this scan cannot see", context)
 
     def display_reader(self, func: ast.AST, context: Context) -> bool:
         """Whether ``func`` is one of IPython.display's classes that read the file a string names."""
@@ -228,3 +251,13 @@ class CallRules(Walker):
                 if hasattr(child, "lineno"):
                     child.lineno = getattr(node, "lineno", 1)
             self.visit(stmt, context)
+
+
+def _plain_attribute_name(arg: ast.AST) -> bool:
+    """Whether ``arg`` is a constant attribute name (dotted or not) with no special part, and no part
+    that names a module or a module's dangerous attribute: operator.attrgetter("score"), not
+    operator.attrgetter("os.system")."""
+    dangerous = REFERENCE_ATTRIBUTES | REEXPORTED_MODULES | KNOWN_MODULE_NAMES | {
+        name for names in (*MODULE_REFERENCE.values(), *MODULE_SHARED.values()) for name in names}
+    return (isinstance(arg, ast.Constant) and isinstance(arg.value, str) and all(
+        part.isidentifier() and not part.startswith("_") and part not in dangerous for part in arg.value.split(".")))

@@ -11,6 +11,7 @@ from autograder.integrity.rules import (
     HIDDEN_PACKAGES,
     IMPORT_MACHINERY,
     MODULE_REFERENCE,
+    MODULE_REVIEW,
     MODULE_SHARED,
     REFERENCE_ATTRIBUTES,
     SHARED_ATTRIBUTES,
@@ -157,6 +158,14 @@ class NameRules(Walker):
             if top == module and len(parts) > 1 and parts[1] in names:
                 self.hit(node, "shared", f"uses {module}.{parts[1]}, which tampers with the kernel or the machine",
                          context)
+                return
+        if top == "ctypes" and len(parts) > 1:  # reached through another module (np.ctypeslib.ctypes.pythonapi)
+            self.hit(node, "shared", f"uses {path}, which calls into the C library and Python's own C API", context)
+            return
+        for module, names in MODULE_REVIEW.items():
+            if top == module and len(parts) > 1 and parts[1] in names:
+                self.hit(node, "none", f"uses {module}.{parts[1]}, which can run any code packed into what it loads: "
+                                       "look at where that comes from", context)
                 return
         if top != "sys" and "sys" in parts[1:-1] and parts[parts.index("sys", 1) + 1] in MODULE_REFERENCE["sys"]:
             self.hit(node, "reference", f"uses {path}, sys reached through another module", context)

@@ -89,11 +89,7 @@ MODULE_REFERENCE = {
     "traceback": {"walk_stack", "walk_tb"},
     "types": {"FunctionType", "CodeType", "MethodType", "LambdaType", "ModuleType"},
     "gc": {"get_objects", "get_referrers", "get_referents"},
-    # code the scan cannot read: a pickle runs any callable it names, exec among them (a re-attack of issue 29)
-    "pickle": {"loads", "load", "Unpickler"},
-    "marshal": {"loads", "load"},
     "pydoc": {"locate"},
-    "operator": {"attrgetter", "methodcaller"},
     "builtins": {"exec", "eval", "compile", "__import__", "open", "getattr", "setattr", "delattr", "globals", "vars",
                  "locals", "breakpoint", "__dict__"},
 }
@@ -108,6 +104,24 @@ MODULE_SHARED = {
            "posix_spawnp", "fork", "forkpty", "kill", "killpg", "chdir", "fchdir", "putenv", "unsetenv", "chroot"},
 }
 """Module attributes that tamper with the kernel or the machine."""
+MODULE_SHARED.update({  # runners of code given as text, which the scan cannot read (reviews of issue 29)
+    "cProfile": {"run", "runctx"}, "profile": {"run", "runctx"},
+    "pdb": {"run", "runeval", "runctx", "runcall", "set_trace", "Pdb"}, "bdb": {"Bdb"}, "trace": {"Trace"},
+    "doctest": {"run_docstring_examples", "testmod", "testfile", "DocTestRunner", "DocTestParser",
+                "script_from_examples", "debug_src", "debug_script"},
+    "typing": {"get_type_hints", "ForwardRef", "_eval_type"},
+    "code": {"InteractiveInterpreter", "InteractiveConsole", "interact", "compile_command"},
+})
+MODULE_REVIEW = {
+    "pickle": {"loads", "load", "Unpickler"}, "_pickle": {"loads", "load", "Unpickler"},
+    "marshal": {"loads", "load"},
+}
+"""Module attributes that honest work uses (a student pickles their own results) but that can run any
+code a cheat packs into them: flagged for review, at no cost."""
+TEXT_RUNNERS = frozenset({"timeit.timeit", "timeit.repeat", "timeit.Timer"})
+"""Functions that run their first argument as code when it is a text (a function is honest use)."""
+ATTRIBUTE_GETTERS = frozenset({"operator.attrgetter", "operator.methodcaller"})
+"""Functions that reach an attribute by the name given: honest with a plain constant name."""
 OS_FILE_WRITES = frozenset({"remove", "unlink", "rename", "renames", "replace", "rmdir", "removedirs", "makedirs",
                             "mkdir", "symlink", "link", "chmod", "chown", "lchown", "truncate", "utime", "open",
                             "write", "mkfifo", "mknod", "setxattr", "removexattr", "lchmod", "chflags",
@@ -131,7 +145,8 @@ KNOWN_MODULE_NAMES = frozenset({"sys", "os", "builtins", "numpy", "scipy", "math
                                 "types", "course", "solutions", "autograder", "IPython"})
 """Names the scan reads as these modules even where the cell did not import them (the set-up cell may have)."""
 REEXPORTED_MODULES = frozenset({"os", "sys", "builtins", "importlib", "gc", "subprocess", "shutil", "ctypes", "inspect",
-                                "pickle", "marshal", "pydoc", "operator"})
+                                "pickle", "_pickle", "marshal", "pydoc", "operator", "typing", "timeit", "pdb", "doctest",
+                                "cProfile", "profile", "trace", "bdb", "code"})
 """Modules that other modules hold as attributes (``numpy.os``, ``scipy.sys``): a path through one of
 them is read as the module's own (``np.os.system`` as ``os.system``)."""
 

@@ -117,5 +117,5 @@ class Walker:
             return None
         path = ".".join([root] + parts[::-1]).split(".")
         # a module another one holds (np.os.system): read from the last such module on
-        inner = [i for i, part in enumerate(path) if i > 0 and part in REEXPORTED_MODULES]
+        inner = [i for i, part in enumerate(path) if 0 < i < len(path) - 1 and part in REEXPORTED_MODULES]
         return ".".join(path[inner[-1]:] if inner else path)

@@ -37,6 +37,7 @@ import contextlib
 import ctypes
 import errno
 import os
+import re
 import resource
 import select
 import shutil
@@ -78,11 +79,20 @@ could use them on any file it can name that it owns, or, started by root, on whi
 hold (root's files): make ``solutions/`` readable by every user, make /etc/shadow readable, or lock
 the grader out of its own code. A seccomp filter makes each fail with EPERM."""
 RING_AND_WATCH_CALLS = ("io_uring_setup", "io_uring_enter", "io_uring_register", "inotify_init", "inotify_init1",
-                        "inotify_add_watch", "fanotify_init", "fanotify_mark")
+                        "inotify_add_watch", "fanotify_init", "fanotify_mark", "mincore", "cachestat", "fadvise64",
+                        "readahead")
 """io_uring, whose operations (an xattr set among them) are not system calls, so that the filter never
-sees them: a re-attack set an xattr through it, and wrote ACLs on the grader's own files; and inotify
-and fanotify, which Landlock does not control: a kernel watched folders it may not read, and saw every
-other kernel's private folder made in /tmp. The seccomp filter refuses them (EPERM)."""
+sees them: a re-attack set an xattr through it, and wrote ACLs on the grader's own files; inotify and
+fanotify, which Landlock does not control: a kernel watched folders it may not read, and saw every
+other kernel's private folder made in /tmp; and the page cache's state, which a kernel emptied of a
+file it may read (fadvise) and another read back (mincore): a channel between kernels. The seccomp
+filter refuses them (EPERM)."""
+ARGUMENT_RULES = {
+    "ioctl": [(1, 0x40086602), (1, 0x40046602), (1, 0x401C5820)],  # FS_IOC_SETFLAGS (64, 32 bit), FS_IOC_FSSETXATTR
+    "fcntl": [(1, 1026)],  # F_NOTIFY: dnotify, which saw another kernel's reads
+}
+"""Calls refused with one argument's value, (argument's index, value): a file's flags (chattr: the
+grader's own files took bits from one kernel for a later one) and dnotify."""
 IDENTITY_CALLS = ("setuid", "setgid", "setreuid", "setregid", "setresuid", "setresgid", "setfsuid", "setfsgid",
                   "setgroups", "add_key", "request_key", "keyctl")
 """The system calls that change who a process is, and the kernel's keyrings. Started by root, the
@@ -93,9 +103,9 @@ KEPT_CAPABILITIES = (1, 2)
 """CAP_DAC_OVERRIDE and CAP_DAC_READ_SEARCH: the only capabilities the kernel keeps in its user
 namespace (the rest leave its bounding set), so that, started by root, it still reads the Python
 installation in a folder closed to others, where Landlock allows."""
-NEWER_ATTRIBUTE_CALLS = {0xC000003E: (463, 466), 0xC00000B7: (463, 466)}
-"""setxattrat and removexattrat (Linux 6.13), by number on x86-64 and arm64 (AUDIT_ARCH values),
-where libseccomp may not know their names yet."""
+NEWER_ATTRIBUTE_CALLS = {0xC000003E: (463, 466, 469), 0xC00000B7: (463, 466, 469)}
+"""setxattrat and removexattrat (Linux 6.13) and file_setattr (6.17), by number on x86-64 and arm64
+(AUDIT_ARCH values), where libseccomp may not know their names yet."""
 
 READ = AccessFS.READ_FILE | AccessFS.READ_DIR | AccessFS.EXECUTE
 """What a read path allows: read files and list folders, run programs."""
@@ -413,8 +423,8 @@ def drop_capabilities() -> None:
 
 def forbid_attribute_changes() -> None:
     """Load a seccomp filter into this process and its children under which every call of
-    ``ATTRIBUTE_CALLS``, ``IDENTITY_CALLS`` and ``RING_AND_WATCH_CALLS`` (and ``NEWER_ATTRIBUTE_CALLS``) fails
-    with EPERM; other calls are unchanged.
+    ``ATTRIBUTE_CALLS``, ``IDENTITY_CALLS`` and ``RING_AND_WATCH_CALLS`` (and ``NEWER_ATTRIBUTE_CALLS``), and
+    of ``ARGUMENT_RULES`` with those arguments, fails with EPERM; other calls are unchanged.
     Needs no_new_privs set first. Raises OSError, or RuntimeError when libseccomp is missing."""
     import pyseccomp  # here, not at the top: the launcher still starts, and says so, without libseccomp
 
@@ -425,24 +435,40 @@ def forbid_attribute_changes() -> None:
             rules.add_rule(pyseccomp.ERRNO(errno.EPERM), number)
     for number in NEWER_ATTRIBUTE_CALLS.get(pyseccomp.system_arch(), ()):
         rules.add_rule(pyseccomp.ERRNO(errno.EPERM), number)
+    for name, refused in ARGUMENT_RULES.items():
+        for index, value in refused:
+            rules.add_rule(pyseccomp.ERRNO(errno.EPERM), name, pyseccomp.Arg(index, pyseccomp.EQ, value))
+    # preadv2 with a flag (RWF_NOWAIT reads whether a page is cached)
+    rules.add_rule(pyseccomp.ERRNO(errno.EPERM), "preadv2", pyseccomp.Arg(5, pyseccomp.NE, 0))
     rules.load()
 
 
-def keep_access_times(paths: list[str]) -> None:
-    """Run by root: move this process into a mount namespace of its own where each of ``paths`` is
-    bound over itself with ``noatime``, so that nothing this process and its children read changes an
-    access time. Landlock does not control ``stat()``: kernels that read files every kernel may read
-    at chosen moments passed a classmate's functions to a later kernel through the files' access times.
-    (Made by root, before the user namespace, the namespace's mounts are not locked; a plain user's
-    would be, and could not be changed.) Raises OSError when a mount is refused."""
+def keep_access_times() -> None:
+    """Run by root: move this process into a mount namespace of its own where every mount is
+    ``noatime``, so that nothing this process and its children read, or follow (a symbolic link's
+    own access time), changes an access time. Landlock does not control ``stat()``: kernels that read
+    files every kernel may read, or followed links, at chosen moments passed a classmate's functions
+    to a later kernel through their access times. (Made by root, before the user namespace, the
+    namespace's mounts are not locked; a plain user's would be, and could not be changed.) Raises
+    OSError when a mount of a file system that holds files is refused."""
     _check(_libc().unshare(CLONE_NEWNS), "unshare(CLONE_NEWNS)")
     _mount(None, "/", MS_REC | MS_PRIVATE)  # nothing done here reaches the machine's own mounts
-    for path in paths:
-        if not os.path.exists(path) or path.startswith("/proc/"):
-            continue
-        _mount(path, path, MS_BIND | MS_REC)
-        kept = os.statvfs(path).f_flag & (os.ST_RDONLY | os.ST_NOSUID | os.ST_NODEV | os.ST_NOEXEC)  # as MS_*
-        _mount(None, path, MS_REMOUNT | MS_BIND | MS_NOATIME | kept)
+    for line in Path("/proc/self/mountinfo").read_text().splitlines():
+        fields = line.split()
+        point = re.sub(r"\\([0-7]{3})", lambda m: chr(int(m.group(1), 8)), fields[4])  # "\040" is a space
+        kind = fields[fields.index("-") + 1]
+        try:
+            kept = os.statvfs(point).f_flag & (os.ST_RDONLY | os.ST_NOSUID | os.ST_NODEV | os.ST_NOEXEC)  # as MS_*
+            _mount(None, point, MS_REMOUNT | MS_BIND | MS_NOATIME | kept)
+        except OSError:
+            if kind not in PSEUDO_FILE_SYSTEMS:
+                raise
+
+
+PSEUDO_FILE_SYSTEMS = frozenset({"proc", "sysfs", "cgroup", "cgroup2", "devpts", "mqueue", "debugfs", "tracefs",
+                                 "securityfs", "pstore", "bpf", "fusectl", "configfs", "hugetlbfs", "binfmt_misc",
+                                 "autofs", "efivarfs", "nsfs", "rpc_pipefs"})
+"""File systems whose mounts may refuse the remount: they hold no file a kernel reads for its access time."""
 
 
 def _mount(source: str | None, target: str, flags: int) -> None:
@@ -468,7 +494,7 @@ def confine(read: list[str], write: list[str], layers: tuple[str, ...] = LAYERS,
             os.chown(folder, kernel_uid(uid), kernel_uid(uid), follow_symlinks=False)
             os.chmod(folder, 0o700, follow_symlinks=False)
         try:
-            keep_access_times([*read, *write])
+            keep_access_times()
         except OSError as error:
             problems.append(f"access times not kept, kernels can signal each other through them ({error})")
     if "network" in layers:
