@@ -609,38 +609,8 @@ def test_a_kernel_changes_no_files_mode_owner_times_attributes_or_length():
     assert after == before
 
 
-IDENTITY_PROBE = """import ctypes, os, platform
+ERRNO_HELPERS = """import ctypes
 libc = ctypes.CDLL(None, use_errno=True)
-keyctl = {"x86_64": 250, "aarch64": 219}[platform.machine()]
-def call(attempt):
-    try:
-        attempt()
-        return "ok"
-    except OSError as error:
-        return str(error.errno)
-def get_keyring_id():
-    if libc.syscall(keyctl, 0, -4, 0) == -1:  # KEYCTL_GET_KEYRING_ID of the user's keyring
-        raise OSError(ctypes.get_errno(), "")
-effective = next(line.split()[1] for line in open("/proc/self/status") if line.startswith("CapEff"))
-def ring_and_watch():
-    if libc.syscall(425, 1, ctypes.create_string_buffer(120)) == -1:  # io_uring_setup, the same number on both
-        raise OSError(ctypes.get_errno(), "")
-    if libc.inotify_init1(0) == -1:
-        raise OSError(ctypes.get_errno(), "")
-print(call(lambda: os.setresuid(1, 1, 1)), call(lambda: os.setgroups([0])), call(get_keyring_id), call(ring_and_watch),
-      effective)
-"""
-"""Tries to become user 1 (root outside, for a kernel started by root), to change its groups, to
-reach its user's keyring, to set up an io_uring and an inotify instance, and prints each errno and
-its effective capabilities."""
-
-
-CHANNEL_PROBE = """import ctypes, fcntl, os, sys
-libc = ctypes.CDLL(None, use_errno=True)
-libc.mmap.restype = ctypes.c_void_p
-libc.mmap.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_long]
-path = sys.argv[1]
-fd = os.open(path, os.O_RDONLY)
 def check(result):
     if result == -1:
         raise OSError(ctypes.get_errno(), "")
@@ -650,6 +620,32 @@ def call(attempt):
         return "ok"
     except OSError as error:
         return str(error.errno)
+"""
+"""What the probes below share: the C library, ``check`` (a C call's -1 as its OSError) and ``call``
+(an attempt's outcome: "ok", or its errno)."""
+
+
+IDENTITY_PROBE = ERRNO_HELPERS + """import os, platform
+keyctl = {"x86_64": 250, "aarch64": 219}[platform.machine()]
+def get_keyring_id():
+    check(libc.syscall(keyctl, 0, -4, 0))  # KEYCTL_GET_KEYRING_ID of the user's keyring
+effective = next(line.split()[1] for line in open("/proc/self/status") if line.startswith("CapEff"))
+def ring_and_watch():
+    check(libc.syscall(425, 1, ctypes.create_string_buffer(120)))  # io_uring_setup, the same number on both
+    check(libc.inotify_init1(0))
+print(call(lambda: os.setresuid(1, 1, 1)), call(lambda: os.setgroups([0])), call(get_keyring_id), call(ring_and_watch),
+      effective)
+"""
+"""Tries to become user 1 (root outside, for a kernel started by root), to change its groups, to
+reach its user's keyring, to set up an io_uring and an inotify instance, and prints each errno and
+its effective capabilities."""
+
+
+CHANNEL_PROBE = ERRNO_HELPERS + """import fcntl, os, sys
+libc.mmap.restype = ctypes.c_void_p
+libc.mmap.argtypes = [ctypes.c_void_p, ctypes.c_size_t, ctypes.c_int, ctypes.c_int, ctypes.c_int, ctypes.c_long]
+path = sys.argv[1]
+fd = os.open(path, os.O_RDONLY)
 page = libc.mmap(None, 4096, 1, 1, fd, 0)  # PROT_READ, MAP_SHARED
 flags = ctypes.c_long(0)
 print(call(lambda: os.posix_fadvise(fd, 0, 0, os.POSIX_FADV_DONTNEED)),

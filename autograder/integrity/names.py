@@ -149,24 +149,16 @@ class NameRules(Walker):
         if path.startswith(DISPLAY_MODULE + ".") and parts[2] not in DISPLAY_NAMES:
             self.hit(node, "shared", f"uses {path}, which is not rich output a lab needs", context)
             return
-        for module, names in MODULE_REFERENCE.items():
-            if top == module and len(parts) > 1 and parts[1] in names:
-                self.hit(node, "reference", f"uses {module}.{parts[1]}, a route to the hidden reference or to the "
-                                            "hidden tests' variables", context)
-                return
-        for module, names in MODULE_SHARED.items():
-            if top == module and len(parts) > 1 and parts[1] in names:
-                self.hit(node, "shared", f"uses {module}.{parts[1]}, which tampers with the kernel or the machine",
-                         context)
+        for kind, table, why in (
+                ("reference", MODULE_REFERENCE, "a route to the hidden reference or to the hidden tests' variables"),
+                ("shared", MODULE_SHARED, "which tampers with the kernel or the machine"),
+                ("none", MODULE_REVIEW, "which can run any code packed into what it loads: look at where that comes from")):
+            if len(parts) > 1 and parts[1] in table.get(top, ()):
+                self.hit(node, kind, f"uses {top}.{parts[1]}, {why}", context)
                 return
         if top == "ctypes" and len(parts) > 1:  # reached through another module (np.ctypeslib.ctypes.pythonapi)
             self.hit(node, "shared", f"uses {path}, which calls into the C library and Python's own C API", context)
             return
-        for module, names in MODULE_REVIEW.items():
-            if top == module and len(parts) > 1 and parts[1] in names:
-                self.hit(node, "none", f"uses {module}.{parts[1]}, which can run any code packed into what it loads: "
-                                       "look at where that comes from", context)
-                return
         if top != "sys" and "sys" in parts[1:-1] and parts[parts.index("sys", 1) + 1] in MODULE_REFERENCE["sys"]:
             self.hit(node, "reference", f"uses {path}, sys reached through another module", context)
             return
