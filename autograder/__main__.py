@@ -74,7 +74,7 @@ def build_parser() -> argparse.ArgumentParser:
     demo.add_argument("--workdir", type=Path, default=ROOT / "demo", help="the folder for the class, its course and grades (default: demo/)")
     demo.add_argument("--jobs", type=int, default=default_jobs(), help=JOBS_HELP)
     demo.add_argument("--full", action="store_true", help="grade the whole catalogue instead: blank, solved and every "
-                      "catalogued mistake of every lab (about 150 submissions, five times the quick class)")
+                      "catalogued mistake of every lab (about 200 submissions, seven times the quick class)")
     data = commands.add_parser("data", help="rebuild the shipped data in course/data/ from the seeded reference builds")
     data.add_argument("--check", action="store_true", help="only check that a rebuild reproduces the shipped files")
     collect = commands.add_parser("collect", help="turn an LMS download of one lab (a zip or a folder) into SUBMISSIONS/<student>/<lab>/ with nbgrader's zip_collect")

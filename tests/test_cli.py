@@ -185,6 +185,8 @@ def test_the_demo_closes_with_a_verdict_and_where_to_look(tmp_path, monkeypatch,
     long = [line for line in out.splitlines() if len(line) > 100 and not line.startswith(" " * 6)
             and not (len(line.split()) == 1 and "/" in line)]
     assert long == [], "lines wider than 100 columns (other than a path or a command to copy)"
+    whole = len(demo.write_demo_class([Lab("train-kf")], tmp_path / "whole", full=True))
+    assert f"The whole catalogue ({whole} submissions, {whole / 6:.0f} times as many as here):" in " ".join(out.split())
     monkeypatch.setattr(demo, "unexpected", lambda rows, expected: [])
     assert demo.run_demo(tmp_path, 1) is True
     assert "All 6 rows came out as expected" in capsys.readouterr().out

@@ -124,7 +124,8 @@ def run_demo(workdir: Path = DEMO_DIR, jobs: int | None = None, full: bool = Fal
          [f".venv/bin/jupyter lab --CourseDirectory.root={root}", f".venv/bin/python -m autograder feedback --workdir {root}"]),
     ]
     if not full:
-        steps.append(("The whole catalogue (about 150 submissions, five times as many as here):",
+        whole = sum(len(catalogue(lab)) + 2 for lab in labs)  # blank, solved and every mistake
+        steps.append((f"The whole catalogue ({count(whole, 'submission')}, {whole / len(expected):.0f} times as many as here):",
                       [".venv/bin/python -m autograder demo --full"]))
     print("Where to look next:")
     for text, lines in steps:
