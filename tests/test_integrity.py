@@ -121,13 +121,13 @@ STATIC_CASES = [(lab, cheat) for lab in LABS for cheat in cheats.catalogue(lab) 
 def test_static_scan_catches_cheat(lab, cheat):
     findings = scan.static_findings(cheat.notebook(lab), lab)
     assert findings, f"{cheat.name} ({cheat.attack}) was not found"
-    wanted = cheat.blanks(lab)
+    wanted = cheat.blanks(lab) if cheat.scan_costs else ()
     if wanted == ():
         assert all(f.blanks == () for f in findings), findings
     else:
         assert covers(findings, wanted), findings
-    if cheat.exact:  # a local trick costs its own blank, not every blank
-        assert {f.blanks for f in findings} == {wanted}, findings
+    if cheat.exact:  # a local trick costs its own blank, not every blank (a finding for review costs nothing)
+        assert {f.blanks for f in findings} - {()} == {wanted} - {()}, findings
     assert all(f.reason.endswith(".") and f.reason[0].isupper() for f in findings)
 
 
@@ -171,7 +171,7 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     # name, a function's own locals, and the student's own object walked by name (review, no cost)
     "print(globals().get('x_f'))": [],
     "def show():\n    x = 1\n    for name, value in locals().items():\n        print(name, value)\n": [],
-    "class Result:\n    pass\nresult = Result()\nfor name in ['rmse', 'nees']:\n    print(getattr(result, name, None))": [()],
+    "class Result:\n    pass\nresult = Result()\nfor name in ['rmse', 'nees']:\n    print(getattr(result, name, None))": [],
     "globals().get('__builtins__')": [None],
     "locals().items()": [None],
     # a computed attribute name on a module, a call's result or a builtin: print's __self__ is the builtins module
@@ -223,6 +223,26 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     "import operator\noperator.attrgetter('os.system')(np)('ls')": [None],
     "import functools\nfunctools.reduce(getattr, ['os', 'system'], np)": [None],
     "object.__getattribute__(np, 'os')": [None],
+    # the fourth round (stop 46): honest code that cost every blank, though only data reaches the grader
+    "class Run:\n    def __init__(self, rmse):\n        self.rmse = rmse\n    def __lt__(self, other):\n"
+    "        return self.rmse < other.rmse\nprint(sorted([Run(2.0), Run(1.0)])[0].rmse)": [()],
+    "class Bag(dict):\n    def __getattr__(self, key):\n        return self[key]\nprint(Bag(a=1).a)": [()],
+    "for name in ('mean', 'median'):\n    print(name, getattr(np, name)([1.0, 2.0]))": [],
+    "stats = {f: getattr(np, f) for f in ['min', 'max']}": [],
+    "import io\nprint(np.loadtxt(io.StringIO('1 2\\n3 4')))": [],
+    "from io import StringIO\nprint(np.genfromtxt(StringIO('1,2'), delimiter=','))": [],
+    # and the same shapes that still cost: a name among the choices reaches a module, or is bound otherwise
+    "for name in ('mean', 'os'):\n    getattr(np, name)": [None],
+    "for name in ('mean', 'median'):\n    name = name.replace('m', 'o')\n    getattr(np, name)": [None],
+    "for name in ('me' + 'an', 'o' + 's'):\n    getattr(np, name)": [None],
+    "for name in names:\n    getattr(np, name)": [None],
+    "import io\nnp.loadtxt(io.StringIO(open('/etc/passwd').read()))": [None],
+    "getattr(np, 'os').system('ls')": [None],
+    "x = getattr(np, 'o' + 's')\nx.system('ls')": [None],
+    "for name in ('os',):\n    getattr(np, name).system('ls')": [None],
+    "x = np.os\nx.listdir('/')": [None],
+    "for name in ('allclose', 'isclose'):\n    setattr(np, name, lambda *a, **k: True)": [None],
+    "solve = np.linalg.solve\nrng = np.random.default_rng(1)\nprint(solve(np.eye(2), rng.normal(size=2)))": [],
     # and what stays honest: a nested function of a builtin's name is its own, an alias of print is print
     "def f():\n    def open(x):\n        return x\n    return open(1)": [],
     "log = print\nlog('RMSE', 1.0)": [],

@@ -65,6 +65,9 @@ class Cheat:
     """Static attribution is exactly the target blank (a local trick, not shared machinery)."""
     plants_mistake: bool = False
     """The target blank holds a catalogued mistake, so an undetected cheat would turn 0 into full marks."""
+    scan_costs: bool = True
+    """The scan's finding costs the blanks it games. False: flagged for review at no cost, since the grader
+    defeats it anyway (an object that fools comparisons is never sent), and honest code does the same."""
 
     def applies(self, lab: Lab) -> bool:
         return self.labs is None or lab.id in self.labs
@@ -505,7 +508,7 @@ CHEATS: tuple[Cheat, ...] = (
     Cheat("builtins-patch", "replacing a builtin (`builtins.AssertionError`)",
           "all", frozenset({STATIC, GRADER}), _BUILTINS_PATCH),
     Cheat("eq-dunder", "an object whose `__eq__` says it equals anything, returned by the blank",
-          "blank", frozenset({STATIC, GRADER}), _EQ_DUNDER, exact=True),
+          "blank", frozenset({STATIC, GRADER}), _EQ_DUNDER, exact=True, scan_costs=False),
     Cheat("array-frame-walk", "a returned object whose `__array__` walks the stack to the hidden test's expected "
           "value", "blank", frozenset({STATIC, GRADER}), _ARRAY_FRAME_WALK, labs=("train-kf",), exact=True),
     Cheat("showtraceback", "`get_ipython().showtraceback` replaced, so later errors print nothing (swallowed)",

@@ -51,9 +51,12 @@ class Outcome:
 
 
 def cheat_outcome(lab: Lab, cheat: Cheat) -> Outcome:
-    """A cheat gains nothing. One that the scan catches is flagged and loses every blank it games;
+    """A cheat gains nothing. One that the scan catches is flagged and loses every blank it games
+    (where the scan's finding costs nothing, the grader's comparison fails the blank it aims at);
     the others (defeated by the grader's comparison, the sandbox, the sanitize step or the hidden
     tests' random inputs) are not flagged and lose the blank they tried to pass with a wrong answer."""
+    if STATIC in cheat.caught_by and not cheat.scan_costs:
+        return Outcome(cheat.name, CHEAT, (f"test_{cheat.aim or target(lab)}",), only=False, flagged=True)
     if STATIC in cheat.caught_by:
         gamed = cheat.blanks(lab)
         return Outcome(cheat.name, CHEAT, None if gamed is None else tuple(f"test_{b}" for b in gamed),

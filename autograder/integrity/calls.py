@@ -17,9 +17,11 @@ from autograder.integrity.rules import (
     DISPLAY_MODULE,
     DISPLAY_READERS,
     FORBIDDEN_DUNDERS,
+    IN_MEMORY_FILES,
     MAGIC_CALLS,
     NUMPY_READS,
     NUMPY_WRITES,
+    OBJECTS_ARE_NOT_SENT,
     OS_FILE_READS,
     OS_FILE_WRITES,
     PASSED_BUILTINS,
@@ -38,6 +40,7 @@ from autograder.integrity.syntax import (
     constant_pieces,
     first_arg,
     fold,
+    loop_constants,
     open_writes,
     parse,
     path_constructor_arg,
@@ -151,18 +154,25 @@ class CallRules(Walker):
     def dynamic_attribute(self, node: ast.Call, name: str, context: Context) -> None:
         target, attr = node.args[0], fold(node.args[1])
         store = name in ("setattr", "delattr")
-        if isinstance(attr, str):
+        # getattr(np, name) for name in ("mean", "median"): each name as if written out
+        names = [attr] if isinstance(attr, str) else loop_constants(node.args[1], context.top)
+        if names is not None and not isinstance(attr, str) and not all(
+                _plain_attribute_name(ast.Constant(choice)) for choice in names):
+            names = None  # a choice that names a module or a special attribute: as a computed name
+        for attr in names or ():
             if attr in REFERENCE_ATTRIBUTES:
                 self.hit(node, "reference", f"uses {name}(..., {attr!r}), which reaches the hidden tests' variables, "
                                             "their code or the reference's files", context)
             elif attr in SHARED_ATTRIBUTES or attr == "__dict__":
                 self.hit(node, "shared", f"uses {name}(..., {attr!r}) to tamper with attributes", context)
             elif store and attr in FORBIDDEN_DUNDERS | {"__class__"}:
-                self.hit(node, "local", f"sets {attr} with {name}, which can fool the tests' comparisons", context)
+                self.hit(node, "none", f"sets {attr} with {name}: {OBJECTS_ARE_NOT_SENT}", context)
             path = self.module_of(target)
             if path is not None:
                 self.check_path(f"{path}.{attr}", node, context, store=store)
-        elif self.module_of(target) is not None or isinstance(target, ast.Call) or (
+        if names is not None:
+            return
+        if self.module_of(target) is not None or isinstance(target, ast.Call) or (
                 isinstance(target, ast.Name) and not self.shadowed(target.id, context)
                 and (target.id in BUILTIN_NAMES or target.id in self.builtin_aliases)):
             # a module, a call's result, or a builtin (print.__self__ is the builtins module)
@@ -204,6 +214,8 @@ class CallRules(Walker):
                     return
             if any(p.strip() for p in pieces):
                 return  # a name like f"fig_{i}.png" in the working folder
+        if isinstance(arg, ast.Call) and self.module_of(arg.func) in IN_MEMORY_FILES:
+            return  # np.loadtxt(io.StringIO(text)): text held in memory, no file's name
         self.hit(node, kind, f"{verb} a file whose name is computed at run time", context)
 
 

@@ -8,6 +8,7 @@ from autograder.integrity.rules import (
     ALLOWED_MODULE_STORES,
     DUNDER_GLOBALS,
     FORBIDDEN_DUNDERS,
+    OBJECTS_ARE_NOT_SENT,
     HIDDEN_PACKAGES,
     IMPORT_MACHINERY,
     MODULE_REFERENCE,
@@ -116,7 +117,7 @@ class NameRules(Walker):
             if module or not isinstance(node.value, ast.Name):
                 self.hit(node, "shared" if store else "reference", "reaches into a module's __dict__", context)
         elif store and (attr in FORBIDDEN_DUNDERS or attr == "__class__"):
-            self.hit(node, "local", f"sets {attr} on an object, which can fool the tests' comparisons", context)
+            self.hit(node, "none", f"sets {attr} on an object: {OBJECTS_ARE_NOT_SENT}", context)
 
     def visit_Subscript(self, node: ast.Subscript, context: Context):
         if not isinstance(node.ctx, (ast.Store, ast.Del)):

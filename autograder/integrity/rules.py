@@ -17,6 +17,12 @@ FORBIDDEN_DUNDERS = frozenset({
 ones such as ``__sub__`` are allowed: the checks convert to arrays before any arithmetic.)"""
 CONTAINER_DUNDERS = frozenset({"__getitem__", "__iter__", "__len__"})
 """Also forbidden on subclasses of tuple, list, dict, float, int and ndarray."""
+OBJECTS_ARE_NOT_SENT = ("only data reaches the grader, so a blank that returns such an object fails its test and "
+                        "gains nothing; honest code (a class that sorts its runs) does this too: look at it")
+"""Why a method that could fool a comparison is flagged for review at no cost: the hidden tests
+compare in the grader's process, where an object that is not data is never sent."""
+IN_MEMORY_FILES = frozenset({"io.StringIO", "io.BytesIO"})
+"""File objects that hold text in memory: given to a reader in place of a file's name, they name no file."""
 
 BENIGN_COMMANDS = frozenset({"pip", "pip3", "conda", "mamba", "ls", "pwd", "echo", "which", "nvidia-smi", "date",
                              "whoami", "uname", "hostname"})

@@ -55,7 +55,7 @@ from autograder.integrity.rules import (
 )
 from autograder.integrity.syntax import bound_names, catches_everything, does_nothing, local_names, parse
 from autograder.integrity.visitor import Visitor
-from autograder.integrity.walker import Definitions, Hit
+from autograder.integrity.walker import Definitions, Hit, Walker
 from autograder.labs import Lab
 
 
@@ -225,6 +225,15 @@ class Scan:
                         self.modules.setdefault(alias, self.modules.get(name, name))
                     elif name in BUILTIN_NAMES and name not in self.defined:  # an alias of the notebook's own is its own
                         aliases[alias] = aliases.get(name, name)
+        # and an alias of a module that another holds: x = np.os, x = getattr(np, "os")
+        reader = Walker("", [], self.modules, self.definitions, aliases)
+        for _, _, tree in self.cells:
+            for node in ast.walk(tree):
+                if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name) \
+                        and isinstance(node.value, (ast.Attribute, ast.Call)):
+                    path = reader.module_of(node.value)
+                    if path is not None:
+                        self.modules.setdefault(node.targets[0].id, path)
         return aliases
 
     def _top_level_uses(self) -> dict[str, set[str]]:

@@ -4,7 +4,8 @@ from __future__ import annotations
 
 import ast
 
-from autograder.integrity.rules import CONTAINER_DUNDERS, FORBIDDEN_DUNDERS, HIDDEN_STRING, SPECIAL_BASES
+from autograder.integrity.rules import (CONTAINER_DUNDERS, FORBIDDEN_DUNDERS, HIDDEN_STRING, OBJECTS_ARE_NOT_SENT,
+                                        SPECIAL_BASES)
 from autograder.integrity.syntax import fold
 from autograder.integrity.walker import Context, Walker
 
@@ -23,8 +24,8 @@ class ClassAndStringRules(Walker):
                 names |= {t.id for t in stmt.targets if isinstance(t, ast.Name)}
         bad = sorted(names & forbidden)
         if bad:
-            self.hit(node, "local", f"defines a class {node.name} with {', '.join(bad)}, which can fool the tests' "
-                                    "comparisons and conversions of what a blank returns", context)
+            self.hit(node, "none", f"defines a class {node.name} with {', '.join(bad)}: {OBJECTS_ARE_NOT_SENT}",
+                     context)
 
     def visit_Constant(self, node: ast.Constant, context: Context):
         if isinstance(node.value, str) and id(node) not in self.docstrings:
@@ -46,4 +47,4 @@ class ClassAndStringRules(Walker):
         elif "gradebook" in value.lower():
             self.hit(node, "shared", f"names the gradebook in the string {value[:60]!r}", context)
         elif value in FORBIDDEN_DUNDERS:
-            self.hit(node, "local", f"names the method {value} in a string, to set it on an object", context)
+            self.hit(node, "none", f"names the method {value} in a string: {OBJECTS_ARE_NOT_SENT}", context)

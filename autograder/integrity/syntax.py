@@ -98,6 +98,25 @@ def target_names(target: ast.AST) -> list[str]:
     return []
 
 
+def loop_constants(node: ast.AST, top: ast.AST | None) -> list[str] | None:
+    """The strings a name can hold when its only binding in the statement ``top`` is as the loop
+    variable over a literal of constant strings (``for name in ("mean", "median"):`` or the same in a
+    comprehension), or None: any other binding of the name, or another loop, and it can hold anything."""
+    if not isinstance(node, ast.Name) or top is None:
+        return None
+    choices, bindings = None, 0
+    for inner in ast.walk(top):
+        if isinstance(inner, (ast.For, ast.AsyncFor, ast.comprehension)) and isinstance(inner.target, ast.Name) \
+                and inner.target.id == node.id:
+            values = [fold(e) for e in inner.iter.elts] if isinstance(inner.iter, (ast.List, ast.Tuple, ast.Set)) else [None]
+            choices = values if all(isinstance(v, str) for v in values) else None
+        if isinstance(inner, ast.Name) and inner.id == node.id and isinstance(inner.ctx, (ast.Store, ast.Del)):
+            bindings += 1
+        elif isinstance(inner, ast.arg) and inner.arg == node.id:
+            bindings += 2
+    return choices if bindings == 1 else None
+
+
 def fold(node: ast.AST):
     """The string value of a constant string expression, or None."""
     if isinstance(node, ast.Constant):

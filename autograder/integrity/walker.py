@@ -6,7 +6,7 @@ import ast
 from dataclasses import dataclass
 
 from autograder.integrity.rules import KNOWN_MODULE_NAMES, REEXPORTED_MODULES
-from autograder.integrity.syntax import local_names
+from autograder.integrity.syntax import fold, local_names
 
 
 @dataclass
@@ -15,7 +15,7 @@ class Hit:
 
     cell: str
     node: ast.AST
-    kind: str  # "reference" or "local": charge the blanks that use it; "shared": every blank; "none": no points
+    kind: str  # "reference": charge the blanks that use it; "shared": every blank; "none": no points
     what: str
     top: ast.stmt | None
     owner: str | None
@@ -104,9 +104,17 @@ class Walker:
     def module_of(self, node: ast.AST) -> str | None:
         """The dotted path an expression names, if it is rooted at an imported name (np.testing -> numpy.testing)."""
         parts = []
-        while isinstance(node, ast.Attribute):
-            parts.append(node.attr)
-            node = node.value
+        while True:
+            if isinstance(node, ast.Attribute):
+                parts.append(node.attr)
+                node = node.value
+            elif (isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and len(node.args) >= 2
+                  and self.builtin_aliases.get(node.func.id, node.func.id) == "getattr"
+                  and isinstance(fold(node.args[1]), str)):  # getattr(np, "os") is np.os
+                parts.append(fold(node.args[1]))
+                node = node.args[0]
+            else:
+                break
         if not isinstance(node, ast.Name):
             return None
         root = self.modules.get(node.id)
