@@ -19,6 +19,7 @@ from nbformat import NotebookNode
 from nbgrader.nbgraderformat import MetadataValidator
 
 from autograder import cells
+from autograder.authoring import consistency
 from autograder.authoring.inventory import print_inventory
 from autograder.labs import ROOT, Lab
 from autograder.release import data
@@ -126,6 +127,14 @@ def build_lab(lab: Lab) -> bool:
               "build again (the notebook keeps the tracebacks):")
         for index, problem in problems:
             print(f"  {names[index]}: {problem}")
+        return False
+    problems = [*consistency.answers_unlike_reference(lab, nb), *(
+        f"{where} stays TeX on the feedback page: a line inside $...$ that begins with +, -, * or a number and a "
+        "full stop starts a Markdown list; break the line elsewhere" for where in consistency.formulas_left_as_text(nb))]
+    if problems:
+        print(f"{count(len(problems), 'problem')} in {lab.draft.relative_to(ROOT)} or its reference; fix them and build again:")
+        for problem in problems:
+            print(f"  {problem}")
         return False
     release_all([lab])
     print(f"released to {lab.release_notebook.relative_to(ROOT)}; no leaks found\n")

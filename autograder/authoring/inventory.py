@@ -143,3 +143,6 @@ def print_inventory(labs: list[Lab]) -> None:
             f"wrong on, or a catalogued mistake). Of the {m.plausible} killed mutants a student could plausibly write "
             f"(autograder/authoring/mutants.py, PLAUSIBLE), the visible checks fail {m.plausible_seen} "
             f"({m.plausible_seen / max(m.plausible, 1):.0%}).", 100, break_on_hyphens=False))
+        for mutant in m.surviving:  # each one a case the hidden tests miss, or an equivalent to list
+            print(textwrap.fill(f"survives: {mutant.blank} {mutant.id}: {mutant.what}", 100, initial_indent="  ",
+                                subsequent_indent="      ", break_on_hyphens=False))
