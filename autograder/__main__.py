@@ -83,6 +83,10 @@ def build_parser() -> argparse.ArgumentParser:
     collect.add_argument("--students", type=Path, required=True, help="CSV with the columns lms_name and student_id")
     collect.add_argument("--out", type=Path, required=True, help="the SUBMISSIONS folder to write")
     collect.add_argument("--pattern", default=None, help="regular expression for the LMS's file names, with the groups student_id and (optionally) timestamp")
+    collect.add_argument("--times-in-names", action="store_true",
+                         help="the LMS writes each upload's time after the student's name, <name>_<YYYY-MM-DD-HH-MM-SS>_<the "
+                              "student's file name>: read it (without this no time is read from a name, since the "
+                              "student chooses what follows the LMS's name)")
     collect.add_argument("--timezone", default="UTC", help="the time zone of the submission times in file names (default: UTC)")
     limits = Limits()
     collect.add_argument("--max-total-mb", type=float, default=limits.max_bytes / 1e6, metavar="MB",
@@ -219,7 +223,8 @@ def main(argv: list[str] | None = None) -> int:
         from autograder.pipeline.collect import run_collect
 
         limits = Limits(round(args.max_total_mb * 1e6), round(args.max_file_mb * 1e6), args.max_files, args.max_ratio)
-        return run_collect(args.lab, args.download, args.students, args.out, args.pattern, args.timezone, limits)
+        return run_collect(args.lab, args.download, args.students, args.out, args.pattern, args.timezone, limits,
+                           args.times_in_names)
     elif args.command == "similarity":
         from autograder.integrity.similarity import run_similarity
 

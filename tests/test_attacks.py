@@ -676,6 +676,41 @@ def test_a_kernel_cannot_signal_through_the_page_cache_file_flags_or_dnotify():
     assert done.stdout.split() == [str(errno.EPERM)] * 5
 
 
+NAMESPACE_PROBE = ERRNO_HELPERS + """import os, threading, subprocess, sys
+CLONE_NEWUSER, CLONE_NEWNS = 0x10000000, 0x00020000
+def clone_new_user():
+    check(libc.syscall({"x86_64": 56, "aarch64": 220}[os.uname().machine], CLONE_NEWUSER | 17, 0, 0, 0, 0))
+worker = threading.Thread(target=lambda: None)  # threads and processes still start (clone3 falls back to clone)
+worker.start()
+worker.join()
+child = subprocess.run([sys.executable, "-c", "print(1)"], capture_output=True, text=True).stdout.strip()
+print(call(lambda: check(libc.unshare(CLONE_NEWUSER))), call(lambda: check(libc.unshare(CLONE_NEWNS))),
+      call(clone_new_user), call(lambda: check(libc.setns(os.open("/proc/self/ns/net", os.O_RDONLY), 0))), child)
+"""
+"""Tries to make a user and a mount namespace (unshare, and clone with CLONE_NEWUSER) and to join one
+(setns); prints each errno, after starting a thread and a process as honest code does."""
+
+
+def probe_outcomes(probe: str) -> list[str]:
+    """What a probe prints, run under the whole sandbox with the Python installation, the system's
+    libraries and its own /proc entry to read (it must run cleanly: no error, nothing on stderr)."""
+    read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable), "/usr/lib", "/lib", "/lib64",
+                        "/etc/ld.so.cache", "/proc/self") if os.path.exists(p)]
+    command = [*sandbox.launcher_command(read, [], sandbox.LAYERS), sys.executable, "-I", "-c", probe]
+    done = subprocess.run(command, capture_output=True, text=True, timeout=60)
+    assert done.returncode == 0 and done.stderr == "", done.stderr
+    return done.stdout.split()
+
+
+def test_a_kernel_cannot_make_namespaces_whose_counter_every_kernel_reads():
+    """A fourth review (helper-56) moved the machine's unique mount-ID counter from one kernel by making
+    mount namespaces (unshare(CLONE_NEWUSER), then unshare(CLONE_NEWNS), 7,000 a second) and read it from
+    another (statx's STATX_MNT_ID_UNIQUE): 99% of raw bits right between two kernels graded side by
+    side. The seccomp filter refuses making or joining namespaces and mounts (EPERM); threads and
+    processes still start. On the code before, each call succeeded."""
+    assert probe_outcomes(NAMESPACE_PROBE) == [str(errno.EPERM)] * 4 + ["1"]
+
+
 def test_a_kernel_cannot_change_who_it_is_nor_reach_a_keyring_io_uring_or_inotify():
     """Started by root, a kernel is root in its user namespace, where user 1 is root outside: with
     ``setresuid(1)`` it became root again, free of the cap on its processes (an adversarial review
@@ -685,12 +720,7 @@ def test_a_kernel_cannot_change_who_it_is_nor_reach_a_keyring_io_uring_or_inotif
     capability. A re-attack then set an xattr through io_uring, whose operations are not system calls,
     and watched folders it may not read with inotify: both are refused too (on c7463c6, io_uring_setup
     and inotify_init1 succeeded)."""
-    read = [p for p in (sys.prefix, sys.base_prefix, os.path.realpath(sys.executable), "/usr/lib", "/lib", "/lib64",
-                        "/etc/ld.so.cache", "/proc/self") if os.path.exists(p)]
-    command = [*sandbox.launcher_command(read, [], sandbox.LAYERS), sys.executable, "-I", "-c", IDENTITY_PROBE]
-    done = subprocess.run(command, capture_output=True, text=True, timeout=60)
-    assert done.returncode == 0 and done.stderr == "", done.stderr
-    assert done.stdout.split() == [str(errno.EPERM)] * 4 + ["0000000000000006"]
+    assert probe_outcomes(IDENTITY_PROBE) == [str(errno.EPERM)] * 4 + ["0000000000000006"]
 
 
 def test_a_kernel_run_by_root_changes_no_access_time():

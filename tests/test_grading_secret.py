@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import os
 import stat
+from pathlib import Path
 
 import nbformat
 
@@ -63,3 +64,26 @@ def test_another_secret_gives_another_seed():
     with cases.seeded(8):
         assert not (cases.rng(1104).standard_normal(3) == drawn).any()
     assert cases.current_seed() == cases.DEFAULT_SEED
+
+
+def test_the_kernel_gets_the_bytes_of_submitted_files_not_their_mode_or_times(tmp_path):
+    """The seed covers a file's name and bytes, not its mode or times; so the kernel's copy has neither.
+    The fourth adversarial review (stop 46) read two files' mode bits in the kernel under plain
+    `nbgrader autograde`, with the same hidden cases before and after a chmod: room for answers to
+    a submission's own cases (shutil.copy2 kept them). Fails on the code before."""
+    from autograder.pipeline.execute import _scratch_copy
+
+    folder = tmp_path / "submission"
+    folder.mkdir()
+    seen = {}
+    for name, mode, when in (("a.txt", 0o600, 1_000_000_000), ("b.txt", 0o755, 1_200_000_000)):
+        (folder / name).write_text("the same bytes\n")
+        os.chmod(folder / name, mode)
+        os.utime(folder / name, (when, when))
+    with _scratch_copy({"metadata": {"path": str(folder)}}) as scratch:
+        for name in ("a.txt", "b.txt"):
+            copy = os.stat(os.path.join(scratch, name))
+            assert Path(scratch, name).read_text() == "the same bytes\n"
+            seen[name] = (stat.S_IMODE(copy.st_mode), copy.st_mtime)
+    assert seen["a.txt"][0] == seen["b.txt"][0], "the two copies' modes differ as the submitted files' did"
+    assert all(mtime > 1_300_000_000 for _, mtime in seen.values()), "a submitted file's time reached the kernel"

@@ -18,7 +18,7 @@ from nbgrader.utils import parse_utc
 from autograder.pipeline import grading, intake
 from autograder.catalogues import submissions
 from autograder.__main__ import main
-from autograder.pipeline.collect import IntakeError, collect
+from autograder.pipeline.collect import TIMED_PATTERN, IntakeError, collect
 from autograder.labs import ROOT, get_lab
 
 LAB = get_lab("train-kf")
@@ -61,7 +61,7 @@ def download(tmp_path):
 def test_collects_a_zip_into_the_grading_layout_and_reports_every_other_file(download, tmp_path):
     zip_path, students = download
     out = tmp_path / "SUBMISSIONS"
-    report = collect(LAB, zip_path, students, out, zone="Europe/London")
+    report = collect(LAB, zip_path, students, out, zone="Europe/London", times_in_names=True)
 
     assert sorted(p.relative_to(out).as_posix() for p in out.rglob("*") if p.is_file()) == [
         "s001/train-kf/timestamp.txt", "s001/train-kf/train-kf.ipynb",
@@ -106,7 +106,8 @@ def test_collects_a_folder_with_the_lms_pattern_given(tmp_path):
 def test_command_reports_unknown_names_and_exits_nonzero(download, tmp_path, capsys):
     zip_path, students = download
     out = tmp_path / "SUBMISSIONS"
-    assert main(["collect", "train-kf", str(zip_path), "--students", str(students), "--out", str(out)]) == 1
+    assert main(["collect", "train-kf", str(zip_path), "--students", str(students), "--out", str(out),
+                 "--times-in-names"]) == 1
     printed = capsys.readouterr().out
     assert "NOT COLLECTED lms/export/mallory_train-kf.ipynb: unknown student 'mallory'" in printed
     assert "no submission from: s004" in printed
@@ -152,7 +153,7 @@ def test_a_file_in_a_students_upload_cannot_claim_another_student_or_time(tmp_pa
     download, students = poc_download(tmp_path, {"alice_2099-01-01-00-00-00_x.ipynb": "FORGED BY BOB",
                                                  "bob_2000-01-01-00-00-00_train-kf.ipynb": notebook("bob-backdated")})
     out = tmp_path / "out"
-    report = collect(LAB, download, students, out)
+    report = collect(LAB, download, students, out, times_in_names=True)
     assert report.students == ["s001", "s003"]
     assert tag(out / "s001/train-kf/train-kf.ipynb") == "alice"
     assert (out / "s001/train-kf/timestamp.txt").read_text() == "2026-10-01 10:00:00"
@@ -173,7 +174,7 @@ def test_a_students_upload_without_times_cannot_stop_the_class(tmp_path):
     whole collect; now it is bob's refusal, and bob's own notebook beside it is his, at his zip's time."""
     download, students = poc_download(tmp_path, {"alice_x.ipynb": "FORGED BY BOB", "train-kf.ipynb": notebook("bob")})
     out = tmp_path / "out"
-    report = collect(LAB, download, students, out)
+    report = collect(LAB, download, students, out, times_in_names=True)
     assert report.students == ["s001", "s002", "s003"]
     assert tag(out / "s001/train-kf/train-kf.ipynb") == "alice" and tag(out / "s002/train-kf/train-kf.ipynb") == "bob"
     assert (out / "s002/train-kf/timestamp.txt").read_text() == "2026-10-09 10:00:00"
@@ -190,10 +191,26 @@ def test_a_file_name_that_reads_as_an_impossible_time_is_that_students_refusal(t
     (download / "dave_2026-13-45-99-99-99_sub.ipynb").write_text(notebook("dave"))
     students = tmp_path / "students.csv"
     students.write_text(STUDENTS)
-    report = collect(LAB, download, students, tmp_path / "out")
+    report = collect(LAB, download, students, tmp_path / "out", times_in_names=True)
     assert report.students == ["s002"] and tag(tmp_path / "out/s002/train-kf/train-kf.ipynb") == "bob"
     [(path, reason)] = report.skipped
     assert path == "dave_2026-13-45-99-99-99_sub.ipynb" and "dave (s004)" in reason and "not a date" in reason
+
+
+def test_by_default_no_time_is_read_from_a_name_the_student_chose(tmp_path):
+    """A fourth review: with an LMS that writes <name>_<the student's file name>, a student who named a
+    late file 2026-01-01-00-00-00_x.ipynb was collected with that time, so with no late penalty. By
+    default no time is read from a name; --times-in-names reads it, for an LMS that writes its own.
+    Fails on the code before (the default read it)."""
+    download = tmp_path / "download"
+    download.mkdir()
+    (download / "bob_2026-01-01-00-00-00_x.ipynb").write_text(notebook("bob"))
+    students = tmp_path / "students.csv"
+    students.write_text(STUDENTS)
+    report = collect(LAB, download, students, tmp_path / "out")
+    assert report.students == ["s002"] and not (tmp_path / "out/s002/train-kf/timestamp.txt").exists()
+    collect(LAB, download, students, tmp_path / "timed", times_in_names=True)
+    assert (tmp_path / "timed/s002/train-kf/timestamp.txt").read_text() == "2026-01-01 00:00:00"
 
 
 def hub_class(course, students: dict) -> None:
@@ -340,7 +357,8 @@ def test_plain_nbgrader_zip_collect_uses_the_collector(download, tmp_path):
     subprocess.run([sys.executable, "-m", "nbgrader", "zip_collect", LAB.id,
                     "--collector=autograder.pipeline.collect.StudentIdCollector",
                     "--extractor=autograder.pipeline.collect.SafeExtractor",
-                    f"--StudentIdCollector.students_file={students}"],
+                    f"--StudentIdCollector.students_file={students}",
+                    f"--StudentIdCollector.named_regexp={TIMED_PATTERN}"],
                    cwd=course, env=env, check=True, capture_output=True)
     assert sorted(p.name for p in (course / "submitted").iterdir()) == ["s001", "s002", "s003"]
     assert tag(course / "submitted/s001/train-kf/train-kf.ipynb") == "alice-new"

@@ -205,7 +205,7 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     "def exec(*a):\n    pass\ndel exec\nexec('1')": [None],
     "def helper(c):\n    exec(c)\nhelper('1')\ndef exec(*a):\n    pass": [None],
     "g = globals()\ng['__builtins__']\ndef globals():\n    return {}": [None],
-    "import pickle\npickle.loads(b'x')": [()],
+    "import pickle\npickle.loads(b'x')": [None],
     "np.core.numeric.builtins.exec('1')": [None],
     "import pydoc\npydoc.locate('os.system')": [None],
     "import operator\nname = 'o' + 's'\noperator.attrgetter(name)(np)": [None],
@@ -214,7 +214,7 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     "import pdb\npdb.run('1')": [None],
     "import typing\ntyping.get_type_hints(object)": [None],
     "np.ctypeslib.ctypes.pythonapi": [None],
-    "import _pickle\n_pickle.loads(b'x')": [()],
+    "import _pickle\n_pickle.loads(b'x')": [None],
     "import timeit\ncode = bytes.fromhex('31').decode()\ntimeit.timeit(code, number=1)": [None],
     "import timeit\ntimeit.timeit('1+1', number=3)": [()],
     "import timeit\ntimeit.timeit(lambda: 1, number=3)": [],
@@ -243,6 +243,28 @@ EDGE_CASES = {  # an added cell -> the blanks charged by each finding (() flags 
     "x = np.os\nx.listdir('/')": [None],
     "for name in ('allclose', 'isclose'):\n    setattr(np, name, lambda *a, **k: True)": [None],
     "solve = np.linalg.solve\nrng = np.random.default_rng(1)\nprint(solve(np.eye(2), rng.normal(size=2)))": [],
+    # the fourth review (helper-56): a file's name held in a name, or passed to the notebook's own
+    # function, cost every blank (an honest solved notebook that saved its figure scored 0/20)
+    "import matplotlib.pyplot as plt\nout = 'track.png'\nplt.plot([0, 1], [0, 1])\nplt.savefig(out)": [],
+    "name = 'results.csv'\nwith open(name, 'w') as f:\n    f.write('a')\nwith open(name) as f:\n    print(f.read())": [],
+    "fname = 'areas.txt'\nnp.savetxt(fname, np.ones(3))": [],
+    "from pathlib import Path\nnotes = Path('notes.txt')\nnotes.write_text('hi')": [],
+    "from pathlib import Path\nfolder = Path('out')\nfolder.mkdir(exist_ok=True)\n(folder / 'a.txt').write_text('x')": [],
+    "def save(rows, path):\n    with open(path, 'w') as f:\n        f.write(str(rows))\nsave([1, 2], 'rows.txt')\n"
+    "save([3], path='more.txt')": [],
+    "def save(rows, path='rows.txt'):\n    open(path, 'w').write(str(rows))\nsave([1])": [],
+    # and the same shapes that still cost: the value leaves the folder, is bound twice, or is not known
+    "where = '/etc/passwd'\nopen(where).read()": [None],
+    "where = 'a.txt'\nwhere = '/etc/passwd'\nopen(where).read()": [None],
+    "def save(rows, path):\n    open(path, 'w').write(str(rows))\nsave([1], input())": [None],
+    "def save(rows, path):\n    open(path, 'w').write(str(rows))\nalias = save\nalias([1], '/etc/x')": [None],
+    "from pathlib import Path\nbase = Path('/work')\n(base / 'x').read_text()": [None],
+    # the fourth review (helper-56): pickle.loads of bytes in the cell ran builtins.exec at no cost (a blank
+    # notebook scored 20/20 without the sandbox); bytes that read as such a pickle cost wherever they go
+    "import pickle\nexec_in_a_pickle = b'cbuiltins\\nexec\\n(Vprint(1)\\ntR.'\nopen('p.pkl', 'wb').write(exec_in_a_pickle)\n"
+    "pickle.load(open('p.pkl', 'rb'))": [(), None],
+    "import marshal\nmarshal.loads(b'x')": [None],
+    "data = b'\\x80\\x04K\\x01.'\nprint(data)": [],
     # and what stays honest: a nested function of a builtin's name is its own, an alias of print is print
     "def f():\n    def open(x):\n        return x\n    return open(1)": [],
     "log = print\nlog('RMSE', 1.0)": [],

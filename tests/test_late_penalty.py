@@ -77,7 +77,7 @@ def test_late_submissions_lose_readmes_penalty_and_hand_grades_are_not_penalised
     for name, (time, nb) in files.items():
         nbformat.write(nb, download / f"{name}_{time:%Y-%m-%d-%H-%M-%S}_{LAB.notebook_name}")
     (tmp_path / "students.csv").write_text("lms_name,student_id\n" + "".join(f"{n},{n}\n" for n in files))
-    collect(LAB, download, tmp_path / "students.csv", tmp_path / "SUBMISSIONS")
+    collect(LAB, download, tmp_path / "students.csv", tmp_path / "SUBMISSIONS", times_in_names=True)
 
     workdir = tmp_path / "course"
     rows = {row.student: row for row in grading.grade(tmp_path / "SUBMISSIONS", workdir).rows}

@@ -37,6 +37,7 @@ from autograder.integrity.rules import (
     path_problem,
 )
 from autograder.integrity.syntax import (
+    argument_choices,
     constant_pieces,
     first_arg,
     fold,
@@ -45,6 +46,7 @@ from autograder.integrity.syntax import (
     parse,
     path_constructor_arg,
     strip_magic_options,
+    substitute,
 )
 from autograder.integrity.walker import Context, Walker
 
@@ -109,11 +111,11 @@ class CallRules(Walker):
             elif method in ("savefig", "tofile") and node.args:
                 self.file_access(node, node.args[0], True, context)
             elif method in PATH_READ_METHODS | PATH_WRITE_METHODS:
-                base = path_constructor_arg(func.value)
+                base = path_constructor_arg(substitute(func.value, self.defined.values))
                 self.file_access(node, base, method in PATH_WRITE_METHODS, context, unknown_ok=False)
-            elif method in PATH_GENERIC_METHODS and path_constructor_arg(func.value) is not None:
+            elif method in PATH_GENERIC_METHODS and path_constructor_arg(substitute(func.value, self.defined.values)):
                 writes = method != "open" or open_writes(node, 0)
-                self.file_access(node, path_constructor_arg(func.value), writes, context)
+                self.file_access(node, path_constructor_arg(substitute(func.value, self.defined.values)), writes, context)
             elif method == "join" and isinstance(func.value, ast.Constant):
                 self.string(node, fold(node), context)
         return None
@@ -190,8 +192,17 @@ class CallRules(Walker):
             if why:
                 self.hit(node, "reference", f"builds the path {folded!r}, which {why}", context)
 
-    def file_access(self, node, arg, writes, context, unknown_ok: bool = False) -> None:
-        """A file access with path expression ``arg``; ``writes`` True, False, or None (unknown)."""
+    def file_access(self, node, arg, writes, context, unknown_ok: bool = False, resolving: bool = True) -> None:
+        """A file access with path expression ``arg``; ``writes`` True, False, or None (unknown). A name
+        bound once to a value stands for the value; a parameter of the notebook's own function, for
+        what every call of it passes (``resolving``: look them up)."""
+        choices = self.parameter_choices(arg, context) if resolving else None
+        if choices is not None:
+            for choice in choices:
+                self.file_access(node, choice, writes, context, unknown_ok, resolving=False)
+            return
+        if arg is not None:
+            arg = substitute(arg, self.defined.values)
         writing = writes is not False
         kind = "shared" if writing else "reference"
         verb = "writes" if writes else ("reads" if writes is False else "opens")
@@ -218,6 +229,17 @@ class CallRules(Walker):
             return  # np.loadtxt(io.StringIO(text)): text held in memory, no file's name
         self.hit(node, kind, f"{verb} a file whose name is computed at run time", context)
 
+
+    def parameter_choices(self, arg: ast.AST | None, context: Context) -> list[ast.AST] | None:
+        """For a parameter of the module-level function being scanned, not bound again in it, what
+        the notebook's calls of the function pass for it (syntax.argument_choices); else None."""
+        function = context.top
+        if not (isinstance(arg, ast.Name) and isinstance(function, ast.FunctionDef) and len(context.params) == 1
+                and arg.id in {a.arg for a in (*function.args.posonlyargs, *function.args.args, *function.args.kwonlyargs)}):
+            return None
+        if any(isinstance(n, ast.Name) and n.id == arg.id and not isinstance(n.ctx, ast.Load) for n in ast.walk(function)):
+            return None
+        return argument_choices(list(self.defined.trees), function.name, arg.id)
 
     def magic(self, node: ast.Call, context: Context) -> bool:
         func = node.func

@@ -118,12 +118,18 @@ MODULE_SHARED.update({  # runners of code given as text, which the scan cannot r
     "typing": {"get_type_hints", "ForwardRef", "_eval_type"},
     "code": {"InteractiveInterpreter", "InteractiveConsole", "interact", "compile_command"},
 })
+MODULE_SHARED.update({  # bytes given in the cell, run when loaded: pickle.loads(b"...") called exec (fourth review)
+    "pickle": {"loads"}, "_pickle": {"loads"}, "marshal": {"loads"},
+})
 MODULE_REVIEW = {
-    "pickle": {"loads", "load", "Unpickler"}, "_pickle": {"loads", "load", "Unpickler"},
-    "marshal": {"loads", "load"},
+    "pickle": {"load", "Unpickler"}, "_pickle": {"load", "Unpickler"},
+    "marshal": {"load"},
 }
-"""Module attributes that honest work uses (a student pickles their own results) but that can run any
-code a cheat packs into them: flagged for review, at no cost."""
+"""Module attributes that honest work uses (a student pickles their own results to a file and reads
+them back) but that can run any code a cheat packs into them: flagged for review, at no cost."""
+PICKLE_CALLS = frozenset({"GLOBAL", "STACK_GLOBAL", "INST", "OBJ", "REDUCE", "NEWOBJ", "NEWOBJ_EX"})
+"""The opcodes with which a pickle names and calls a function when it is loaded: bytes written in a
+cell that read as a pickle holding one run code the scan cannot see (builtins.exec), wherever they go."""
 TEXT_RUNNERS = frozenset({"timeit.timeit", "timeit.repeat", "timeit.Timer"})
 """Functions that run their first argument as code when it is a text (a function is honest use)."""
 ATTRIBUTE_GETTERS = frozenset({"operator.attrgetter", "operator.methodcaller"})

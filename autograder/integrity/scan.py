@@ -53,7 +53,7 @@ from autograder.integrity.rules import (
     NAMESPACE_WRITES,
     is_check_helper,
 )
-from autograder.integrity.syntax import bound_names, catches_everything, does_nothing, local_names, parse
+from autograder.integrity.syntax import bound_names, catches_everything, does_nothing, local_names, parse, single_values
 from autograder.integrity.visitor import Visitor
 from autograder.integrity.walker import Definitions, Hit, Walker
 from autograder.labs import Lab
@@ -189,7 +189,8 @@ class Scan:
                 if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
                     self.defined.setdefault(node.name, (order, node.lineno))
         rebound = frozenset(name for _, _, tree in self.cells for name in _bound_otherwise(tree))
-        self.definitions = Definitions(self.defined, rebound)
+        trees = tuple(tree for _, _, tree in self.cells)
+        self.definitions = Definitions(self.defined, rebound, single_values(list(trees)), trees)
         self.builtin_aliases = self._collect_aliases()
         self.uses = self._top_level_uses()
         self.hits: list[Hit] = []

@@ -3,11 +3,20 @@
 from __future__ import annotations
 
 import ast
+import pickletools
 
 from autograder.integrity.rules import (CONTAINER_DUNDERS, FORBIDDEN_DUNDERS, HIDDEN_STRING, OBJECTS_ARE_NOT_SENT,
-                                        SPECIAL_BASES)
+                                        PICKLE_CALLS, SPECIAL_BASES)
 from autograder.integrity.syntax import fold
 from autograder.integrity.walker import Context, Walker
+
+
+def calls_when_unpickled(data: bytes) -> bool:
+    """Whether ``data`` reads as a whole pickle that names or calls a function (``PICKLE_CALLS``)."""
+    try:
+        return any(op.name in PICKLE_CALLS for op, _, _ in pickletools.genops(data))
+    except Exception:  # not a pickle: genops raises ValueError, or others on a truncated or odd one
+        return False
 
 
 class ClassAndStringRules(Walker):
@@ -30,6 +39,9 @@ class ClassAndStringRules(Walker):
     def visit_Constant(self, node: ast.Constant, context: Context):
         if isinstance(node.value, str) and id(node) not in self.docstrings:
             self.string(node, node.value, context)
+        elif isinstance(node.value, bytes) and calls_when_unpickled(node.value):
+            self.hit(node, "shared", "holds bytes that read as a pickle which calls a function when loaded, code "
+                                     "this scan cannot see", context)
 
     def visit_JoinedStr(self, node: ast.JoinedStr, context: Context):
         self.string(node, fold(node), context)

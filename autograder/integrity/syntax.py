@@ -4,6 +4,7 @@ statement binds, constant folding of strings, and the shapes of calls that open 
 from __future__ import annotations
 
 import ast
+import copy
 import functools
 import re
 
@@ -115,6 +116,79 @@ def loop_constants(node: ast.AST, top: ast.AST | None) -> list[str] | None:
         elif isinstance(inner, ast.arg) and inner.arg == node.id:
             bindings += 2
     return choices if bindings == 1 else None
+
+
+def substitute(node: ast.AST, values: dict[str, ast.AST], depth: int = 4) -> ast.AST:
+    """A copy of ``node`` in which each name that ``values`` holds is replaced by its value (itself with
+    its names replaced, ``depth`` times at most): ``out = "fig.png"`` makes ``savefig(out)`` read as
+    ``savefig("fig.png")``."""
+    if depth == 0 or not values:
+        return node
+
+    class Replace(ast.NodeTransformer):
+        def visit_Name(self, name: ast.Name) -> ast.AST:
+            if isinstance(name.ctx, ast.Load) and name.id in values:
+                return substitute(values[name.id], values, depth - 1)
+            return name
+
+    return Replace().visit(copy.deepcopy(node))
+
+
+def single_values(trees: list[ast.Module]) -> dict[str, ast.AST]:
+    """The names that the trees bind exactly once in all, by a plain assignment ``name = value``:
+    name -> value. A name bound twice anywhere (again, as a parameter, a loop variable, an import, a
+    definition, ``global``) is left out, whatever scope each binding is in."""
+    bindings: dict[str, int] = {}
+    values: dict[str, ast.AST] = {}
+    for tree in trees:
+        for node in ast.walk(tree):
+            names = []
+            if isinstance(node, ast.Name) and isinstance(node.ctx, (ast.Store, ast.Del)):
+                names = [node.id]
+            elif isinstance(node, ast.arg):
+                names = [node.arg]
+            elif isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.ClassDef)):
+                names = [node.name]
+            elif isinstance(node, (ast.Import, ast.ImportFrom)):
+                names = [(a.asname or a.name).split(".")[0] for a in node.names]
+            elif isinstance(node, (ast.Global, ast.Nonlocal)):
+                names = list(node.names) * 2
+            for name in names:
+                bindings[name] = bindings.get(name, 0) + 1
+            if isinstance(node, ast.Assign) and len(node.targets) == 1 and isinstance(node.targets[0], ast.Name):
+                values[node.targets[0].id] = node.value
+    return {name: value for name, value in values.items() if bindings.get(name) == 1}
+
+
+def argument_choices(trees: list[ast.Module], function: str, parameter: str) -> list[ast.AST] | None:
+    """What the notebook passes as ``parameter`` of its module-level function ``function``: the
+    argument of every call ``function(...)`` (by position or keyword, or the default), or None when
+    the function is used otherwise than called by its name, or a call passes ``*args`` or ``**kwargs``."""
+    definition = next((node for tree in trees for node in tree.body
+                       if isinstance(node, ast.FunctionDef) and node.name == function), None)
+    if definition is None:
+        return None
+    positional = [a.arg for a in definition.args.posonlyargs + definition.args.args]
+    defaults = dict(zip(positional[len(positional) - len(definition.args.defaults):], definition.args.defaults))
+    defaults |= {a.arg: d for a, d in zip(definition.args.kwonlyargs, definition.args.kw_defaults) if d is not None}
+    calls, choices = set(), []
+    for tree in trees:
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Call) and isinstance(node.func, ast.Name) and node.func.id == function:
+                calls.add(id(node.func))
+                if any(isinstance(a, ast.Starred) for a in node.args) or any(k.arg is None for k in node.keywords):
+                    return None
+                index = positional.index(parameter) if parameter in positional else None
+                given = [k.value for k in node.keywords if k.arg == parameter]
+                if index is not None and index < len(node.args):
+                    given.append(node.args[index])
+                choice = given[0] if given else defaults.get(parameter)
+                if choice is None:
+                    return None
+                choices.append(choice)
+    used = [node for tree in trees for node in ast.walk(tree)
+            if isinstance(node, ast.Name) and node.id == function and id(node) not in calls]
+    return None if used else choices
 
 
 def fold(node: ast.AST):

@@ -3,7 +3,7 @@
 from __future__ import annotations
 
 import ast
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 from autograder.integrity.rules import KNOWN_MODULE_NAMES, REEXPORTED_MODULES
 from autograder.integrity.syntax import fold, local_names
@@ -28,6 +28,10 @@ class Definitions:
 
     first: dict[str, tuple[int, int]]
     rebound: frozenset[str]
+    values: dict[str, ast.AST] = field(default_factory=dict)
+    """Names bound exactly once in the notebook, by ``name = value``: name -> value (syntax.single_values)."""
+    trees: tuple[ast.Module, ...] = ()
+    """Every scanned cell's tree, for what the notebook passes to its own functions."""
 
     def own_before(self, name: str, order: int, line: int) -> bool:
         """Whether ``name``, used in the statement at ``line`` of the ``order``-th cell, is a function or

@@ -39,12 +39,16 @@ from autograder.labs import ROOT, Lab, get_lab
 from autograder.pipeline.archives import RATIO_FLOOR, Limits, Refusal, Unpacker
 from autograder.pipeline.intake import STUDENT_ID
 
-DEFAULT_PATTERN = (
+DEFAULT_PATTERN = r"(?:^|/)(?P<student_id>[^/_]+)_[^/]*\.ipynb$"
+"""A file ``<lms name>_<anything>.ipynb`` anywhere in the download (but inside a student's upload: see
+StudentIdCollector). No time is read: after the LMS's name comes the student's own name for the file,
+which could begin with a time of the student's choosing (a fourth review dated a late file so)."""
+TIMED_PATTERN = (
     r"(?:^|/)(?P<student_id>[^/_]+)_"
     r"(?:(?P<timestamp>\d{4}-\d\d-\d\d[-_T ]\d\d[-:]\d\d(?:[-:]\d\d)?)_)?[^/]*\.ipynb$"
 )
-"""A file ``<lms name>_<anything>.ipynb``, or ``<lms name>_<YYYY-MM-DD-HH-MM-SS>_<anything>.ipynb``
-with the submission time, anywhere in the download (but inside a student's upload: see StudentIdCollector)."""
+"""``collect --times-in-names``: also ``<lms name>_<YYYY-MM-DD-HH-MM-SS>_<anything>.ipynb``, with the
+submission time, for an LMS that writes its own time there."""
 
 
 def unpacked_folder(relative: PurePosixPath) -> str:
@@ -331,8 +335,10 @@ def _shown(path: str) -> str:
 
 
 def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: str | None = None,
-            zone: str = "UTC", limits: Limits = Limits()) -> IntakeReport:
+            zone: str = "UTC", limits: Limits = Limits(), times_in_names: bool = False) -> IntakeReport:
     """Collect an LMS download of ``lab`` (a zip or a folder) into ``out/<student>/<lab>/<lab>.ipynb``.
+    The file names are read with ``pattern``, or by default DEFAULT_PATTERN (TIMED_PATTERN with
+    ``times_in_names``: the LMS writes each upload's time after the student's LMS name).
 
     nbgrader's ZipCollectApp does the work in a scratch course folder whose ``submitted/`` is
     ``out``, its archives unpacked within ``limits`` (SafeExtractor). A student's folder
@@ -373,8 +379,8 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
         config.StudentIdCollector.timezone = zone
         if not download.is_dir():
             config.StudentIdCollector.lms_archives = [download.name]  # the LMS's own zip, whatever its name
-        if pattern:
-            config.StudentIdCollector.named_regexp = pattern
+        if pattern or times_in_names:
+            config.StudentIdCollector.named_regexp = pattern or TIMED_PATTERN
         app = ZipCollectApp(coursedir=CourseDirectory(config=config), config=config)
         result = capture_log(app)
         collector: StudentIdCollector | None = app.collector_plugin_inst
@@ -395,11 +401,11 @@ def collect(lab: Lab, download: Path, students_file: Path, out: Path, pattern: s
 
 
 def run_collect(lab_id: str, download: Path, students_file: Path, out: Path, pattern: str | None = None,
-                zone: str = "UTC", limits: Limits = Limits()) -> int:
+                zone: str = "UTC", limits: Limits = Limits(), times_in_names: bool = False) -> int:
     """``python -m autograder collect``: collect and print the report. Exit status 1 if a file was
     refused or not collected, 2 if nothing could be collected."""
     try:
-        report = collect(get_lab(lab_id), download, students_file, out, pattern, zone, limits)
+        report = collect(get_lab(lab_id), download, students_file, out, pattern, zone, limits, times_in_names)
     except (IntakeError, ValueError, OSError) as error:
         print(f"collect: {error}")
         return 2

@@ -381,7 +381,11 @@ def _scratch_copy(resources: dict):
     """Run the kernel in a scratch copy of the submission's folder (its regular files), not in the
     folder itself: nbgrader writes the graded notebook into that folder after the kernel is gone,
     and a kernel that could write there could leave a symbolic link in the notebook's place that
-    sends nbgrader's write to the gradebook or another student's file. Yields the scratch folder."""
+    sends nbgrader's write to the gradebook or another student's file. The copies have the bytes
+    only, with a new file's mode and times: a file's mode bits and times are not part of the seed
+    (grading_secret.submission_content), so a student who chose them could hand in answers in them
+    to their own hidden cases (plain nbgrader autograde keeps them; the fourth review found it).
+    Yields the scratch folder."""
     metadata = resources.setdefault("metadata", {})
     folder = metadata.get("path")
     scratch = tempfile.mkdtemp(prefix="kit-work-")
@@ -389,7 +393,7 @@ def _scratch_copy(resources: dict):
         if folder and os.path.isdir(folder):
             for entry in os.scandir(folder):
                 if entry.is_file(follow_symlinks=False):
-                    shutil.copy2(entry.path, scratch)
+                    shutil.copyfile(entry.path, os.path.join(scratch, entry.name), follow_symlinks=False)
         metadata["path"] = scratch
         yield scratch
     finally:
