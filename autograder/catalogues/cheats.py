@@ -33,6 +33,7 @@ import codecs
 import copy
 import functools
 import hashlib
+import pickle
 from dataclasses import dataclass, field
 from typing import Callable
 
@@ -235,6 +236,27 @@ def _exec_obfuscated(lab: Lab) -> NotebookNode:
     before = f'import codecs\nexec(codecs.decode("{hidden}", "rot13"))\n\n\n'
     _answer(nb, blank).source = _with_body(lab, blank, f"return _r.{blank}({_names(lab, blank)['call']})", before)
     return nb
+
+
+def _pickled_exec(lab: Lab) -> NotebookNode:
+    """The import packed into a pickle that calls builtins.exec when loaded (a fourth review's route
+    round the scan: pickle.loads was flagged for review at no cost)."""
+    nb = _base(lab, plant=False)
+    blank = target(lab)
+    packed = pickle.dumps(_Exec(f"import solutions.{lab.module}.reference as _r"))
+    before = f"import pickle\npickle.loads({packed!r})\n\n\n"
+    _answer(nb, blank).source = _with_body(lab, blank, f"return _r.{blank}({_names(lab, blank)['call']})", before)
+    return nb
+
+
+class _Exec:
+    """Pickles as a call of builtins.exec with ``code``."""
+
+    def __init__(self, code: str) -> None:
+        self.code = code
+
+    def __reduce__(self):
+        return exec, (self.code,)
 
 
 _GC_SEARCH = _replace_answer("""
@@ -490,6 +512,8 @@ CHEATS: tuple[Cheat, ...] = (
           "blank", frozenset({STATIC, SANDBOX}), _OPEN_EXEC),
     Cheat("exec-obfuscated-import", "an import of the reference hidden in rot13 and run with `exec`",
           "blank", frozenset({STATIC, SANDBOX}), _exec_obfuscated),
+    Cheat("pickled-exec", "an import of the reference packed into a pickle that calls `exec` when loaded",
+          "blank", frozenset({STATIC, SANDBOX}), _pickled_exec),
     Cheat("namespace-builtins", "`globals()['__builtins__']`, then the reference imported through what it holds",
           "blank", frozenset({STATIC, SANDBOX}), _NAMESPACE_BUILTINS, exact=True),
     Cheat("display-shows-reference", "IPython.display's `Code(filename=...)` showing the reference's source "
