@@ -110,12 +110,13 @@ class CallRules(Walker):
                 pass  # the rules below are for methods
             elif method in ("savefig", "tofile") and node.args:
                 self.file_access(node, node.args[0], True, context)
-            elif method in PATH_READ_METHODS | PATH_WRITE_METHODS:
+            elif method in PATH_READ_METHODS | PATH_WRITE_METHODS | PATH_GENERIC_METHODS:
+                # Path("x").write_text(...), and notes.write_text(...) after notes = Path("x")
                 base = path_constructor_arg(substitute(func.value, self.defined.values))
-                self.file_access(node, base, method in PATH_WRITE_METHODS, context, unknown_ok=False)
-            elif method in PATH_GENERIC_METHODS and path_constructor_arg(substitute(func.value, self.defined.values)):
-                writes = method != "open" or open_writes(node, 0)
-                self.file_access(node, path_constructor_arg(substitute(func.value, self.defined.values)), writes, context)
+                if method not in PATH_GENERIC_METHODS:
+                    self.file_access(node, base, method in PATH_WRITE_METHODS, context, unknown_ok=False)
+                elif base is not None:
+                    self.file_access(node, base, method != "open" or open_writes(node, 0), context)
             elif method == "join" and isinstance(func.value, ast.Constant):
                 self.string(node, fold(node), context)
         return None

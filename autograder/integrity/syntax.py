@@ -171,6 +171,7 @@ def argument_choices(trees: list[ast.Module], function: str, parameter: str) -> 
     positional = [a.arg for a in definition.args.posonlyargs + definition.args.args]
     defaults = dict(zip(positional[len(positional) - len(definition.args.defaults):], definition.args.defaults))
     defaults |= {a.arg: d for a, d in zip(definition.args.kwonlyargs, definition.args.kw_defaults) if d is not None}
+    index = positional.index(parameter) if parameter in positional else None
     calls, choices = set(), []
     for tree in trees:
         for node in ast.walk(tree):
@@ -178,7 +179,6 @@ def argument_choices(trees: list[ast.Module], function: str, parameter: str) -> 
                 calls.add(id(node.func))
                 if any(isinstance(a, ast.Starred) for a in node.args) or any(k.arg is None for k in node.keywords):
                     return None
-                index = positional.index(parameter) if parameter in positional else None
                 given = [k.value for k in node.keywords if k.arg == parameter]
                 if index is not None and index < len(node.args):
                     given.append(node.args[index])
