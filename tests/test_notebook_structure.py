@@ -4,6 +4,8 @@ import ast
 import inspect
 import re
 
+import nbformat
+
 from nbgrader.nbgraderformat import MetadataValidator
 
 from autograder import cells
@@ -62,6 +64,62 @@ def test_a_model_answer_unlike_its_reference_is_named(monkeypatch):
     cell.source = cell.source.replace(begin, f"{begin}\n{begin[:begin.index('#')]}unused = 0", 1)
     [sentence] = consistency.answers_unlike_reference(lab, nb)
     assert sentence.startswith(f"{name}: the model answer in the notebook differs from solutions/{lab.module}/reference.py")
+
+
+@over_labs
+def test_the_first_cell_says_what_is_graded(lab):
+    """A student finds at the top what each part asks them to write, its points and about how long it
+    takes (issue 33); the table's points and blanks are the notebook's, and "Going further" grades nothing."""
+    assert consistency.summary_disagrees(cells.read(lab.source_notebook)) == []
+
+
+def _summary_notebook(table: str, later: str = "") -> nbformat.NotebookNode:
+    """A two-section notebook: a blank `f` (2 points) in section 1, a written answer (1 point) in
+    section 2, then a "Going further" part holding ``later``'s cell, graded if ``later`` is its id."""
+    v4 = nbformat.v4
+    graded = {"solution": True, "grade": True, "locked": False}
+    nb = v4.new_notebook(cells=[
+        v4.new_markdown_cell("# Lab\n\n" + table + "\n\nText."),
+        v4.new_markdown_cell("## 1. One"),
+        v4.new_code_cell("def f():\n    ### BEGIN SOLUTION\n    return 1\n    ### END SOLUTION",
+                         metadata={"nbgrader": {"grade_id": "f", "solution": True, "grade": False}}),
+        v4.new_code_cell("validate(f)", metadata={"nbgrader": {"grade_id": "test_f", "grade": True, "points": 2}}),
+        v4.new_markdown_cell("## 2. Two"),
+        v4.new_markdown_cell("answer", metadata={"nbgrader": {"grade_id": "q", "points": 1, **graded}}),
+        v4.new_markdown_cell("## 3. Going further"),
+    ])
+    if later:
+        nb.cells.append(v4.new_markdown_cell("more", metadata={"nbgrader": {"grade_id": later, "points": 1, **graded}}))
+    return nb
+
+
+TABLE = """| part | what you write | points | about |
+|---|---|---|---|
+| 1. One | `f` | 2 | 30 min |
+| 2. Two | a written answer | 1 | 10 min |
+| **all** | 1 function, 1 written answer | **3** | **40 min** |"""
+
+
+def test_a_table_of_what_is_graded_that_disagrees_is_named():
+    """Each kind of disagreement is named: a row's points, its blanks, the total, a section in no row or
+    in two, a graded cell after "Going further", and no table at all."""
+    assert consistency.summary_disagrees(_summary_notebook(TABLE)) == []
+    assert consistency.summary_disagrees(_summary_notebook(TABLE.replace("| 2 | 30", "| 3 | 30"))) == [
+        "the row for section '1. One' says 3 points; its graded cells give 2"]
+    assert consistency.summary_disagrees(_summary_notebook(TABLE.replace("`f`", "functions"))) == [
+        "the row for section '1. One' names the blanks []; its sections hold ['f']"]
+    assert consistency.summary_disagrees(_summary_notebook(TABLE.replace("**3**", "4"))) == [
+        "the total row says 4 points; the graded cells give 3"]
+    without_two = TABLE.replace("| 2. Two | a written answer | 1 | 10 min |\n", "")
+    assert consistency.summary_disagrees(_summary_notebook(without_two)) == [
+        "section 2 has graded cells and is in 0 rows of the table of what is graded; it should be in one"]
+    twice = TABLE.replace("| 2. Two |", "| 1–2. Both | `f` | 3 | 40 min |\n| 2. Two |")
+    assert "section 2 has graded cells and is in 2 rows of the table of what is graded; it should be in one" in (
+        consistency.summary_disagrees(_summary_notebook(twice)))
+    late = consistency.summary_disagrees(_summary_notebook(TABLE, later="extra"))
+    assert late[0] == 'extra is graded but comes after the "Going further" heading; that part is not graded'
+    assert consistency.summary_disagrees(_summary_notebook("no table here"))[0].startswith(
+        "the first cell has no table of what is graded")
 
 
 @over_labs

@@ -130,7 +130,8 @@ def build_lab(lab: Lab) -> bool:
         return False
     problems = [*consistency.answers_unlike_reference(lab, nb), *(
         f"{where} stays TeX on the feedback page: a line inside $...$ that begins with +, -, * or a number and a "
-        "full stop starts a Markdown list; break the line elsewhere" for where in consistency.formulas_left_as_text(nb))]
+        "full stop starts a Markdown list; break the line elsewhere" for where in consistency.formulas_left_as_text(nb)),
+        *consistency.summary_disagrees(nb)]
     if problems:
         print(f"{count(len(problems), 'problem')} in {lab.draft.relative_to(ROOT)} or its reference; fix them and build again:")
         for problem in problems:
