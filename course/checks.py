@@ -971,7 +971,15 @@ def _set_by_a_cell_that_failed(error: NameError, shell: Any) -> str | None:
     if not name:
         return None
     assigns = re.compile(rf"^[ \t]*(?:[\w\s,]*,\s*)?{re.escape(name)}\s*(?:,[\w\s,]*)?=(?!=).*$", re.MULTILINE)
+    defines = re.compile(rf"^def\s+{re.escape(name)}\s*\(", re.MULTILINE)
     for source in reversed(shell.user_ns.get("In", [])[:-1]):
+        if defines.search(source or ""):
+            # a blank's cell that a SyntaxError stopped: nothing in it ran, so its function is not defined (a
+            # student trial of reentry-pf: the check cell said only "NameError: name 'pf_step' is not defined")
+            return wrap(f"NameError: name '{name}' is not defined. The cell with `def {name}(...)` was run, but it "
+                        f"stopped with an error before {name} was defined: most often a SyntaxError (a missing "
+                        "bracket, colon or comma, or a wrong indent), which stops the whole cell. Fix the error "
+                        "that cell shows, run it again, then this one.")
         found = assigns.search(source or "")
         if found:
             line = " ".join(found.group(0).split())

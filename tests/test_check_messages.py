@@ -158,6 +158,25 @@ def _run_in_kernel(cells_source: list[str], folder) -> tuple:
     return nb, errors, text
 
 
+def test_a_check_after_a_blank_that_a_syntax_error_stopped_says_so(tmp_path):
+    """A blank whose cell has a SyntaxError defines nothing; its check cell's NameError points at that cell (a
+    student trial of reentry-pf found a bare "NameError: name 'pf_step' is not defined"). A name that no cell
+    run defines keeps Python's own message."""
+    cells_source = [
+        "%xmode Minimal\nimport numpy as np\nfrom course.checks import check_close, passed, require",
+        "def step(x):\n    return np.array([x, 0.0]",
+        'require(step)\ncheck_close(step(1.0), [1.0, 0.0], "step(1)")\npassed("step")',
+        'require(later)',
+    ]
+    _, errors, text = _run_in_kernel(cells_source, tmp_path)
+    assert errors[1].ename == "SyntaxError"
+    assert text[2] == ("NameError: name 'step' is not defined. The cell with `def step(...)` was run, but it stopped "
+                       "with an error before step was defined: most often a SyntaxError (a missing bracket, colon or "
+                       "comma, or a wrong indent), which stops the whole cell. Fix the error that cell shows, run it "
+                       "again, then this one."), text[2]
+    assert errors[3].ename == "NameError" and "was run, but it stopped" not in text[3], text[3]
+
+
 def test_in_a_kernel_a_check_blames_another_blank_only_when_it_may_be_the_cause_and_says_each_thing_once(tmp_path):
     """A student's kernel. A sign error in gain raises LinAlgError inside it; its check says which call raised it,
     with the inputs and the likely cause. The check of update, which calls gain, blames gain first, as the error
