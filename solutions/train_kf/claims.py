@@ -395,6 +395,27 @@ def _() -> None:
         assert np.allclose(scaled_R, scaled_QB, rtol=1e-9, atol=1e-8), f"R x {c:g} and Q, B0 / {c:g} differ."
 
 
+# --- section 9: the pointer before the covariance question (Q has rank one)
+
+@claim("train-kf/q-rank-one")
+def _() -> None:
+    """Q has rank one along g = (h, 1); the forecast's x - h v has the last analysis's position variance at every factor of Q, and the true train keeps x_{t+1} - h v_{t+1} = x_t."""
+    A, _, _, Q, _, B0 = _model()
+    for sigma, dt_min in ((15.0, 1.0), (3.0, 2.5), (40.0, 0.5)):
+        Q_step, h = ref.process_noise(sigma, dt_min), dt_min / 60.0
+        assert np.linalg.matrix_rank(Q_step) == 1, f"Q for sigma {sigma}, dt_min {dt_min} does not have rank one"
+        assert np.allclose(Q_step, sigma**2 * np.outer([h, 1.0], [h, 1.0])), "Q is not sigma^2 g g^T with g = (h, 1)"
+    across = np.array([1.0, -1.0 / 60.0])
+    assert np.allclose(across @ A, [1.0, 0.0]), "x - h v after one step of A is not the previous position"
+    _, Bs = _true_filter()
+    for c in FACTORS:
+        for B_a in (B0, Bs[0], Bs[29], Bs[-1]):
+            _, B_f = ref.predict(np.zeros(2), B_a, A, c * Q)
+            assert np.isclose(across @ B_f @ across, B_a[0, 0]), f"x - h v gains uncertainty from Q x {c:g}"
+    truth = _pool()[1][:200]
+    assert np.allclose(truth[:, 1:, 0] - truth[:, 1:, 1] / 60.0, truth[:, :-1, 0]), "x_{t+1} - h v_{t+1} != x_t in the simulation"
+
+
 # --- section 10: consistency, 100 repetitions with 200 hours each
 
 @claim("train-kf/coverage-over-hours")
@@ -448,3 +469,4 @@ def _() -> None:
     per_set = nees.mean(axis=(1, 2))
     _between(abs(per_set.mean() - 2.0), 0.0, 0.03, "the distance from 2 of the mean NEES over all hours")
     _between(per_set.std(), 0.06, 0.11, "the standard deviation of the mean NEES of a set of 200 hours")
+
