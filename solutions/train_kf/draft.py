@@ -23,13 +23,12 @@
 # **What you will do**
 # 1. Derive the Kalman gain by minimising a cost function, and the covariance of the result (four short
 #    written derivations).
-# 2. Write the two forms of the gain and check numerically that they agree.
-# 3. Write the filter one piece at a time: the process noise `Q`, the forecast step, the analysis step,
-#    and the loop over one hour of GPS fixes.
-# 4. Run it on an hour of data, compare it with the raw GPS and with another model of the train's noise,
-#    and see what happens when the filter's covariances are wrong.
-# 5. Measure whether the filter's uncertainty is honest: how often the truth is inside its band, and the
-#    normalised estimation error squared (NEES) over many simulated hours.
+# 2. Write the two forms of the gain, then the filter one piece at a time: the process noise `Q`, the forecast
+#    step, the analysis step, and the loop over one hour of GPS fixes.
+# 3. Run it on an hour of data. Compare it with the raw GPS and with another model of the train's noise, and
+#    see what happens when the filter's covariances are wrong.
+# 4. Measure over many simulated hours whether the filter's uncertainty is honest: how often the truth is inside
+#    its band, and the normalised estimation error squared (NEES).
 #
 # **What is graded, and about how long each part takes**
 #
@@ -45,8 +44,8 @@
 # | 10. Is the filter honest? | `nees`, one written answer | 3 | 20 min |
 # | **all** | 7 functions, 8 written answers | **24** | **about 3 h** |
 #
-# Written answers (derivations and questions) are marked by hand; the functions by hidden tests. Section 1
-# takes about 5 minutes to read. Section 11, "Going further", is not graded: read it if you want to know more.
+# Written answers (derivations and questions) are marked by hand, the functions by hidden tests. The last
+# section, "Going further", is not graded.
 #
 # **How this notebook works.** Each blank is one function in a cell that says `YOUR CODE HERE`. The read-only
 # cell below it runs *visible checks* on cases you can work out by hand; their messages say what to fix.
@@ -65,7 +64,7 @@
 # module distributed on HUBzero with `KalmanTrain.zip` (MATLAB). The copy we worked from names no author
 # or year. The text, code and data here are our own, and so are any errors. Where the handout has a typo,
 # a one-line *Handout correction* says so where the equation comes, and we use the corrected form. You do
-# not need the handout; section 11 explains each correction for readers who have it.
+# not need the handout; section 11 explains each correction.
 
 # %% nbgrader={"grade": false, "grade_id": "setup", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # Set-up: run this cell first.
@@ -180,7 +179,7 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 # %% [markdown]
 # **Derivation 3.** Show that the two forms of the gain agree:
 # $(B^{-1} + H^T R^{-1} H)^{-1} (R^{-1} H)^T = B H^T (H B H^T + R)^{-1}$.
-# *Hint:* expand $H^T R^{-1} (H B H^T + R)$ in two ways.
+# *Hint.* Expand $H^T R^{-1} (H B H^T + R)$ in two ways.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "derivation_3", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -290,7 +289,7 @@ for n, m in [(2, 2), (2, 1), (4, 3), (6, 2), (8, 8)]:
 # %% [markdown]
 # ## 4. The process noise $Q$
 #
-# The forecast $\vec{x}^f_{t+1} = A\vec{x}_t$ leaves out the noise $Z_t$. So each step adds the noise's
+# The forecast moves the estimate with $A$ and leaves out the noise $Z_t$. So each step adds the noise's
 # covariance $Q = E[Z Z^T]$ to the forecast's uncertainty. Write `process_noise(sigma, dt_min)`, the $Q$ of one
 # step of `dt_min` minutes:
 #
@@ -729,7 +728,8 @@ plt.show()
 # value varies by less than 0.3% from $Q/10$ to $Q \times 100$, far less than the scatter of a mean over 20 hours,
 # so the figure cannot show where its minimum lies (at 1, in expectation). <!-- claim: train-kf/q-scaling-position-flat -->
 # $Q = \sigma^2 \begin{bmatrix} h^2 & h \\ h & 1 \end{bmatrix}$ has
-# rank one: whatever the factor, it says that the position's noise is exactly $h$ times the velocity's, so the
+# rank one (the note before the question): whatever the factor, it adds no uncertainty across $\vec{g} = (h, 1)$
+# and says that the position's noise is exactly $h$ times the velocity's, so the
 # filter builds its position from the velocity fixes integrated through $A$ (section 8), however much it trusts
 # the model's velocity. The curve for $R$ is a shallow U, lowest near factor 1 and higher at both ends. <!-- claim: train-kf/r-scaling-position-u -->
 # Scaling $R$ is not the mirror of scaling $Q$ here: multiplying
