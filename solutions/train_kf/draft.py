@@ -129,7 +129,7 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 # $$J(\vec{x}) = (\vec{x} - \vec{x}^f)^T B^{-1} (\vec{x} - \vec{x}^f) + (\vec{x} - \vec{x}^0)^T R^{-1} (\vec{x} - \vec{x}^0).$$
 
 # %% [markdown]
-# **Derivation 1.** Show that the minimiser $\vec{x}^a$ of $J$ can be written as
+# **Derivation 1 (2 points).** Show that the minimiser $\vec{x}^a$ of $J$ can be written as
 # $\vec{x}^a = \vec{x}^f + K(\vec{x}^0 - \vec{x}^f)$ with $K = B(R + B)^{-1}$.
 # Write your answer in the cell below (Markdown with LaTeX, or a clear description of each step).
 #
@@ -159,7 +159,7 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 #
 # $$J(\vec{x}) = (\vec{x} - \vec{x}^f)^T B^{-1} (\vec{x} - \vec{x}^f) + (H\vec{x} - \vec{y}^0)^T R^{-1} (H\vec{x} - \vec{y}^0).$$
 #
-# **Derivation 2.** Show that its minimiser is $\vec{x}^a = \vec{x}^f + K(\vec{y}^0 - H\vec{x}^f)$ with
+# **Derivation 2 (2 points).** Show that its minimiser is $\vec{x}^a = \vec{x}^f + K(\vec{y}^0 - H\vec{x}^f)$ with
 # $K = (B^{-1} + H^T R^{-1} H)^{-1} (R^{-1} H)^T$. *Hint.* Follow the steps of derivation 1; the chain rule
 # through $H$ puts $H^T$ in front of the gradient of the second term.
 
@@ -177,7 +177,7 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 # ### END SOLUTION
 
 # %% [markdown]
-# **Derivation 3.** Show that the two forms of the gain agree:
+# **Derivation 3 (2 points).** Show that the two forms of the gain agree:
 # $(B^{-1} + H^T R^{-1} H)^{-1} (R^{-1} H)^T = B H^T (H B H^T + R)^{-1}$.
 # *Hint.* Expand $H^T R^{-1} (H B H^T + R)$ in two ways.
 
@@ -199,6 +199,12 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 # `K`, an $n \times m$ array. Use `np.linalg.solve` (or `scipy.linalg.cho_solve`) rather than
 # `np.linalg.inv` wherever you can: solving is cheaper and more accurate than forming an inverse. (The
 # information form does need $B^{-1}$ itself.)
+#
+# *Hint.* `np.linalg.solve(S, C)` gives $S^{-1} C$, with the inverse on the left. The covariance form has it on the
+# right: $K = B H^T S^{-1}$ with $S = H B H^T + R$. Transpose to move it: $S$ and $B$ are symmetric, so
+# $B H^T S^{-1} = (S^{-1} H B)^T$, which is `np.linalg.solve(S, H @ B).T`.
+# An answer that uses `np.linalg.inv` gets the same points if its numbers are right: the hidden tests compare
+# values only. Solving is simply the better habit.
 
 # %% nbgrader={"grade": false, "grade_id": "gain_information_form", "locked": false, "schema_version": 3, "solution": true, "task": false}
 def gain_information_form(B, H, R):
@@ -461,7 +467,7 @@ check_kupdate(kupdate)
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# **Derivation 4 (the analysis covariance).** `kupdate` uses $B^a = B - KHB$. Show that
+# **Derivation 4: the analysis covariance (2 points).** `kupdate` uses $B^a = B - KHB$. Show that
 #
 # $$B^a = (B^{-1} + H^T R^{-1} H)^{-1} = (I - KH)\,B .$$
 #
@@ -595,7 +601,7 @@ print("gain K (rows: position, velocity; columns: position fix, velocity fix):")
 print(np.round(gain_covariance_form(B_f, H, R), 4))
 
 # %% [markdown]
-# **Question.** Why does the filter improve the position so much more than the velocity, compared with the GPS
+# **Question (2 points).** Why does the filter improve the position so much more than the velocity, compared with the GPS
 # alone? Use the model and the printed gain.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "position_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
@@ -654,10 +660,15 @@ train.print_model_comparison(data, {name: run_filter(data.gps, x0, B0, A, Q_mode
                                     for name, Q_model in models.items()})
 
 # %% [markdown]
-# **Question.** Compare the two filters on the shipped hour. Where do the two $Q$ differ? Which of the two
+# **Question (1 point).** Compare the two filters on the shipped hour. Where do the two $Q$ differ? Which of the two
 # models generated the data? To find out, read the code of `train.forward`, the given function that simulates
 # the true train (the simulated hours and the shipped hour come from it): type `train.forward??` in a new cell
 # and run it. (It is in the file `train.py` of the `course` package.) Can one hour tell the two models apart?
+# Answer the last part from evidence, in one of two ways. Either judge from the numbers shown: compare the gap
+# between the two filters with how uncertain one hour's position estimate is (section 8 printed the filter's
+# standard deviations). Or run a small experiment in a new cell: `train.simulate(60, rng)`, with
+# `rng = np.random.default_rng(1)`, gives a fresh hour `hour` from the true train; run both filters on `hour.gps`,
+# compare their estimates with `hour.truth`, and count over a few dozen hours which filter wins.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "noise_question", "locked": false, "points": 1, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -669,9 +680,14 @@ train.print_model_comparison(data, {name: run_filter(data.gps, x0, B0, A, Q_mode
 # `process_noise` is the true model. One hour cannot show it: over many simulated hours the random-walk filter has the smaller position error in
 # most hours, but only in about 2 in 3, while the velocity errors agree to within 1%. <!-- claim: train-kf/noise-models-over-hours -->
 #
-# **Rubric (1 point).** The table read correctly (nearly equal errors on this hour), <!-- claim: train-kf/noise-models-shipped --> with the difference in $Q$
-# named (same velocity variance, smaller position and cross terms in WNA) <!-- claim: train-kf/wna-vs-walk-q --> or the random walk identified as the
-# model of the data.
+# **Rubric (1 point).** The table read correctly (nearly equal errors on this hour), <!-- claim: train-kf/noise-models-shipped --> with one of:
+# the difference in $Q$ named (same velocity variance, smaller position and cross terms in WNA); <!-- claim: train-kf/wna-vs-walk-q -->
+# the random walk identified as the model of the data; or the last part answered from evidence. For the last
+# part, either kind of evidence earns the point if the argument follows from it: a judgement from the numbers
+# shown (a gap of a few hundredths of a mile, <!-- claim: train-kf/noise-models-shipped --> against a position standard deviation of about
+# 1.2 mi, <!-- claim: train-kf/position-sd-grows --> so one hour's noise can hide it), or a small experiment on hours from `train.simulate`
+# (the random-walk filter wins in most hours, not in all). <!-- claim: train-kf/noise-models-over-hours --> An answer that says one hour settles it, with no evidence, does not earn the point
+# by that part.
 # ### END SOLUTION
 
 # %% [markdown]
@@ -680,6 +696,12 @@ train.print_model_comparison(data, {name: run_filter(data.gps, x0, B0, A, Q_mode
 # The filter trusts its model through $Q$ and the GPS through $R$. What if those numbers are wrong? Below,
 # the data always come from the true process, but the filter is told $Q$ (or $R$) multiplied by a
 # factor from 1/100 to 100. Each point is the mean RMSE over 20 simulated hours.
+#
+# Only $Q$ or $R$ is scaled: the filter's starting belief $B_0$ stays as in section 1 in every run. So a factor on
+# $R$ is not the mirror of a factor on $Q$. Multiplying $R$ by $c$ gives exactly the filter told $Q/c$ *and*
+# $B_0/c$: <!-- claim: train-kf/r-scaling-equivalence --> besides the balance between model and fixes, it also
+# changes how much the filter trusts its start. In a one-hour run that matters, because the filter remembers its
+# start for a large part of the hour <!-- claim: train-kf/vague-start --> (section 10 comes back to how long errors last).
 
 # %% nbgrader={"grade": false, "grade_id": "covariance_scaling", "locked": true, "schema_version": 3, "solution": false, "task": false}
 require(process_noise, predict, kupdate, run_filter)
@@ -705,7 +727,7 @@ plt.show()
 # the new speed. Use this when you explain the position curve for $Q$.
 
 # %% [markdown]
-# **Question.** Describe the figure panel by panel: for the position and for the velocity, how does the RMSE
+# **Question (2 points).** Describe the figure panel by panel: for the position and for the velocity, how does the RMSE
 # change when the filter's $Q$, or its $R$, is too small or too large? Explain the two ways the velocity goes
 # wrong, and why the position curve for $Q$ looks so different from the one for $R$.
 
@@ -740,6 +762,9 @@ plt.show()
 # while $B_0/100$ alone gives 1.22 mi and $Q/100$ alone 1.25 mi (1.16 mi with the true covariances). The filter
 # ignores the position fixes while its velocity lags behind the real speed (the velocity panel), so the position,
 # built from that velocity, drifts away and no fix pulls it back. <!-- claim: train-kf/r-scaling-ends -->
+# Much of the gap between the two curves comes from the start of the run, and a longer run shrinks it: over 600
+# minutes $R \times 100$ gives 1.76 mi against 1.51 mi for $Q/100$, and $R/100$ 1.43 mi against 1.27 mi for
+# $Q \times 100$. <!-- claim: train-kf/r-scaling-long-run -->
 #
 # **Rubric (2 points).** 1 point: the velocity panel read correctly: both curves lowest at 1; <!-- claim: train-kf/velocity-minimum-at-1 -->
 # $Q$ too small lags behind the speed changes with an error well
@@ -750,6 +775,10 @@ plt.show()
 # A correct description
 # of each panel earns both points without the explanations. For the position curve for $Q$, "flat" and "lowest at 1
 # in expectation, since the true covariances give the optimal filter" are both correct readings. <!-- claim: train-kf/optimal-at-1 -->
+# For why the position curves for $Q$ and $R$ differ, any of these explanations is full credit when the figure is
+# read correctly: the starting belief $B_0$ held fixed while $R$ is scaled (a factor on $R$ also changes the trust
+# in the start, which matters for most of a one-hour run); or the rank one of $Q$ (a factor on $Q$ adds no
+# uncertainty across $\vec{g}$, so the position keeps coming from the velocity fixes integrated through $A$); or both.
 # An answer that says the position error approaches the GPS's when $Q$ is large
 # misreads the position panel.
 # ### END SOLUTION
@@ -837,7 +866,15 @@ print(f"minutes whose mean NEES is inside the 95% band [{low:.2f}, {high:.2f}]: 
       f"{np.sum((mean_nees >= low) & (mean_nees <= high))} of {len(mean_nees)}")
 
 # %% [markdown]
-# **Question.** What do the two panels say: is the filter consistent? Why is the per-hour fraction so much more
+# **Before the question: errors that last.** A fraction over 60 minutes is a steady measure only if the 60
+# minutes are 60 nearly independent samples. An error the filter corrects slowly is still there minutes later:
+# the errors of nearby minutes are then *correlated in time*, and a long run of minutes outside the band (or
+# inside it) counts for little more than one sample. How fast an error is corrected depends on the gain: each fix
+# removes about the gain's share of the error it sees. Section 8 printed the gain for the position and for the
+# velocity.
+
+# %% [markdown]
+# **Question (2 points).** What do the two panels say: is the filter consistent? Why is the per-hour fraction so much more
 # spread out for the position than for the velocity?
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "consistency_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
@@ -862,7 +899,9 @@ print(f"minutes whose mean NEES is inside the 95% band [{low:.2f}, {high:.2f}]: 
 # **Rubric (2 points).** 1 point: consistency read from the figure: about 95% inside over all hours, <!-- claim: train-kf/coverage-over-hours -->
 # the NEES near 2 and mostly inside its band. <!-- claim: train-kf/nees-band -->
 # 1 point: the wider spread of the position fraction <!-- claim: train-kf/coverage-per-hour-spread -->
-# explained by its persistent (slowly corrected) errors, against the quickly renewed velocity errors.
+# explained by its persistent (slowly corrected, correlated in time) errors, against the quickly renewed velocity
+# errors: the small position gain of section 8, or "fewer independent samples per hour", or the same idea in other
+# words, earns the point. The exact correlations are not needed.
 # ### END SOLUTION
 
 # %% [markdown]
