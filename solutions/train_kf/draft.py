@@ -200,11 +200,10 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 # `np.linalg.inv` wherever you can: solving is cheaper and more accurate than forming an inverse. (The
 # information form does need $B^{-1}$ itself.)
 #
-# *Hint.* `np.linalg.solve(S, C)` gives $S^{-1} C$, with the inverse on the left. The covariance form has it on the
-# right: $K = B H^T S^{-1}$ with $S = H B H^T + R$. Transpose to move it: $S$ and $B$ are symmetric, so
-# $B H^T S^{-1} = (S^{-1} H B)^T$, which is `np.linalg.solve(S, H @ B).T`.
-# An answer that uses `np.linalg.inv` gets the same points if its numbers are right: the hidden tests compare
-# values only. Solving is simply the better habit.
+# *Hint.* `np.linalg.solve(S, C)` gives $S^{-1} C$, but the covariance form has $S^{-1}$ on the right:
+# $K = B H^T S^{-1}$ with $S = H B H^T + R$. As $S$ and $B$ are symmetric, $K = (S^{-1} H B)^T$, which is
+# `np.linalg.solve(S, H @ B).T`. (`np.linalg.inv` costs no points if your numbers are right: the hidden tests
+# compare values.)
 
 # %% nbgrader={"grade": false, "grade_id": "gain_information_form", "locked": false, "schema_version": 3, "solution": true, "task": false}
 def gain_information_form(B, H, R):
@@ -664,11 +663,10 @@ train.print_model_comparison(data, {name: run_filter(data.gps, x0, B0, A, Q_mode
 # models generated the data? To find out, read the code of `train.forward`, the given function that simulates
 # the true train (the simulated hours and the shipped hour come from it): type `train.forward??` in a new cell
 # and run it. (It is in the file `train.py` of the `course` package.) Can one hour tell the two models apart?
-# Answer the last part from evidence, in one of two ways. Either judge from the numbers shown: compare the gap
-# between the two filters with how uncertain one hour's position estimate is (section 8 printed the filter's
-# standard deviations). Or run a small experiment in a new cell: `train.simulate(60, rng)`, with
-# `rng = np.random.default_rng(1)`, gives a fresh hour `hour` from the true train; run both filters on `hour.gps`,
-# compare their estimates with `hour.truth`, and count over a few dozen hours which filter wins.
+# Answer from evidence: either judge from the numbers shown (the gap between the filters against the position
+# standard deviation printed in section 8), or try a few dozen fresh hours in a new cell: with
+# `rng = np.random.default_rng(1)`, `hour = train.simulate(60, rng)` is one; run both filters on `hour.gps`,
+# compare with `hour.truth` and count which filter wins.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "noise_question", "locked": false, "points": 1, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -697,11 +695,9 @@ train.print_model_comparison(data, {name: run_filter(data.gps, x0, B0, A, Q_mode
 # the data always come from the true process, but the filter is told $Q$ (or $R$) multiplied by a
 # factor from 1/100 to 100. Each point is the mean RMSE over 20 simulated hours.
 #
-# Only $Q$ or $R$ is scaled: the filter's starting belief $B_0$ stays as in section 1 in every run. So a factor on
-# $R$ is not the mirror of a factor on $Q$. Multiplying $R$ by $c$ gives exactly the filter told $Q/c$ *and*
-# $B_0/c$: <!-- claim: train-kf/r-scaling-equivalence --> besides the balance between model and fixes, it also
-# changes how much the filter trusts its start. In a one-hour run that matters, because the filter remembers its
-# start for a large part of the hour <!-- claim: train-kf/vague-start --> (section 10 comes back to how long errors last).
+# The starting belief $B_0$ is not scaled. As $R \times c$ gives exactly the filter told $Q/c$ *and*
+# $B_0/c$, <!-- claim: train-kf/r-scaling-equivalence --> a factor on $R$ also changes how much the filter trusts
+# its start, and the filter remembers its start for much of the hour. <!-- claim: train-kf/vague-start -->
 
 # %% nbgrader={"grade": false, "grade_id": "covariance_scaling", "locked": true, "schema_version": 3, "solution": false, "task": false}
 require(process_noise, predict, kupdate, run_filter)
@@ -866,12 +862,10 @@ print(f"minutes whose mean NEES is inside the 95% band [{low:.2f}, {high:.2f}]: 
       f"{np.sum((mean_nees >= low) & (mean_nees <= high))} of {len(mean_nees)}")
 
 # %% [markdown]
-# **Before the question: errors that last.** A fraction over 60 minutes is a steady measure only if the 60
-# minutes are 60 nearly independent samples. An error the filter corrects slowly is still there minutes later:
-# the errors of nearby minutes are then *correlated in time*, and a long run of minutes outside the band (or
-# inside it) counts for little more than one sample. How fast an error is corrected depends on the gain: each fix
-# removes about the gain's share of the error it sees. Section 8 printed the gain for the position and for the
-# velocity.
+# **Before the question: errors that last.** One hour's fraction is a steady measure only if its 60 minutes are
+# nearly independent samples. An error that the filter corrects slowly lasts for many minutes: the errors of
+# nearby minutes are then *correlated in time*, and a long run of them counts for little more than one sample.
+# The gains printed in section 8 say how much of an error each fix removes.
 
 # %% [markdown]
 # **Question (2 points).** What do the two panels say: is the filter consistent? Why is the per-hour fraction so much more
