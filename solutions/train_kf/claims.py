@@ -107,8 +107,9 @@ def _steady() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return B_f, ref.gain_covariance_form(B_f, H, R), Bs[-1]
 
 
-def _expected_rmse(Q_f: np.ndarray, R_f: np.ndarray, B0_f: np.ndarray | None = None) -> np.ndarray:
-    """Exact root of the hour-mean expected squared error (2,) of a filter told Q_f, R_f, B0_f on the true process.
+def _expected_rmse(Q_f: np.ndarray, R_f: np.ndarray, B0_f: np.ndarray | None = None, n_minutes: int = 60) -> np.ndarray:
+    """Exact root of the run-mean (an hour unless n_minutes says) expected squared error (2,) of a filter told Q_f,
+    R_f, B0_f on the true process.
 
     No simulation: the truth starts from the true belief and moves with the true Q, the fixes have the true R,
     and the error covariance P of the filter's estimate follows the Joseph form with the filter's own gain.
@@ -116,13 +117,13 @@ def _expected_rmse(Q_f: np.ndarray, R_f: np.ndarray, B0_f: np.ndarray | None = N
     A, H, R, Q, _, B0 = _model()
     P, B = B0, B0 if B0_f is None else B0_f
     mse = np.zeros(2)
-    for _ in range(60):
+    for _ in range(n_minutes):
         P, B = A @ P @ A.T + Q, A @ B @ A.T + Q_f
         K = ref.gain_covariance_form(B, H, R_f)
         B = B - K @ H @ B
         I_KH = np.eye(2) - K @ H
         P = I_KH @ P @ I_KH.T + K @ R @ K.T
-        mse += np.diag(P) / 60.0
+        mse += np.diag(P) / n_minutes
     return np.sqrt(mse)
 
 
@@ -384,6 +385,21 @@ def _() -> None:
     _between(_expected_rmse(Q, R)[0], 1.15, 1.17, "the true filter's expected position error, mi")
 
 
+@claim("train-kf/r-scaling-long-run")
+def _() -> None:
+    """Expected position error (exact) over 600 minutes: R x 100 1.76 mi against Q/100 1.51; R/100 1.43 against
+    Q x 100 1.27. Each gap is less than a third of the same gap over 60 minutes (2.74 - 1.25, 2.32 - 1.16)."""
+    _, _, R, Q, _, _ = _model()
+    pairs = (((Q, 100.0 * R), 1.76, (Q / 100.0, R), 1.51, "R x 100 against Q/100"),
+             ((Q, R / 100.0), 1.43, (100.0 * Q, R), 1.27, "R/100 against Q x 100"))
+    for scaled_R, want_R, scaled_Q, want_Q, what in pairs:
+        long_R, long_Q = _expected_rmse(*scaled_R, n_minutes=600)[0], _expected_rmse(*scaled_Q, n_minutes=600)[0]
+        _between(long_R, want_R - 0.005, want_R + 0.005, f"{what}: the 600-minute expected position error with R scaled, mi")
+        _between(long_Q, want_Q - 0.005, want_Q + 0.005, f"{what}: the 600-minute expected position error with Q scaled, mi")
+        short_gap = _expected_rmse(*scaled_R)[0] - _expected_rmse(*scaled_Q)[0]
+        _between(long_R - long_Q, 0.0, short_gap / 3.0, f"{what}: the 600-minute gap, mi")
+
+
 @claim("train-kf/r-scaling-equivalence")
 def _() -> None:
     """The filter with R x c gives the same estimates as the filter with Q and B0 divided by c (for every factor of section 9)."""
@@ -393,6 +409,27 @@ def _() -> None:
         scaled_R = _filter(y, Q, c * R, B0)[0]
         scaled_QB = _filter(y, Q / c, R, B0 / c)[0]
         assert np.allclose(scaled_R, scaled_QB, rtol=1e-9, atol=1e-8), f"R x {c:g} and Q, B0 / {c:g} differ."
+
+
+# --- section 9: the pointer before the covariance question (Q has rank one)
+
+@claim("train-kf/q-rank-one")
+def _() -> None:
+    """Q has rank one along g = (h, 1); the forecast's x - h v has the last analysis's position variance at every factor of Q, and the true train keeps x_{t+1} - h v_{t+1} = x_t."""
+    A, _, _, Q, _, B0 = _model()
+    for sigma, dt_min in ((15.0, 1.0), (3.0, 2.5), (40.0, 0.5)):
+        Q_step, h = ref.process_noise(sigma, dt_min), dt_min / 60.0
+        assert np.linalg.matrix_rank(Q_step) == 1, f"Q for sigma {sigma}, dt_min {dt_min} does not have rank one"
+        assert np.allclose(Q_step, sigma**2 * np.outer([h, 1.0], [h, 1.0])), "Q is not sigma^2 g g^T with g = (h, 1)"
+    across = np.array([1.0, -1.0 / 60.0])
+    assert np.allclose(across @ A, [1.0, 0.0]), "x - h v after one step of A is not the previous position"
+    _, Bs = _true_filter()
+    for c in FACTORS:
+        for B_a in (B0, Bs[0], Bs[29], Bs[-1]):
+            _, B_f = ref.predict(np.zeros(2), B_a, A, c * Q)
+            assert np.isclose(across @ B_f @ across, B_a[0, 0]), f"x - h v gains uncertainty from Q x {c:g}"
+    truth = _pool()[1][:200]
+    assert np.allclose(truth[:, 1:, 0] - truth[:, 1:, 1] / 60.0, truth[:, :-1, 0]), "x_{t+1} - h v_{t+1} != x_t in the simulation"
 
 
 # --- section 10: consistency, 100 repetitions with 200 hours each
@@ -448,3 +485,4 @@ def _() -> None:
     per_set = nees.mean(axis=(1, 2))
     _between(abs(per_set.mean() - 2.0), 0.0, 0.03, "the distance from 2 of the mean NEES over all hours")
     _between(per_set.std(), 0.06, 0.11, "the standard deviation of the mean NEES of a set of 200 hours")
+
