@@ -752,7 +752,7 @@ plt.show()
 # to $Q \times 100$ the position RMSE changes by only a few percent (less than 5% in almost every run), and
 # at $Q/100$ it rises only a little. Its expected
 # value varies by less than 0.3% from $Q/10$ to $Q \times 100$, far less than the scatter of a mean over 20 hours,
-# so the figure cannot show where its minimum lies (at 1, in expectation). <!-- claim: train-kf/q-scaling-position-flat -->
+# so the figure cannot show where its minimum lies (for the expected squared error, at 1). <!-- claim: train-kf/q-scaling-position-flat -->
 # $Q = \sigma^2 \begin{bmatrix} h^2 & h \\ h & 1 \end{bmatrix}$ has
 # rank one (the note before the question): whatever the factor, it adds no uncertainty across $\vec{g} = (h, 1)$
 # and says that the position's noise is exactly $h$ times the velocity's, so the
@@ -763,7 +763,8 @@ plt.show()
 # trusts its initial belief against the fixes. <!-- claim: train-kf/r-scaling-equivalence -->
 # On the figure, the $R$ curve's position ends are about 2.4 mi at $R/100$ and 2.1 mi at $R \times 100$, against
 # 1.3 mi at 1. <!-- claim: train-kf/r-scaling-shipped-figure --> Which end is higher varies with the 20 hours: the
-# small-$R$ end is the higher in more than a third of sets of 20 hours, as here. <!-- claim: train-kf/r-scaling-end-order -->
+# small-$R$ end is the higher in 3 to 4 sets of 20 hours in 10, as here; averaged over many sets the three points are
+# about 2.2, 2.3 and 1.05 mi. <!-- claim: train-kf/r-scaling-end-order -->
 # Over many hours, the root of the expected squared position error (written "expected error" below) is 2.32 mi
 # with $R/100$ and 2.74 mi with $R \times 100$, against 1.16 mi with the true covariances. The small-$R$ end is
 # a filter that distrusts its good start: $B_0 \times 100$ alone gives the same 2.32 mi. The large-$R$ end comes
@@ -782,7 +783,7 @@ plt.show()
 # GPS everywhere, <!-- claim: train-kf/position-below-gps --> the $Q$ curve flat, <!-- claim: train-kf/q-scaling-position-flat -->
 # the $R$ curve lowest near 1 and rising at both ends. <!-- claim: train-kf/r-scaling-position-u -->
 # Either order of the $R$ curve's two ends is right when it is read correctly from the student's figure: over many
-# sets of 20 hours the small-$R$ end is the higher in more than a third. <!-- claim: train-kf/r-scaling-end-order -->
+# sets of 20 hours the small-$R$ end is the higher in 3 to 4 sets in 10. <!-- claim: train-kf/r-scaling-end-order -->
 # A correct description
 # of each panel earns both points without the explanations. For the position curve for $Q$, "flat" and "lowest
 # expected squared error at 1, since the true covariances give the optimal filter" are both correct readings. <!-- claim: train-kf/optimal-at-1 -->
