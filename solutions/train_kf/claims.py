@@ -107,14 +107,16 @@ def _steady() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     return B_f, ref.gain_covariance_form(B_f, H, R), Bs[-1]
 
 
-def _expected_rmse(Q_f: np.ndarray, R_f: np.ndarray, B0_f: np.ndarray | None = None, n_minutes: int = 60) -> np.ndarray:
+def _expected_rmse(Q_f: np.ndarray, R_f: np.ndarray, B0_f: np.ndarray | None = None, n_minutes: int = 60,
+                   Q_true: np.ndarray | None = None) -> np.ndarray:
     """Exact root of the run-mean (an hour unless n_minutes says) expected squared error (2,) of a filter told Q_f,
-    R_f, B0_f on the true process.
+    R_f, B0_f on the true process (whose process noise is Q_true if given).
 
     No simulation: the truth starts from the true belief and moves with the true Q, the fixes have the true R,
     and the error covariance P of the filter's estimate follows the Joseph form with the filter's own gain.
     """
     A, H, R, Q, _, B0 = _model()
+    Q = Q if Q_true is None else Q_true
     P, B = B0, B0 if B0_f is None else B0_f
     mse = np.zeros(2)
     for _ in range(n_minutes):
@@ -599,3 +601,15 @@ def _() -> None:
         g = np.array([h**2 / 2.0, h])
         dwna = 4.0 * np.array([[h**4 / 4.0, h**3 / 2.0], [h**3 / 2.0, h**2]])
         assert np.allclose(dwna, 4.0 * np.outer(g, g)) and np.linalg.matrix_rank(dwna) == 1, "the discrete WNA Q"
+
+
+@claim("train-kf/q-rank-matters")
+def _() -> None:
+    """Truth and filter with the full-rank CWNA Q (q = 225 x 60): the expected position error at Q x 100 is about 47%
+    above the one at 1 ([1.4, 1.55] times); with the rank-one random walk it changes by less than 0.3% from Q/10 to Q x 100 (exact)."""
+    _, _, R, Q, _, _ = _model()
+    cwna = train.white_noise_acceleration(15.0**2 * 60.0)
+    rise = _expected_rmse(100.0 * cwna, R, Q_true=cwna)[0] / _expected_rmse(cwna, R, Q_true=cwna)[0]
+    _between(rise, 1.4, 1.55, "CWNA: the expected position error at Q x 100 over the one at 1")
+    walk = np.array([_expected_rmse(c * Q, R)[0] for c in FACTORS[2:]])
+    _between(walk.max() / walk.min(), 1.0, 1.003, "random walk: the spread of the expected position error from Q/10 to Q x 100")

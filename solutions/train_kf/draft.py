@@ -714,8 +714,8 @@ plt.show()
 
 
 # %% [markdown]
-# **Before the question: $Q$ has rank one.** Section 4 found $Q = \sigma^2 \vec{g}\,\vec{g}^T$ with $\vec{g} = (h, 1)$:
-# one noise input $z$ drives both states. Think of the state as a point in the (position, velocity) plane.
+# **Before the question: $Q$ has rank one.** Section 4 found $Q = \sigma^2 \vec{g}\,\vec{g}^T$ with $\vec{g} = (h, 1)$.
+# Think of the state as a point in the (position, velocity) plane.
 #
 # * Each minute the noise moves the train only along $\vec{g}$: a speed change $z$ always comes with the
 #   position change $h z$. So the band that $Q$ adds to the forecast is a thin one along $\vec{g}$. A factor on $Q$
@@ -982,6 +982,14 @@ print(f"minutes whose mean NEES is inside the 95% band [{low:.2f}, {high:.2f}]: 
 # Do not confuse it with the *discrete* white-noise acceleration model of the same textbook, in which the
 # acceleration $a$ is constant during each step, with variance $\sigma_a^2$. There the position gains $h^2 a/2$ and the velocity $h a$, so
 # $Q = \sigma_a^2 \begin{bmatrix} h^4/4 & h^3/2 \\ h^3/2 & h^2 \end{bmatrix}$: one noise input again, and rank one. <!-- claim: train-kf/cwna-correlation -->
+
+# %% [markdown]
+# ### Why the rank of $Q$ matters in section 9
+#
+# The flat position curve for $Q$ in section 9 comes from $Q$'s rank one. If the true train and the filter both used
+# the full-rank CWNA $Q$ above, the curve would not be flat: the expected position error at $Q \times 100$ is about
+# 47% above the one at 1, against less than 0.3% for the random walk. <!-- claim: train-kf/q-rank-matters --> A full-rank
+# $Q$ adds uncertainty across $\vec{g}$, so a large factor makes the filter lean on the noisy position fixes.
 
 # %% [markdown]
 # ### Where this lab differs from the handout
