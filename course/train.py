@@ -298,7 +298,9 @@ def plot_consistency(result: ConsistencyResult) -> Figure:
     """Left: how often the truth is inside the +-2 sigma band, per hour. Right: NEES against time."""
     fig, axes = plt.subplots(1, 2, figsize=(12, 4.5), layout="constrained")
     ax = axes[0]
-    bins = np.linspace(0.0, 1.0, 21)
+    # each fraction is a whole number of minutes over the hour: put the bin edges half-way between two counts
+    n_minutes = result.nees.shape[1]
+    bins = np.concatenate([[-0.5], np.arange(0.5, n_minutes + 1.0, n_minutes / 20.0)]) / n_minutes
     ax.hist([result.inside[:, 0], result.inside[:, 1]], bins=bins, color=["tab:blue", "tab:red"],
             label=[f"{name}: {result.inside[:, k].mean():.1%} over all hours"
                    for k, name in enumerate(("position", "velocity"))])
