@@ -48,7 +48,7 @@ error reaches it. The radar can keep a diverged run's position pinned while its 
 SPEED = 120.0
 """The aircraft's speed, m/s (constant: the coordinated-turn model keeps it)."""
 FILTERS = ("pf", "ekf", "ckf", "ukf", "cut4", "cut6", "cut8")
-LABELS = {"pf": "PF (mean)", "ekf": "EKF", "ckf": "CKF", "ukf": "UKF", "cut4": "CUT4", "cut6": "CUT6", "cut8": "CUT8"}
+LABELS = {"pf": "PF", "ekf": "EKF", "ckf": "CKF", "ukf": "UKF", "cut4": "CUT4", "cut6": "CUT6", "cut8": "CUT8"}
 COLOURS = {"pf": "black", "ekf": "tab:brown", "ckf": "tab:red", "ukf": "tab:orange", "cut4": "tab:purple",
            "cut6": "tab:blue", "cut8": "tab:green"}
 LECTURE_TABLE = {
@@ -366,7 +366,9 @@ def summarise(err: np.ndarray) -> dict:
 @dataclass(frozen=True)
 class ShippedResults:
     """The reference's Monte Carlo results: the T = 5 s table, RMSE_k curves (and the CKF's and UKF's position
-    RMSE_k (K,) on the flight without turns), and the sweep over T with its lost and diverged fractions."""
+    RMSE_k (K,) on the flight without turns), and the sweep over T: the lecture's metric (``sweep``), the median
+    over runs of each run's metric (``sweep_median``), both (len(T), 3) per filter, and the lost and diverged
+    fractions."""
 
     runs: int
     seed: int
@@ -380,6 +382,7 @@ class ShippedResults:
     sweep: dict
     sweep_lost: dict
     sweep_diverged: dict
+    sweep_median: dict
 
 
 def load(path: Path = DATA_FILE) -> ShippedResults:
@@ -393,23 +396,41 @@ def load(path: Path = DATA_FILE) -> ShippedResults:
         sweep={k: np.array(v) for k, v in raw["sweep"]["filters"].items()},
         sweep_lost={k: np.array(v) for k, v in raw["sweep"]["lost_fraction"].items()},
         sweep_diverged={k: np.array(v) for k, v in raw["sweep"]["diverged_fraction"].items()},
+        sweep_median={k: np.array(v) for k, v in raw["sweep"]["median"].items()},
     )
 
 
 def print_table(table: dict, runs: int) -> None:
-    """Print the lecture's metric for every filter beside the lecture's, with factors relative to the PF."""
-    print(f"The lecture's metric, sqrt(mean_k RMSE_k^2 / 5), over {runs} runs (lecture's value in brackets)")
-    print(f"{'filter':<10}{'position [m]':>24}{'velocity [m/s]':>26}{'turn rate [rad/s]':>24}{'x PF (pos)':>12}{'lost':>6}"
-          f"{'diverged':>10}")
+    """Print the lecture's metric (a mean over the runs) for every filter beside the lecture's, with the position
+    metric without the lost runs and the counts of lost and diverged runs. The filters are ranked by
+    print_median_table, not here."""
+    print(f"The lecture's metric, sqrt(mean_k RMSE_k^2 / 5), a mean over {runs} runs (lecture's value in brackets)")
+    print(f"{'filter':<10}{'position [m]':>24}{'velocity [m/s]':>26}{'turn rate [rad/s]':>24}{'pos w/o lost':>14}"
+          f"{'lost':>6}{'diverged':>10}")
     for name in FILTERS:
         row = table[name]
         cells = []
         for q in QUANTITIES:
             lecture = LECTURE_TABLE[q].get(name)
             cells.append(f"{row[q]:.4g}" + (f" ({lecture:.4g})" if lecture is not None else " (-)"))
-        factor = row["position"] / table["pf"]["position"]
-        print(f"{LABELS[name]:<10}{cells[0]:>24}{cells[1]:>26}{cells[2]:>24}{cell(factor, 12)}{row['lost_runs']:>6}"
-              f"{row['diverged_runs']:>10}")
+        print(f"{LABELS[name]:<10}{cells[0]:>24}{cells[1]:>26}{cells[2]:>24}"
+              f"{cell(row['excluding_lost']['position'], 14, '.4g')}{row['lost_runs']:>6}{row['diverged_runs']:>10}")
+    print(f"lost: position error above {LOST_KM:g} km at the last return; diverged: velocity error above "
+          f"{DIVERGED_KMS:g} km/s at some return")
+
+
+def print_median_table(table: dict, runs: int) -> None:
+    """Print the ranking table: each filter's median over the runs of its runs' own metric (position, velocity,
+    turn rate), the PF's median position as the unit, and the counts of lost and diverged runs."""
+    print(f"Median over {runs} runs of each run's own metric, sqrt(mean_k e_k^2 / 5): the typical run")
+    print(f"{'filter':<10}{'position [m]':>14}{'velocity [m/s]':>16}{'turn rate [rad/s]':>19}{'x PF (pos)':>12}"
+          f"{'lost':>6}{'diverged':>10}")
+    for name in FILTERS:
+        row = table[name]["median"]
+        factor = row["position"] / table["pf"]["median"]["position"]
+        print(f"{LABELS[name]:<10}{cell(row['position'], 14, '.4g')}{cell(row['velocity'], 16, '.4g')}"
+              f"{cell(row['turn_rate'], 19, '.4g')}{cell(factor, 12)}{table[name]['lost_runs']:>6}"
+              f"{table[name]['diverged_runs']:>10}")
     print(f"lost: position error above {LOST_KM:g} km at the last return; diverged: velocity error above "
           f"{DIVERGED_KMS:g} km/s at some return")
 
@@ -490,8 +511,12 @@ ZERO_VELOCITY_METRIC = SPEED / np.sqrt(5.0)
 """The lecture's velocity metric of the estimate 'zero velocity' (error = the speed at every return), m/s."""
 
 
-def plot_rmse_against_interval(T: np.ndarray, sweep: dict, lost: dict, diverged: dict, runs: int) -> Figure:
-    """The lecture's metric for the position and the velocity, and the fractions of lost and diverged runs, against T.
+def plot_rmse_against_interval(T: np.ndarray, sweep: dict, lost: dict, diverged: dict, runs: int,
+                               statistic: str = "sqrt(mean_k RMSE_k^2 / 5)") -> Figure:
+    """A metric for the position and the velocity, and the fractions of lost and diverged runs, against T.
+
+    ``statistic`` names the metric on the axes: the lecture's by default; pass the sweep's medians and
+    "median of each run's metric" to plot the typical run.
 
     ``sweep[name]`` is (len(T), 3), the metric per interval; ``lost[name]`` and ``diverged[name]`` (len(T),) the
     fractions of lost and of diverged runs.
@@ -506,7 +531,7 @@ def plot_rmse_against_interval(T: np.ndarray, sweep: dict, lost: dict, diverged:
             ax.plot(T[off], np.full(off.sum(), top), "^", color=COLOURS[name], ms=10)
         ax.set_ylim(top=top * 1.6)
         ax.set_xlabel("measurement interval T [s]")
-        ax.set_ylabel(f"{quantity}: sqrt(mean_k RMSE_k^2 / 5) [{unit}]")
+        ax.set_ylabel(f"{quantity}: {statistic} [{unit}]")
         ax.set_title(f"{quantity} (triangle: off the scale, above $10^{{{np.log10(top):.0f}}}$ {unit})", fontsize="medium")
         ax.set_xticks(T)
     axes[1].axhline(ZERO_VELOCITY_METRIC, color="grey", ls="--", lw=1.2)

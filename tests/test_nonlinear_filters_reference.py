@@ -418,3 +418,37 @@ def test_shipped_particle_filter_errors_are_rebuilt_in_part():
         rebuilt = batch.errors(filters=("pf",), steps=None if whole else PF_STEPS_REBUILT)["pf"]
         expected = shipped[batch.name] if whole else shipped[batch.name][:, :PF_STEPS_REBUILT]
         assert same_bits(rebuilt, np.ascontiguousarray(expected)), f"the PF errors of batch {batch.name} differ from a rebuild"
+
+
+LOST_STUDY = data.RECORDS_DIR / ref.LOST_STUDY_FILE
+
+
+@random_draws(false_fail=0.0, fixed_seed=True,
+              why="a rebuild of the lost-run study's first batch from its seed, compared bit for bit with the shipped record")
+def test_the_lost_run_study_is_rebuilt_in_part(tmp_path):
+    """The lost-run study (solutions/records/nonlinear_filters_lost_runs.records.npz: 40 batches of 100 runs of
+    every filter at T = 5 s) is rerun for its first batch (seed LOST_STUDY_SEED), whose per-run summaries must
+    equal the record's first 100 rows bit for bit; the record must hold one row per run with the seed of its
+    batch, and be exactly what lost_study_records writes from its batches.
+
+    Covers the study's seeds, the scenario and radar data of each run, every filter (the PF's particle stream
+    included) and the per-run summary (metric, time-RMS and final position error, peak velocity error) in the
+    installed NumPy and SciPy, and the record's layout and bytes: a change in any of them fails here (about a
+    minute instead of the study's 15 of CPU). What only the whole study adds (`python -m
+    solutions.nonlinear_filters.reference lost-study`, about 15 min): the runs of batches 1 to 39, i.e. a hand edit
+    of those rows or a change that acts only on other seeds.
+    """
+    with np.load(LOST_STUDY) as archive:
+        shipped = {name: archive[name] for name in archive.files}
+    runs, batches = ref.LOST_STUDY_RUNS, ref.LOST_STUDY_BATCHES
+    first = ref.lost_study_batch(0)
+    assert set(shipped) == set(first), "the record holds other arrays than a batch of the study"
+    assert all(len(value) == runs * batches for value in shipped.values()), "the record does not hold 4000 runs"
+    seeds = ref.LOST_STUDY_SEED + np.repeat(np.arange(batches, dtype=np.int64), runs)
+    assert same_bits(shipped["seed"], seeds), "the record's seeds are not the study's"
+    assert not {b.seed for b in ref.batches()} & set(seeds.tolist()), "the study shares a seed with the shipped results"
+    for key, value in first.items():
+        assert same_bits(value, np.ascontiguousarray(shipped[key][:runs])), f"{key} of the first batch differs from a rebuild"
+    split = [{key: value[b * runs:(b + 1) * runs] for key, value in shipped.items()} for b in range(batches)]
+    ref.write_npz(tmp_path / "study.npz", ref.lost_study_records(split))
+    assert (tmp_path / "study.npz").read_bytes() == LOST_STUDY.read_bytes(), "the record is not what the study writes"

@@ -1,5 +1,14 @@
 """Checks of the results the nonlinear-filters notebook states.
 
+Filters are ranked by the median over runs of each run's own metric (the lecture's metric of one run), the
+same statistic for every filter, in the text, the tables and here. Every ranking claim that involves the
+particle filter is checked twice: on the runs as they are, and with one lost run added to the particle
+filter's runs (LOST_RUN: an 11 km time-RMS position error, as an independent review's PF lost about one run
+in 400), so that it holds whichever way such a run falls. The lost-run study (4000 runs of every filter at
+T = 5 s in 40 batches of 100, seeds LOST_STUDY_SEED + b, shipped as a record: solutions/records/
+nonlinear_filters_lost_runs.records.npz, rebuilt in part by tests/test_nonlinear_filters_reference.py) gives
+the particle filter's lost-run rate and the independent batches of the ranking claims.
+
 Every claim about the Monte Carlo comparison is checked on the shipped 400-run table (which
 ``python -m autograder data --check`` rebuilds bit for bit from the reference) AND on independent
 batches: six batches of 50 runs of the Gaussian filters (seeds 1-6), three batches of 30 runs of all
@@ -16,9 +25,11 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+import scipy.stats
 
 import solutions.nonlinear_filters.reference as ref
 from autograder.authoring.claims import claim, rate_at_least
+from autograder.release import data
 from course import air_traffic, cut
 
 GAUSSIAN = ("ekf", "ckf", "ukf", "cut4", "cut6", "cut8")
@@ -32,6 +43,104 @@ MANY_PARTICLE_SEEDS = (303, 306)
 @functools.cache
 def _shipped() -> air_traffic.ShippedResults:
     return air_traffic.load()
+
+
+LOST_RUN_KM = 11.0
+"""The injected lost run: a time-RMS position error of 11 km (and 11 km at the last return), a time-RMS velocity
+error of 1 km/s and a turn-rate error of 1 rad/s: the size of the lost run an independent PF showed."""
+STUDY_BATCHES = ref.LOST_STUDY_BATCHES
+
+
+def _lost_run() -> dict[str, np.ndarray]:
+    """The per-run summary (reference.per_run_summary's keys) of LOST_RUN_KM's run, for one run."""
+    rms = np.array([1000.0 * LOST_RUN_KM, 1000.0, 1.0])
+    return {"metric": rms[None, :] / np.sqrt(5.0), "time_rms_position": rms[:1], "final_position": rms[:1],
+            "peak_velocity": np.array([1000.0])}
+
+
+def _summary(runs: dict[str, np.ndarray]) -> dict:
+    """What the claims read of a filter, from its per-run summary: the lecture's metric (a mean), the median,
+    the metric without the lost runs, and the counts of lost and diverged runs."""
+    metric = runs["metric"]
+    lost = runs["final_position"] > 1000.0 * air_traffic.LOST_KM
+    diverged = runs["peak_velocity"] > 1000.0 * air_traffic.DIVERGED_KMS
+
+    def named(values):
+        return {q: float(v) for q, v in zip(air_traffic.QUANTITIES, values)}
+
+    return {**named(np.sqrt(np.mean(metric**2, axis=0))), "median": named(np.median(metric, axis=0)),
+            "excluding_lost": named(np.sqrt(np.mean(metric[~lost] ** 2, axis=0)) if np.any(~lost) else np.full(3, np.nan)),
+            "lost_runs": int(lost.sum()), "diverged_runs": int(diverged.sum()), "runs": len(metric)}
+
+
+def _with_lost_run(runs: dict[str, np.ndarray]) -> dict[str, np.ndarray]:
+    """A filter's per-run summary with the lost run added."""
+    return {key: np.concatenate([value, _lost_run()[key]]) for key, value in runs.items()}
+
+
+@functools.cache
+def _study() -> dict[str, np.ndarray]:
+    """The lost-run study's record: per-run summaries of every filter (``<filter>/<quantity>``) and seeds."""
+    with np.load(data.RECORDS_DIR / ref.LOST_STUDY_FILE) as archive:
+        return {name: archive[name] for name in archive.files}
+
+
+def _study_runs(name: str, rows: slice = slice(None)) -> dict[str, np.ndarray]:
+    """One filter's per-run summary in the study (the rows given: all 4000 by default)."""
+    return {key: _study()[f"{name}/{key}"][rows] for key in ("metric", "time_rms_position", "final_position",
+                                                             "peak_velocity")}
+
+
+def _tables(inject: bool) -> list[dict]:
+    """Summaries of every filter: the shipped 400-run table (the PF from its shipped per-run errors), then the
+    study's 40 batches of 100 runs; with ``inject``, the PF has the lost run added in each."""
+    def pf(runs):
+        return _summary(_with_lost_run(runs) if inject else runs)
+
+    table_runs = ref.per_run_summary(_pf_errors()["table"])
+    shipped = {**{name: {**row, "runs": _shipped().runs} for name, row in _shipped().table.items()},
+               "pf": pf(table_runs)}
+    batches = []
+    for b in range(STUDY_BATCHES):
+        rows = slice(b * ref.LOST_STUDY_RUNS, (b + 1) * ref.LOST_STUDY_RUNS)
+        batches.append({name: pf(_study_runs(name, rows)) if name == "pf" else _summary(_study_runs(name, rows))
+                        for name in air_traffic.FILTERS})
+    return [shipped] + batches
+
+
+@functools.cache
+def _pooled(inject: bool) -> dict:
+    """Summaries of every filter over the study's 4000 runs (the PF with the lost run added if ``inject``)."""
+    return {name: _summary(_with_lost_run(_study_runs(name)) if inject and name == "pf" else _study_runs(name))
+            for name in air_traffic.FILTERS}
+
+
+@functools.cache
+def _pf_errors() -> dict[str, np.ndarray]:
+    """The PF's shipped errors (runs, K, 3) of each batch of the shipped results."""
+    with np.load(data.RECORDS_DIR / ref.PF_ERRORS_FILE) as archive:
+        return {name: archive[name] for name in archive.files}
+
+
+def _ranking_holds(check, minimum: float = 1.0) -> None:
+    """Run ``check(table) -> str | None`` (None: the ranking holds, else why not) on the shipped table and the
+    pooled study (both must hold), and on the study's batches (at least ``minimum`` of them), each without and
+    with the lost run added to the PF's runs."""
+    for inject in (False, True):
+        tables = _tables(inject)
+        what = "with one lost PF run added" if inject else "as run"
+        for label, t in (("shipped table", tables[0]), ("4000 study runs", _pooled(inject))):
+            problem = check(t)
+            assert problem is None, f"{label}, {what}: {problem}"
+        rate_at_least([check(t) is None for t in tables[1:]], minimum, f"the ranking in a study batch, {what}")
+
+
+def _clopper_pearson(k: int, n: int, level: float = 0.95) -> tuple[float, float]:
+    """The exact (Clopper-Pearson) interval of a binomial rate, k of n."""
+    a = (1 - level) / 2
+    low = scipy.stats.beta.ppf(a, k, n - k + 1) if k > 0 else 0.0
+    high = scipy.stats.beta.ppf(1 - a, k + 1, n - k) if k < n else 1.0
+    return float(low), float(high)
 
 
 def _summaries(err: dict) -> dict:
@@ -58,26 +167,39 @@ def _pf_batches() -> list[tuple[dict, dict]]:
 
 
 @functools.cache
-def _independent_sweep() -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict[str, np.ndarray]]:
-    """The lecture metric (len(SWEEP_T), 3) and the lost and diverged fractions (len(SWEEP_T),) of each filter over
-    SWEEP_RUNS fresh runs per interval."""
-    sweep, lost, diverged = ({name: [] for name in air_traffic.FILTERS} for _ in range(3))
+def _independent_sweep() -> tuple[dict[str, np.ndarray], dict[str, np.ndarray], dict[str, np.ndarray], dict[str, np.ndarray],
+                                  list[dict[str, np.ndarray]]]:
+    """The lecture metric and the median of each run's metric (len(SWEEP_T), 3), the lost and diverged fractions
+    (len(SWEEP_T),) of each filter over SWEEP_RUNS fresh runs per interval, and the PF's per-run summary at each T."""
+    sweep, median, lost, diverged = ({name: [] for name in air_traffic.FILTERS} for _ in range(4))
+    pf_runs = []
     for i, T in enumerate(ref.SWEEP_T):
         for name, e in ref.monte_carlo(SWEEP_RUNS, SWEEP_SEED + i, T=T).items():
             sweep[name].append(air_traffic.lecture_metric(e))
+            median[name].append(np.median(air_traffic.lecture_metric(e, axis=1), axis=0))
             lost[name].append(np.mean(air_traffic.lost_runs(e)))
             diverged[name].append(np.mean(air_traffic.diverged_runs(e)))
-    return tuple({name: np.array(v) for name, v in d.items()} for d in (sweep, lost, diverged))
+            if name == "pf":
+                pf_runs.append(ref.per_run_summary(e))
+    return (*({name: np.array(v) for name, v in d.items()} for d in (sweep, median, lost, diverged)), pf_runs)
+
+
+def _median_sweeps(inject: bool) -> list[tuple[str, np.ndarray, dict]]:
+    """(name, T, median (len(T), 3) per filter) of the shipped sweep (the PF's from its shipped errors) and of the
+    independent one; with ``inject``, one lost run added to the PF's runs at every T."""
+    def pf_medians(per_T: list[dict[str, np.ndarray]]) -> np.ndarray:
+        return np.array([np.median((_with_lost_run(r) if inject else r)["metric"], axis=0) for r in per_T])
+
+    shipped = _shipped()
+    shipped_pf = [ref.per_run_summary(_pf_errors()[f"sweep_T{T:g}"]) for T in shipped.sweep_T]
+    independent = _independent_sweep()
+    return [("shipped sweep", shipped.sweep_T, {**shipped.sweep_median, "pf": pf_medians(shipped_pf)}),
+            ("independent sweep", np.array(ref.SWEEP_T), {**independent[1], "pf": pf_medians(independent[4])})]
 
 
 def _all_tables() -> list[dict]:
     """The shipped table, then the six Gaussian batches, then the three batches with the PF."""
     return [_shipped().table] + _batches() + [s for s, _ in _pf_batches()]
-
-
-def _pf_tables() -> list[dict]:
-    """The shipped table, then the three batches with the PF."""
-    return [_shipped().table] + [s for s, _ in _pf_batches()]
 
 
 def _curves() -> list[dict]:
@@ -102,12 +224,6 @@ def _lost_fraction(name: str) -> tuple[float, float]:
     return _fraction(name, "lost_runs")
 
 
-def _sweeps() -> list[tuple[str, np.ndarray, dict]]:
-    shipped = _shipped()
-    return [("shipped sweep", shipped.sweep_T, shipped.sweep), ("independent sweep", np.array(ref.SWEEP_T),
-                                                                 _independent_sweep()[0])]
-
-
 @claim("nonlinear-filters/exactness-degrees")
 def _() -> None:
     """CKF and UKF are exact to degree 3, CUT4 to 5, CUT6 to 7, CUT8 to 9 (moment errors < 1e-9, then > 1)."""
@@ -128,65 +244,118 @@ def _() -> None:
 
 @claim("nonlinear-filters/pf-best-all")
 def _() -> None:
-    """The PF has the smallest position, velocity and turn-rate metric of the seven filters: in the 400-run table and in each of the 3 batches of 30 runs."""
-    for i, t in enumerate(_pf_tables()):
+    """By the median, the PF has the smallest position, velocity and turn-rate error of the seven filters: in the shipped table, the 4000 study runs and every study batch, with and without one lost PF run added."""
+    def check(t: dict) -> str | None:
         for quantity in air_traffic.QUANTITIES:
-            best = min(air_traffic.FILTERS, key=lambda name: t[name][quantity])
-            assert best == "pf", f"table {i} (0 = shipped): the smallest {quantity} metric is {best}'s"
+            best = min(air_traffic.FILTERS, key=lambda name: t[name]["median"][quantity])
+            if best != "pf":
+                return f"the smallest median {quantity} is {best}'s"
+        return None
+
+    _ranking_holds(check)
 
 
 @claim("nonlinear-filters/position-ordering")
 def _() -> None:
-    """Position metric CUT8 < CUT6 < CUT4 < min(UKF, CKF): in the 400-run table and in at least 7 of the 9 independent batches (8 of 9 seen)."""
-    def ordered(t: dict) -> bool:
-        p = {name: t[name]["position"] for name in GAUSSIAN}
-        return p["cut8"] < p["cut6"] < p["cut4"] < min(p["ukf"], p["ckf"])
+    """By the median position error, CUT6 and CUT8 (within 3% of each other in the table and the 4000 study runs) come before CUT4, then the UKF, the CKF and the EKF: in the table, the study and at least 95% of its batches."""
+    def check(t: dict) -> str | None:
+        p = {name: t[name]["median"]["position"] for name in GAUSSIAN}
+        if not max(p["cut6"], p["cut8"]) < p["cut4"] < p["ukf"] < p["ckf"] < p["ekf"]:
+            return f"median positions {p}"
+        return None
 
-    tables = _all_tables()
-    assert ordered(tables[0]), "shipped table: the position ordering does not hold"
-    rate_at_least([ordered(t) for t in tables[1:]], 7 / 9, "CUT8 < CUT6 < CUT4 < UKF, CKF in a batch")
+    _ranking_holds(check, 0.95)
+    for label, t in (("shipped table", _tables(False)[0]), ("4000 study runs", _pooled(False))):
+        ratio = t["cut6"]["median"]["position"] / t["cut8"]["median"]["position"]
+        assert abs(ratio - 1) < 0.03, f"{label}: CUT6/CUT8 median position {ratio:.3f}"
 
 
 @claim("nonlinear-filters/cut8-best-gaussian")
 def _() -> None:
-    """Of the six Gaussian filters, CUT8 has the smallest velocity metric in the table and every batch, and the smallest position metric in the table and in at least 7 of 9 batches."""
-    tables = _all_tables()
-    for quantity, minimum in (("velocity", 1.0), ("position", 7 / 9)):
-        outcomes = [min(GAUSSIAN, key=lambda name: t[name][quantity]) == "cut8" for t in tables]
-        assert outcomes[0], f"shipped table: the best Gaussian {quantity} is not CUT8's"
-        rate_at_least(outcomes[1:], minimum, f"CUT8 best Gaussian filter in {quantity} in a batch")
+    """Of the six Gaussian filters, CUT8 has the smallest median velocity and turn-rate errors: in the table, the 4000 study runs and every study batch."""
+    def check(t: dict) -> str | None:
+        for quantity in ("velocity", "turn_rate"):
+            best = min(GAUSSIAN, key=lambda name: t[name]["median"][quantity])
+            if best != "cut8":
+                return f"the best Gaussian median {quantity} is {best}'s"
+        return None
+
+    _ranking_holds(check)
 
 
 @claim("nonlinear-filters/pf-ahead-of-cut8")
 def _() -> None:
-    """The PF's position metric is 5-25% below CUT8's, its velocity metric below CUT8's and its turn-rate metric under half of CUT8's: in the table and each PF batch."""
-    for i, t in enumerate(_pf_tables()):
-        pf, c8 = t["pf"], t["cut8"]
-        ratio = pf["position"] / c8["position"]
-        assert 0.75 < ratio < 0.95, f"table {i}: PF/CUT8 position ratio {ratio:.3f}"
-        assert pf["velocity"] < c8["velocity"] and pf["turn_rate"] < 0.5 * c8["turn_rate"], f"table {i}: {pf}, {c8}"
+    """By the median, the PF's position error is 10-25% below CUT8's, its velocity error below CUT8's and its turn-rate error about half of CUT8's (0.35-0.6 times): in the table, the study and every study batch, with and without one lost PF run added."""
+    def check(t: dict) -> str | None:
+        pf, c8 = t["pf"]["median"], t["cut8"]["median"]
+        position, turn = pf["position"] / c8["position"], pf["turn_rate"] / c8["turn_rate"]
+        if not (0.75 < position < 0.9 and pf["velocity"] < c8["velocity"] and 0.35 < turn < 0.6):
+            return f"PF/CUT8 median position {position:.3f}, turn rate {turn:.3f}, velocity {pf['velocity']:.1f} vs {c8['velocity']:.1f}"
+        return None
+
+    _ranking_holds(check)
 
 
 @claim("nonlinear-filters/pf-near-lecture")
 def _() -> None:
-    """The PF's position, velocity and turn-rate metrics are within 15% of the lecture's PF row (115.47 m, 24.16 m/s, 0.0393 rad/s): in the table and each PF batch."""
-    for i, t in enumerate(_pf_tables()):
+    """Without its lost runs, the PF's lecture metric (position, velocity, turn rate) is within 15% of the lecture's PF row (115.47 m, 24.16 m/s, 0.0393 rad/s): in the table, the 4000 study runs and at least 90% of the study batches, with and without one lost PF run added."""
+    def check(t: dict) -> str | None:
         for quantity in air_traffic.QUANTITIES:
-            ratio = t["pf"][quantity] / air_traffic.LECTURE_TABLE[quantity]["pf"]
-            assert abs(ratio - 1) < 0.15, f"table {i}: PF {quantity} {t['pf'][quantity]}, ratio {ratio:.3f}"
+            ratio = t["pf"]["excluding_lost"][quantity] / air_traffic.LECTURE_TABLE[quantity]["pf"]
+            if abs(ratio - 1) >= 0.15:
+                return f"PF {quantity} without lost runs, {ratio:.3f} times the lecture's"
+        return None
+
+    _ranking_holds(check, 0.9)
 
 
-@claim("nonlinear-filters/pf-rarely-lost")
+CATASTROPHE_KM = 5.0
+"""A catastrophe: a run whose time-RMS position error is above 5 km (the particles lost the aircraft for good)."""
+PF_LOST, PF_LOST_INTERVAL = 7, (0.07, 0.36)
+"""The PF's lost runs of the study (final position error above 1 km) and their exact 95% interval, in % to 2 decimals."""
+PF_CATASTROPHES, PF_CATASTROPHE_INTERVAL, PF_WORST_KM, PF_OTHERS_BELOW_KM = 1, (0.0, 0.14), 16.8, 1.5
+NEAR_MISS_BELOW_KM = 1.1
+"""A bound (km) on the time-RMS position error of the PF's lost runs that are not catastrophes."""
+"""The PF's catastrophes in the study, their exact 95% interval (%), the largest time-RMS position error (km, to 0.1),
+and a bound (km) on the time-RMS position error of every other run."""
+
+
+@claim("nonlinear-filters/pf-lost-rate")
 def _() -> None:
-    """The PF loses under 2% of the runs at T = 5 s (about 1 in 200): in the 400-run table, and pooled over the 290
-    independent runs at T = 5 s (the shipped sweep's 200 and the three batches' 90). With a true rate of 0.5%, 290
-    runs show 6 or more lost (2%) with probability about 0.5%."""
-    shipped = _shipped()
-    i = list(shipped.sweep_T).index(5.0)
-    lost = shipped.sweep_lost["pf"][i] * shipped.sweep_runs + sum(t["pf"]["lost_runs"] for t, _ in _pf_batches())
-    runs = shipped.sweep_runs + PF_RUNS * len(PF_SEEDS)
-    fractions = (shipped.table["pf"]["lost_runs"] / shipped.runs, lost / runs)
-    assert runs >= 290 and max(fractions) < 0.02, f"PF lost fractions (shipped, pooled over {runs}) {fractions}"
+    """Over the study's 4000 runs the PF lost 7 (0.07-0.36%, exact 95% interval), 6 of them near misses (time-RMS position error under 1.1 km) and 1 a catastrophe (16.8 km; 95% interval up to 0.14%), with every other run below 1.5 km."""
+    runs = _study_runs("pf")
+    lost = runs["final_position"] > 1000.0 * air_traffic.LOST_KM
+    catastrophe = runs["time_rms_position"] > 1000.0 * CATASTROPHE_KM
+    n = len(lost)
+    assert n == ref.LOST_STUDY_BATCHES * ref.LOST_STUDY_RUNS == 4000, f"{n} study runs"
+    for what, flags, count, interval in (("lost", lost, PF_LOST, PF_LOST_INTERVAL),
+                                         ("catastrophes", catastrophe, PF_CATASTROPHES, PF_CATASTROPHE_INTERVAL)):
+        k = int(flags.sum())
+        low, high = _clopper_pearson(k, n)
+        assert k == count, f"the PF's {what}: {k} of {n}"
+        assert (round(100 * low, 2), round(100 * high, 2)) == interval, f"{what}: 95% interval {100 * low:.3f}-{100 * high:.3f}%"
+    assert np.all(lost[catastrophe]), "a catastrophe that is not lost"
+    worst, others = runs["time_rms_position"].max() / 1000, runs["time_rms_position"][~catastrophe].max() / 1000
+    assert round(worst, 1) == PF_WORST_KM and others < PF_OTHERS_BELOW_KM, f"worst {worst:.2f} km, others up to {others:.2f} km"
+    near = runs["time_rms_position"][lost & ~catastrophe] / 1000
+    assert near.max() < NEAR_MISS_BELOW_KM, f"lost runs that are not catastrophes reach {near.max():.2f} km"
+
+
+@claim("nonlinear-filters/study-mean-behind")
+def _() -> None:
+    """Over the study's 4000 runs, the PF's mean position metric (with its one catastrophe) is above CUT6's and CUT8's, while its median is the smallest of the seven filters (pf-best-all)."""
+    t = _pooled(False)
+    assert t["pf"]["position"] > max(t["cut6"]["position"], t["cut8"]["position"]), \
+        f"mean position PF {t['pf']['position']:.1f}, CUT6 {t['cut6']['position']:.1f}, CUT8 {t['cut8']['position']:.1f}"
+
+@claim("nonlinear-filters/one-lost-run-moves-the-mean")
+def _() -> None:
+    """One lost run of 11 km added to the PF's 400 shipped runs lifts its mean position metric from under 120 m to over 250 m, behind CUT4's, CUT6's and CUT8's means, and moves its median by under 1 m."""
+    before, after = (_tables(inject)[0] for inject in (False, True))
+    assert before["pf"]["position"] < 120 and after["pf"]["position"] > 250, (before["pf"]["position"], after["pf"]["position"])
+    assert all(after["pf"]["position"] > after[name]["position"] for name in ("cut4", "cut6", "cut8")), after["pf"]
+    moved = abs(after["pf"]["median"]["position"] - before["pf"]["median"]["position"])
+    assert moved < 1.0, f"the PF's median moved by {moved:.2f} m"
 
 
 @claim("nonlinear-filters/cut8-velocity-gap")
@@ -195,6 +364,22 @@ def _() -> None:
     for i, t in enumerate(_all_tables()):
         v8, v6 = t["cut8"]["velocity"], t["cut6"]["velocity"]
         assert v8 < 50 and 10 * v8 < v6, f"table {i}: velocity metric CUT8 {v8:.1f} m/s, CUT6 {v6:.1f} m/s"
+
+
+@claim("nonlinear-filters/diverged-runs-make-the-mean")
+def _() -> None:
+    """CUT4's and CUT6's mean velocity metrics are more than 50 times their median velocity errors, in the 400-run table and over the 4000 study runs (seen 69-103 times)."""
+    for label, t in (("shipped table", _tables(False)[0]), ("4000 study runs", _pooled(False))):
+        for name in ("cut4", "cut6"):
+            ratio = t[name]["velocity"] / t[name]["median"]["velocity"]
+            assert ratio > 50, f"{label}: {name}'s mean velocity metric is {ratio:.0f} times its median"
+
+
+@claim("nonlinear-filters/mean-ranks-cut8-ahead")
+def _() -> None:
+    """By the lecture's metric (a mean), CUT8's position error is below CUT6's in the 400-run table and over the 4000 study runs, while their medians are within 3% (position-ordering)."""
+    for label, t in (("shipped table", _tables(False)[0]), ("4000 study runs", _pooled(False))):
+        assert t["cut8"]["position"] < t["cut6"]["position"], f"{label}: mean position CUT8 {t['cut8']['position']:.1f}, CUT6 {t['cut6']['position']:.1f}"
 
 
 @claim("nonlinear-filters/cut-matches-lecture")
@@ -224,18 +409,22 @@ def _() -> None:
 
 @claim("nonlinear-filters/velocity-best-two")
 def _() -> None:
-    """The two smallest velocity metrics of the seven filters are the PF's and CUT8's: in the table and each PF batch."""
-    for i, t in enumerate(_pf_tables()):
-        best = sorted(air_traffic.FILTERS, key=lambda name: t[name]["velocity"])[:2]
-        assert best == ["pf", "cut8"], f"table {i}: smallest velocity metrics {best}"
+    """The two smallest median velocity errors of the seven filters are the PF's and CUT8's: in the table, the study and every study batch, with and without one lost PF run added."""
+    def check(t: dict) -> str | None:
+        best = sorted(air_traffic.FILTERS, key=lambda name: t[name]["median"]["velocity"])[:2]
+        return None if best == ["pf", "cut8"] else f"smallest median velocity errors {best}"
+
+    _ranking_holds(check)
 
 
 @claim("nonlinear-filters/orders-of-magnitude")
 def _() -> None:
-    """The seven filters' velocity metrics span more than two orders of magnitude, in the table and every PF batch."""
-    for t in _pf_tables():
-        v = [t[name]["velocity"] for name in air_traffic.FILTERS]
-        assert max(v) > 100 * min(v), f"velocity metrics {v}"
+    """The seven filters' median velocity errors span more than two orders of magnitude: in the table, the study and every study batch, with and without one lost PF run added."""
+    def check(t: dict) -> str | None:
+        v = [t[name]["median"]["velocity"] for name in air_traffic.FILTERS]
+        return None if max(v) > 100 * min(v) else f"median velocity errors {v}"
+
+    _ranking_holds(check)
 
 
 @claim("nonlinear-filters/initial-error-settles")
@@ -247,14 +436,6 @@ def _() -> None:
     for i, curves in enumerate(_curves()):
         for name, curve in curves.items():
             assert curve[2] < 500, f"curves {i}, {name}: {curve[2]:.0f} m at t = 10 s"
-
-
-@claim("nonlinear-filters/pf-below-cut8-after-75s")
-def _() -> None:
-    """From t = 75 s on, the PF's position RMSE_k is below CUT8's at more than 80% of the returns (shipped curves and each PF batch; 87% in the shipped curves, 99-100% in the batches)."""
-    for i, curves in enumerate(_curves()):
-        below = np.mean(curves["pf"][15:] < curves["cut8"][15:])
-        assert below > 0.8, f"curves {i}: PF below CUT8 at {below:.0%} of the returns from t = 75 s"
 
 
 @claim("nonlinear-filters/ckf-ukf-error-grows")
@@ -333,7 +514,7 @@ def _() -> None:
     """At every interval T, CUT8 diverges in no more runs than any other Gaussian filter, and in under 10% of them:
     in the shipped sweep (200 runs per T; seen 0-5%) and in the independent one (20 runs per T)."""
     shipped = _shipped()
-    for what, diverged in (("shipped sweep", shipped.sweep_diverged), ("independent sweep", _independent_sweep()[2])):
+    for what, diverged in (("shipped sweep", shipped.sweep_diverged), ("independent sweep", _independent_sweep()[3])):
         others = np.min([diverged[name] for name in GAUSSIAN[:-1]], axis=0)
         assert np.all(diverged["cut8"] <= others) and np.all(diverged["cut8"] < 0.1), \
             f"{what}: CUT8 diverged {diverged['cut8']}, fewest of the others {others}"
@@ -432,31 +613,36 @@ def _() -> None:
 
 @claim("nonlinear-filters/pf-best-at-five-seconds")
 def _() -> None:
-    """At T = 5 s the PF has the smallest position metric of the seven filters, in the shipped sweep and an independent one."""
-    for what, T, sweep in _sweeps():
-        i = list(T).index(5.0)
-        best = min(air_traffic.FILTERS, key=lambda name: sweep[name][i, 0])
-        assert best == "pf", f"{what}, T = 5 s: smallest position metric is {best}'s"
+    """At T = 5 s and T = 10 s the PF has the smallest median position error of the seven filters, in the shipped sweep and an independent one, with and without one lost PF run added."""
+    for inject in (False, True):
+        for what, T, median in _median_sweeps(inject):
+            for interval in (5.0, 10.0):
+                i = list(T).index(interval)
+                best = min(air_traffic.FILTERS, key=lambda name: median[name][i, 0])
+                assert best == "pf", f"{what} (lost run added: {inject}), T = {interval:g} s: smallest median position is {best}'s"
 
 
 @claim("nonlinear-filters/pf-falls-behind")
 def _() -> None:
-    """At T = 15 s CUT8 has the smallest position metric of the seven filters, and at T = 15 s and 20 s the PF's is more than 3 times CUT8's (shipped and independent sweep)."""
-    for what, T, sweep in _sweeps():
-        i15, i20 = list(T).index(15.0), list(T).index(20.0)
-        best = min(air_traffic.FILTERS, key=lambda name: sweep[name][i15, 0])
-        assert best == "cut8", f"{what}, T = 15 s: smallest position metric is {best}'s"
-        for i in (i15, i20):
-            assert sweep["pf"][i, 0] > 3 * sweep["cut8"][i, 0], f"{what}, T = {T[i]}: PF {sweep['pf'][i, 0]:.0f} m"
+    """At T = 15 s CUT8 has the smallest median position error of the seven filters, and at T = 20 s the PF's is more than 10 times CUT8's (shipped and independent sweep, with and without one lost PF run added)."""
+    for inject in (False, True):
+        for what, T, median in _median_sweeps(inject):
+            i15, i20 = list(T).index(15.0), list(T).index(20.0)
+            best = min(air_traffic.FILTERS, key=lambda name: median[name][i15, 0])
+            assert best == "cut8", f"{what}, T = 15 s: smallest median position is {best}'s"
+            assert median["pf"][i20, 0] > 10 * median["cut8"][i20, 0], f"{what}, T = 20 s: PF {median['pf'][i20, 0]:.0f} m"
 
 
 @claim("nonlinear-filters/errors-grow-with-interval")
 def _() -> None:
-    """Every filter's position metric is larger at T = 20 s than at T = 5 s (shipped and independent sweep)."""
-    for what, T, sweep in _sweeps():
+    """Every filter but the EKF has a larger median position error at T = 20 s than at T = 5 s, and the EKF loses over 90% of the runs at every T (shipped and independent sweep)."""
+    independent = _independent_sweep()
+    for (what, T, median), lost in zip(_median_sweeps(False), (_shipped().sweep_lost, independent[2])):
         first, last = list(T).index(5.0), list(T).index(20.0)
         for name in air_traffic.FILTERS:
-            assert sweep[name][last, 0] > sweep[name][first, 0], f"{what}: {name}"
+            if name != "ekf":
+                assert median[name][last, 0] > median[name][first, 0], f"{what}: {name}"
+        assert np.all(lost["ekf"] > 0.9), f"{what}: EKF lost fractions {lost['ekf']}"
 
 
 @claim("nonlinear-filters/cut-matches-published")
@@ -480,14 +666,14 @@ def _() -> None:
 
 @claim("nonlinear-filters/pf-lost-at-long-intervals")
 def _() -> None:
-    """At T = 20 s the PF loses more than 80% of the runs and its velocity metric is above that of estimating zero velocity (120/sqrt(5) = 53.7 m/s): shipped and independent sweep."""
+    """At T = 20 s the PF loses more than 80% of the runs, and its median velocity error is within 25% of that of estimating zero velocity (120/sqrt(5) = 53.7 m/s): shipped and independent sweep."""
     shipped = _shipped()
-    metric, lost, _ = _independent_sweep()
-    for what, T, sweep, lost_fraction in (("shipped sweep", shipped.sweep_T, shipped.sweep, shipped.sweep_lost),
-                                          ("independent sweep", np.array(ref.SWEEP_T), metric, lost)):
+    independent = _independent_sweep()
+    for (what, T, median), lost_fraction in zip(_median_sweeps(False), (shipped.sweep_lost, independent[2])):
         i = list(T).index(20.0)
         assert lost_fraction["pf"][i] > 0.8, f"{what}: PF lost fraction at T = 20 s {lost_fraction['pf'][i]:.2f}"
-        assert sweep["pf"][i, 1] > air_traffic.ZERO_VELOCITY_METRIC, f"{what}: PF velocity {sweep['pf'][i, 1]:.1f} m/s"
+        ratio = median["pf"][i, 1] / air_traffic.ZERO_VELOCITY_METRIC
+        assert abs(ratio - 1) < 0.25, f"{what}: PF median velocity {median['pf'][i, 1]:.1f} m/s"
 
 
 @functools.cache

@@ -255,14 +255,16 @@ def results_from_errors(errors: dict[str, dict[str, np.ndarray]], runs: int = DA
                         sweep_runs: int = SWEEP_RUNS, particles: int = PARTICLES) -> dict:
     """Everything the notebook loads, from the errors (runs, K, 3) of each filter of each batch (by name): the
     T = 5 s table, RMSE_k curves, the CKF's and UKF's position RMSE_k on the flight without turns, and the
-    sweep over T with its lost and diverged fractions."""
+    sweep over T with its medians and its lost and diverged fractions."""
     err, straight = errors["table"], errors["straight"]
     sweep = {name: [] for name in air_traffic.FILTERS}
     sweep_lost = {name: [] for name in air_traffic.FILTERS}
     sweep_diverged = {name: [] for name in air_traffic.FILTERS}
+    sweep_median = {name: [] for name in air_traffic.FILTERS}
     for T in SWEEP_T:
         for name, e in errors[f"sweep_T{T:g}"].items():
             sweep[name].append(air_traffic.lecture_metric(e).tolist())
+            sweep_median[name].append(np.median(air_traffic.lecture_metric(e, axis=1), axis=0).tolist())
             sweep_lost[name].append(float(np.mean(air_traffic.lost_runs(e))))
             sweep_diverged[name].append(float(np.mean(air_traffic.diverged_runs(e))))
     return _rounded({
@@ -272,7 +274,7 @@ def results_from_errors(errors: dict[str, dict[str, np.ndarray]], runs: int = DA
         "rmse_curves": {name: air_traffic.rmse_over_time(e).tolist() for name, e in err.items()},
         "straight_position_rmse": {name: air_traffic.rmse_over_time(e)[:, 0].tolist() for name, e in straight.items()},
         "sweep": {"T": list(SWEEP_T), "runs": sweep_runs, "filters": sweep, "lost_fraction": sweep_lost,
-                  "diverged_fraction": sweep_diverged},
+                  "diverged_fraction": sweep_diverged, "median": sweep_median},
     })
 
 
@@ -302,6 +304,52 @@ def write_data(directory: Path) -> list[Path]:
     return [path, records]
 
 
+# ------------------------------------------------------------------------------------------------
+# The lost-run study: how often each filter loses a run, over thousands of runs
+# ------------------------------------------------------------------------------------------------
+
+LOST_STUDY_SEED = DATA_SEED + 1000
+"""First seed of the lost-run study's batches (LOST_STUDY_SEED + b for batch b): distinct from the shipped
+table's seeds (DATA_SEED to DATA_SEED + 5) and from the claim checks' (below 1000)."""
+LOST_STUDY_BATCHES = 40
+LOST_STUDY_RUNS = 100
+"""The study: LOST_STUDY_BATCHES batches of LOST_STUDY_RUNS runs of every filter at T = 5 s (4000 runs)."""
+LOST_STUDY_FILE = "nonlinear_filters_lost_runs.records.npz"
+"""The study's per-run summary (per_run_summary of every filter, by ``<filter>/<quantity>``, batches in order)
+and the seed of each run's batch: the PF takes about 0.2 s of CPU a run, so the study (about 15 min) is
+shipped as a record, written by ``python -m solutions.nonlinear_filters.reference lost-study --out DIR``."""
+
+
+def per_run_summary(err: np.ndarray) -> dict[str, np.ndarray]:
+    """What the study keeps of each run, from the errors (runs, K, 3): the lecture's metric of the run (runs, 3),
+    its time-RMS position error [m], its position error at the last radar return [m] (a run is lost if that is
+    above LOST_KM) and its largest velocity error [m/s] (diverged above DIVERGED_KMS)."""
+    return {"metric": air_traffic.lecture_metric(err, axis=1),
+            "time_rms_position": np.sqrt(np.mean(err[:, :, 0] ** 2, axis=1)),
+            "final_position": err[:, -1, 0].copy(),
+            "peak_velocity": np.max(err[:, :, 1], axis=1)}
+
+
+def lost_study_batch(batch: int, runs: int = LOST_STUDY_RUNS) -> dict[str, np.ndarray]:
+    """The per-run summary of every filter (``<filter>/<quantity>``) on batch ``batch`` of the study (seed
+    LOST_STUDY_SEED + batch), and the seed of each run (``seed``)."""
+    err = monte_carlo(runs, LOST_STUDY_SEED + batch)
+    summary = {f"{name}/{key}": value for name, e in err.items() for key, value in per_run_summary(e).items()}
+    return {**summary, "seed": np.full(runs, LOST_STUDY_SEED + batch, dtype=np.int64)}
+
+
+def lost_study_records(batches: list[dict[str, np.ndarray]]) -> dict[str, np.ndarray]:
+    """The study's record from its batches in order: each array the batches' arrays end to end."""
+    return {key: np.concatenate([b[key] for b in batches]) for key in batches[0]}
+
+
+def write_lost_study(directory: Path, batches: int = LOST_STUDY_BATCHES) -> Path:
+    """Run the lost-run study (``batches`` batches) and write its record into ``directory``."""
+    path = Path(directory) / LOST_STUDY_FILE
+    write_npz(path, lost_study_records([lost_study_batch(b) for b in range(batches)]))
+    return path
+
+
 def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m solutions.nonlinear_filters.reference",
                                      description="The air-traffic comparison of the nonlinear-filters lab.")
@@ -311,7 +359,12 @@ def main(argv: list[str] | None = None) -> int:
     table.add_argument("--seed", type=int, default=DATA_SEED)
     table.add_argument("--particles", type=int, default=PARTICLES)
     table.add_argument("--json", action="store_true", help="print JSON on stdout")
+    study = sub.add_parser("lost-study", help="the lost-run study over 4000 runs, written as a record (about 15 min)")
+    study.add_argument("--out", type=Path, default=Path("solutions/records"))
     args = parser.parse_args(argv)
+    if args.command == "lost-study":
+        print(write_lost_study(args.out))
+        return 0
     result = air_traffic_table(args.runs, args.seed, args.particles)
     if args.json:
         print(json.dumps(result, indent=1))
