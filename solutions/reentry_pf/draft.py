@@ -15,11 +15,10 @@
 # %% [markdown]
 # # Lab reentry-pf: tracking a falling object, and its ballistic coefficient, with a particle filter
 #
-# An object (a meteorite, or a space module) falls through the atmosphere. A radar on the ground measures
-# its altitude ten times a second, with errors of about 500 m. From those readings alone we want the
-# object's altitude, its speed, and its **ballistic coefficient** $\beta$, a number that sums up how its
-# mass, shape and cross-section let the air slow it down. The model is nonlinear, so instead of a Kalman
-# filter you will write a **particle filter**: a cloud of thousands of guesses that is moved by the model,
+# An object (a meteorite, or a space module) falls through the atmosphere. A radar on the ground measures its
+# altitude ten times a second, with errors of about 500 m. From those readings we want its altitude, its speed and
+# its **ballistic coefficient** $\beta$, which sums up how its mass, shape and size let the air slow it down. The
+# model is nonlinear, so you will write a **particle filter**: a cloud of thousands of guesses, moved by the model,
 # weighed against each reading, and resampled.
 #
 # **What you will do**
@@ -46,20 +45,14 @@
 #
 # Section 9, "Going further", is optional reading: nothing there is graded.
 #
-# **How this notebook works.** Each blank is one function in a cell that says `YOUR CODE HERE`. Below
-# each blank, a read-only cell runs *visible checks* on cases you can work out by hand; their messages
-# say what to fix. When your work is graded, *hidden tests* also compare your function with a reference
-# on random inputs of several sizes. The particle filter step is random, so its hidden test is
-# statistical: a correct step fails it with probability below one in a million. Each function is graded on
-# its own: a mistake in one blank does not cost you the points of the blanks that use it. A graded function
-# must leave the arrays it is given as they are and return new ones. Draw every random number from the `rng`
-# a function is given, never from `np.random`, so that the same seed gives the same result. The three written
-# answers are marked by hand.
-#
-# **Locked cells.** The grey cells are read-only: the set-up, the visible checks, the graded cells and the
-# figures. Grading puts back the original of each one, so an edit there would be lost. You write only in the
-# cells marked `YOUR CODE HERE` and `YOUR ANSWER HERE`. Before you submit, press **Validate** in the toolbar: it
-# runs the whole notebook and lists each blank that is not written yet or does not pass its visible checks.
+# **How this notebook works.** Each blank is one function in a cell that says `YOUR CODE HERE`. Below it, a
+# read-only cell runs *visible checks* on cases you can work out by hand; their messages say what to fix. When you
+# are graded, *hidden tests* compare your function with a reference on random inputs, and each function is graded
+# on its own. The test of `pf_step` is statistical: a correct step fails it with probability below one in a million.
+# A graded function must leave the arrays it is given unchanged, and draw every random number from the `rng` it is
+# given, never from `np.random`. The three written answers are marked by hand. The grey cells are locked: grading
+# puts back their originals. Before you submit, press **Validate**: it lists each blank that is not written yet or
+# fails its visible checks.
 #
 # *Credit.* This lab follows the Day 5 exercise of the course "Bayesian Scientific Computing" by Daniela
 # Calvetti and Erkki Somersalo (Case Western Reserve University), given in Lyngby in December 2019. Its
@@ -93,18 +86,13 @@ from course.checks import check_array, check_close, check_pair, check_true, pass
 #   \frac{d\beta}{dt} = 0 \quad (3), \qquad \rho(h) = \gamma\, e^{-\eta h} \quad (4),$$
 #
 # with $g$ = `G` = 9.81 m/s$^2$, $\gamma$ = `GAMMA` = 1.754 kg/m$^3$ and $\eta$ = `ETA` = 1.39e-4 1/m. Together,
-# $\dot x = f(x)$ with $f(x) = [-v,\ g - g\rho(h)v^2/(2\beta),\ 0]$ (5). Equation (3) says that we believe
-# $\beta$ is a constant of the object; we just do not know it.
+# $\dot x = f(x)$ with $f(x) = [-v,\ g - g\rho(h)v^2/(2\beta),\ 0]$ (5). Equation (3) says that $\beta$ is a
+# constant of the object; we just do not know it.
 #
-# Note the sign convention: because $v$ is the *downward* speed, $h$ decreases at the rate $v$, and the
-# drag *reduces* $v$.
-#
-# A particle filter works on a whole cloud of states at once. We store a cloud of $N$ particles as an array
-# of shape `(3, N)`: row 0 holds the altitudes, row 1 the speeds, row 2 the $\beta$ values, and column
-# $\ell$ is particle $x^{(\ell)}$. Write `tracking_dynamics(t, x)`, the handout's `TrackingDynamics`, so
-# that it takes either one state, shape `(3,)`, or a cloud, shape `(3, N)`, and returns $f$ with the same
-# shape. The time `t` is not used (the model does not depend on time), but the ODE solver passes it.
-# No loop: `h, v, beta = x` unpacks the rows, and NumPy's arithmetic works on all of them at once.
+# A cloud of $N$ particles is an array of shape `(3, N)`: rows $h$, $v$, $\beta$, and column $\ell$ is particle
+# $x^{(\ell)}$. Write `tracking_dynamics(t, x)`, the handout's `TrackingDynamics`, so that it takes one state,
+# shape `(3,)`, or a cloud, shape `(3, N)`, and returns $f$ with the same shape. The ODE solver passes the time `t`;
+# the model does not use it. No loop: `h, v, beta = x` unpacks the rows, and NumPy works on all of them at once.
 
 # %% nbgrader={"grade": false, "grade_id": "load_data", "locked": true, "schema_version": 3, "solution": false, "task": false}
 data = falling_object.load()
@@ -161,17 +149,14 @@ check_tracking_dynamics(tracking_dynamics)
 # $$b_j = q^T x(t_j) + \varepsilon_j = h(t_j) + \sigma e_j, \qquad q = [1, 0, 0]^T, \qquad e_j \sim N(0, 1),$$
 #
 # with $\sigma$ = `SIGMA` = 500 m. Write `simulate_radar(x0, t, sigma, rng)`. It computes the noiseless truth
-# `x_true`, shape `(3, len(t))`, with `scipy.integrate.solve_ivp(..., method="RK45", t_eval=t)` (RK45 is
-# MATLAB's `ode45`) from `x0` at `t[0]` to `t[-1]`, then draws `e = rng.standard_normal(len(t))` **in one
-# call** and returns `(x_true, b)`. Always use the generator `rng` you are given: that makes every run
-# reproducible.
+# `x_true`, shape `(3, len(t))`, with `scipy.integrate.solve_ivp(..., method="RK45", t_eval=t)` (MATLAB's `ode45`)
+# from `x0` at `t[0]` to `t[-1]`, then draws `e = rng.standard_normal(len(t))` **in one call** from the `rng` you
+# are given, and returns `(x_true, b)`.
 #
-# The truth is the yardstick for everything that follows, so it must be far more accurate than the radar:
-# choose `solve_ivp`'s tolerances `rtol` and `atol` so that the altitude is right to well under a metre. (Try
-# the defaults, `rtol=1e-3`, against a much tighter solve and see how far off they are.)
-#
-# The shipped data, `data`, was made by this very computation from $x_0 = [61000\ \mathrm{m}, 3048\ \mathrm{m/s},
-# 19161]$ with a fixed seed. The visible checks compare your truth with it.
+# Every result is measured against the truth, so it must be far more accurate than the radar: choose
+# `solve_ivp`'s tolerances `rtol` and `atol` so that the altitude is right to well under a metre. (Compare the
+# default `rtol=1e-3` with a much tighter solve.) The shipped `data` came from this computation, from
+# $x_0 = [61000\ \mathrm{m}, 3048\ \mathrm{m/s}, 19161]$; the visible checks compare your truth with it.
 
 # %% nbgrader={"grade": false, "grade_id": "simulate_radar", "locked": false, "schema_version": 3, "solution": true, "task": false}
 def simulate_radar(x0, t, sigma, rng):
@@ -308,11 +293,10 @@ check_initial_cloud(initial_cloud)
 # %% [markdown]
 # ## 4. One step of the particle filter (an auxiliary particle filter)
 #
-# Between two readings, the cloud $x^{(\ell)}$ with normalised weights $w^{(\ell)}$ at $t_j$ becomes a cloud at
-# $t_{j+1}$ in four steps, the handout's (a) to (d). The next cells take them one at a time, in the order you
-# write them. Write `pf_step(x, w, b_next, rng, *, innovation_std=INNOVATION_STD, info=None)`: it takes a cloud
-# `x` of shape `(3, N)`, its weights `w` of shape `(N,)` and the next reading `b_next`, and returns the new cloud
-# and its normalised weights.
+# Write `pf_step(x, w, b_next, rng, *, innovation_std=INNOVATION_STD, info=None)`. It takes the cloud `x`, shape
+# `(3, N)`, at $t_j$, its normalised weights `w`, shape `(N,)`, and the next reading `b_next`, and returns the cloud
+# at $t_{j+1}$ and its normalised weights. It takes four steps, the handout's (a) to (d); the next cells give them
+# in the order you write them.
 #
 # **(a) Propagate** every particle with one Forward Euler step of the model:
 # $\hat x^{(\ell)} = x^{(\ell)} + \Delta t\, f(x^{(\ell)})$, with $\Delta t$ = `DT` = 0.1 s. These are the
@@ -342,10 +326,9 @@ check_initial_cloud(initial_cloud)
 # `rng.choice(N, size=N, p=w_hat)` draws the indices, `x_hat[:, k]` copies the chosen columns, and
 # `rng.standard_normal((3, N))` draws all the perturbations at once.
 #
-# Without the perturbation, the copies of a candidate would stay identical and the cloud would collapse onto a
-# few points. The handout calls it the *innovation*. It is the filter's **artificial process noise** (also called
-# jittering): the model of equation (5) has no process noise, so $D$ is a setting of the filter, not a property
-# of the object. (In Kalman filters, the innovation is something else: the residual $y - Hx$.)
+# Without the perturbation, the copies of a candidate would stay identical. The handout calls it the *innovation*;
+# we call it the **artificial process noise**, since the model (5) has none: $D$ is a setting of the filter, not a
+# property of the object. (In a Kalman filter, the innovation is the residual $y - Hx$.)
 
 # %% [markdown]
 # **(d) Re-weigh.** The perturbation moved each particle away from the candidate it copies, so correct for it,
@@ -363,11 +346,10 @@ check_initial_cloud(initial_cloud)
 # effective sample size $1/\sum_\ell (\hat w^{(\ell)})^2$ of the fitness weights that (c) draws with, and
 # `info["parents"]`, the indices $k_\ell$.
 #
-# **What this algorithm is.** Steps (a) to (d) are an **auxiliary particle filter** (Pitt and Shephard, 1999).
-# Its resampling *looks ahead*: (b) scores each particle by how well its predicted altitude explains the next
-# reading, and (d) corrects for that look-ahead. The more common **bootstrap filter** (Gordon, Salmond and Smith,
-# 1993) resamples with the current weights alone, then propagates, perturbs and weighs by the new reading. It is
-# given (`falling_object.bootstrap_step`), and section 7 runs both.
+# **What this algorithm is.** Steps (a) to (d) are an **auxiliary particle filter** (Pitt and Shephard, 1999): its
+# resampling *looks ahead* at the next reading, and (d) corrects for that. The **bootstrap filter** (Gordon,
+# Salmond and Smith, 1993) resamples with the current weights alone. It is given (`falling_object.bootstrap_step`),
+# and section 7 runs both.
 
 # %% nbgrader={"grade": false, "grade_id": "pf_step", "locked": false, "schema_version": 3, "solution": true, "task": false}
 def pf_step(x, w, b_next, rng, *, innovation_std=INNOVATION_STD, info=None):
@@ -518,9 +500,7 @@ check_pf_step(pf_step)
 # > **Handout correction.** The handout builds the interval by sorting the $N$ particle values and throwing away
 # > the same *number* of them at each end, $i_\min = [(1 - p/100)N/2]$ and $i_\max = [(1 + p/100)N/2]$. That counts
 # > every particle once, which is right only when the weights are equal: after resampling, but not after step (d),
-# > which leaves unequal weights. With weights, throw away the same *weight* at each end. (A remark on the handout's
-# > rule: $[\cdot]$ is MATLAB's `round`, which sends halves away from zero, and its indices start at 1. With equal
-# > weights, the two rules pick the same sample or neighbouring ones.)
+# > which leaves unequal weights. With weights, throw away the same *weight* at each end.
 #
 # Write `credibility_interval(samples, weights, p)` for one variable's values `samples` (N,), their weights (N,),
 # non-negative and not necessarily normalised, and $p$ in percent, a number or an array of numbers; return
@@ -588,7 +568,7 @@ check_credibility_interval(credibility_interval)
 # %% [markdown]
 # ## 6. The filter over half a minute of readings
 #
-# Put the pieces together. `run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD)` starts from
+# `run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD)` starts from
 # `initial_cloud(b[0], N, rng)` at $t_0$, then for $j = 1, \dots, T$ takes one filter step with the reading `b[j]`.
 # The step is `pf_step` unless another one is given (write `step = pf_step if step is None else step`); call it as
 # `step(x, w, b[j], rng, innovation_std=innovation_std, info=info)` with one dict `info`, so that it reports on
@@ -606,8 +586,7 @@ check_credibility_interval(credibility_interval)
 #   descends from: `np.arange(N)` at $t_0$, then `root = root[info["parents"]]` after each step. At $t_0$ nothing
 #   has been resampled, and all three are $N$.
 #
-# Return the history. A loop over the readings is fine (each step depends on the one before); there is still
-# no loop over the particles.
+# Return the history. A loop over the readings is fine; there is still no loop over the particles.
 
 # %% nbgrader={"grade": false, "grade_id": "run_particle_filter", "locked": false, "schema_version": 3, "solution": true, "task": false}
 def run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD):
@@ -708,10 +687,9 @@ history = run_particle_filter(data.b, falling_object.N_PARTICLES, np.random.defa
 falling_object.print_report(data, history)
 
 # %% [markdown]
-# **The yardstick.** How well could anyone know $\beta$ from these readings? Without noise, the model makes each
-# altitude $h_j$ a function of the initial state $x_0 = (h_0, v_0, \beta)$. The sensitivities
-# $s_j = \partial h_j / \partial x_0$ give the information that the readings $b_1, \dots, b_j$ hold. Add the
-# prior's information $C^{-1}$ (the prior already holds $b_0$):
+# **The yardstick.** How well could $\beta$ be known from these readings? The noise-free model makes each altitude
+# $h_j$ a function of the initial state $x_0 = (h_0, v_0, \beta)$. The sensitivities $s_j = \partial h_j / \partial
+# x_0$ give the information that the readings $b_1, \dots, b_j$ hold; add the prior's, $C^{-1}$:
 #
 # $$J_j = C^{-1} + \sum_{i=1}^{j} \frac{s_i s_i^T}{\sigma^2}, \qquad \text{yardstick}_j = \sqrt{(J_j^{-1})_{33}}.$$
 #
@@ -737,11 +715,9 @@ for t_j in (0, 10, 15, 20, 25, 30):
 # fastest between 15 s and 25 s, when the object is low enough for the drag to matter. <!-- claim: reentry-pf/information-arrives-late -->
 
 # %% [markdown]
-# The figure shows, for $h$, $v$ and $\beta$, the truth, the weighted mean, the weighted median, and the 50% and
-# 90% bands. The bottom row shows the same curves minus the truth, since the bands are small next to the values.
-# The grey dots are the radar readings. In the $\beta$ panels, the dotted curves are the truth $\pm$ 1.645 times
-# the yardstick: as wide as an exact posterior's 90% band. That band would be centred on its own estimate, not
-# on the truth, so compare only the widths.
+# In the figure, the bottom row shows each curve minus the truth. In the $\beta$ panels, the dotted curves are the
+# truth $\pm$ 1.645 times the yardstick: as wide as an exact posterior's 90% band. That band would be centred on its
+# own estimate, not on the truth, so compare only the widths.
 
 # %% nbgrader={"grade": false, "grade_id": "plot_tracking", "locked": true, "schema_version": 3, "solution": false, "task": false}
 require(run_particle_filter, tracking_dynamics)
@@ -754,10 +730,9 @@ plt.show()
 #
 # The weights that step (d) leaves are close to equal: their ESS stays above 0.6 $N$ at every step in every one of
 # 10 runs on fresh readings with the handout's noise and $N$ = 2000. <!-- claim: reentry-pf/ess-after-d-high -->
-# That says nothing about resampling, which happens *before* (d). The next figure shows three diagnostics that do:
-# the ESS of the weights each step resampled with (for `pf_step`, the fitness weights of (b)), the number of
-# distinct parents each resampling drew, and the number of particles of $t_0$ that still have descendants. The
-# second filter is the bootstrap filter, on the same readings with the handout's setting.
+# That says nothing about the resampling, which comes *before* (d). The next figure shows, for `pf_step` and for
+# the bootstrap filter (same readings and setting): the ESS of the weights each step resampled with, the number of
+# distinct parents each resampling drew, and the number of particles of $t_0$ that still have descendants.
 
 # %% [markdown]
 # The dashed lines are the baseline of a filter that learns nothing: *multinomial* resampling of equal weights.
@@ -775,9 +750,8 @@ axes = falling_object.plot_health(data, {"auxiliary (pf_step)": history, "bootst
 plt.show()
 
 # %% [markdown]
-# One run does not show how the width of $\beta$'s 90% band behaves. The figure below takes the handout's noise
-# (100, 100, 5) from the tuning study of section 8: 50 simulated half minutes for each $N$ = 500, 2000 and 5000.
-# It shows the median width, the spread from run to run, and the yardstick.
+# One run is not enough to judge the width of $\beta$'s 90% band. The figure below takes the handout's noise from
+# the study of section 8: 50 simulated half minutes for each of $N$ = 500, 2000 and 5000.
 
 # %% nbgrader={"grade": false, "grade_id": "band_widths", "locked": true, "schema_version": 3, "solution": false, "task": false}
 require(tracking_dynamics)
@@ -788,11 +762,12 @@ plt.show()
 
 # %% [markdown]
 # **Why the handout's setting learns little.** Its artificial process noise does not match the model's errors.
-# The only error of the filter's model is the Forward Euler step, which misses the true trajectory by at most 2 m
-# in $h$ and 1 m/s in $v$ per step. <!-- claim: reentry-pf/euler-error-small -->
-# The noise in $v$, 100 m/s per step, is far larger. The filter can then explain the drag's slowing as random
-# kicks to $v$ instead of as $\beta$, and its bands of $v$ are much too wide: at 30 s the 90% interval of $v$
-# reaches below zero (upward motion) in every one of the study's 50 runs. <!-- claim: reentry-pf/handout-v-upward -->
+# The filter's only model error is the Forward Euler step, which misses the true trajectory by at most 2 m in $h$
+# and 1 m/s in $v$ per step. <!-- claim: reentry-pf/euler-error-small -->
+# The noise in $v$, 100 m/s per step, is far larger, so the filter can explain the drag's slowing as random kicks
+# to $v$ instead of as $\beta$. Its bands of $v$ are much too wide: in the study of section 8, the truth of
+# $v$ lies inside the 50% band over 90% of the time, <!-- claim: reentry-pf/handout-v-too-wide -->
+# and at 30 s the 90% interval reaches below zero (upward motion) in every one of the 50 runs. <!-- claim: reentry-pf/handout-v-upward -->
 # The noise in $\beta$, 5 per step, is too small to replace the diversity that each resampling destroys. So the
 # spread of $\beta$ in the cloud comes from the few particles of $t_0$ whose descendants survive, and the band's
 # width depends on $N$ (figure above). <!-- claim: reentry-pf/fewer-particles-narrower -->
@@ -845,26 +820,26 @@ plt.show()
 # %% [markdown]
 # ## 8. Tuning
 #
-# The handout's setting is a starting point, and section 7 showed its defects. **The study.** Each of 14 settings
-# (the filter, $N$ and the artificial process noise) was run on the same 50 simulated half minutes: the lab's
-# truth, fresh radar noise, fresh filter draws. The scores ship in `course/data/falling_object_tuning.csv`. For
-# each setting, the table gives the RMSE of the weighted mean of $h$, $v$ and $\beta$, and the fraction of the time
-# the truth lay inside the 50% and the 90% bands (the *coverage*). Both are scored over the last 10 s, $t \ge$ 20 s,
-# when the readings have said something about $\beta$. <!-- claim: reentry-pf/information-arrives-late -->
-#
-# The last row is what an exact posterior would score (the noise-free model linearised at the truth, with the
-# lab's prior): 50% to 53% for every 50% band and 90% to 92% for every 90% band. <!-- claim: reentry-pf/ideal-scored -->
-# Coverage below that means over-confident bands (too narrow), above it under-confident ones (too wide).
+# Section 7 showed the defects of the handout's setting. **The study** ran each of 14 settings (the filter, $N$ and
+# the artificial process noise) on the same 50 simulated half minutes: the lab's truth, fresh radar noise, fresh
+# filter draws. The table gives, for each setting, the RMSE of the weighted mean of $h$, $v$ and $\beta$, and the
+# fraction of the time the truth lay inside the 50% and the 90% bands (the *coverage*). Both are scored over the
+# last 10 s, $t \ge$ 20 s, when the readings have said something about $\beta$. <!-- claim: reentry-pf/information-arrives-late -->
+# The scores ship in `course/data/falling_object_tuning.csv`.
 
 # %% [markdown]
-# Two rows have names that the rest of the lab uses. **The handout's setting** is the row with `auxiliary`,
-# $N$ = 5000 and noise (100, 100, 5): the filter of section 7. **The tuned setting** is the row with `auxiliary`,
-# $N$ = 2000 and noise (10 m, 10 m/s, 50): less noise in $h$ and $v$, more in $\beta$, and fewer particles.
+# **How to read it.** The last row is what an exact posterior would score: 50% to 53% for every 50% band and 90% to
+# 92% for every 90% band. <!-- claim: reentry-pf/ideal-scored -->
+# Coverage below that means over-confident bands (too narrow), above it under-confident ones (too wide).
+#
+# Two rows are marked with the names the lab uses. **The handout's setting** is `auxiliary`, $N$ = 5000, noise
+# (100, 100, 5): the filter of section 7. **The tuned setting** is `auxiliary`, $N$ = 2000, noise (10 m, 10 m/s,
+# 50): less noise in $h$ and $v$, more in $\beta$, and fewer particles.
 #
 # **Read the noise too.** Each number is a mean over 50 runs, and runs differ, $\beta$ most. With the handout's
 # setting, one run's RMSE of $\beta$ lies between about 150 and 1200 (10th to 90th percentile). <!-- claim: reentry-pf/beta-rmse-spread -->
-# So the table gives the RMSE of $\beta$ with $\pm$ two standard errors of its mean. Two settings whose
-# ranges overlap are not shown to differ.
+# So the table gives the RMSE of $\beta$ with $\pm$ two standard errors of its mean. When the ranges of two rows
+# overlap, the study has not shown that they differ.
 
 # %% nbgrader={"grade": false, "grade_id": "tuning_table", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
@@ -878,23 +853,6 @@ print(falling_object.format_tuning_table(study, ideal=ideal))
 require(tracking_dynamics)
 axes = falling_object.plot_tuning(study, ideal=ideal)
 plt.show()
-
-# %% [markdown]
-# What the study shows (all scores over $t \ge$ 20 s):
-#
-# * **The handout's setting** has bands of $v$ far too wide: the truth of $v$ lies inside its 50% band over 90% of
-#   the time. <!-- claim: reentry-pf/handout-v-too-wide -->
-# * **The tuned setting** cuts the RMSE of $h$ to 0.46 of the handout's setting's (0.43 to 0.50 over five batches
-#   of 10 runs) and that of $v$ to 0.15 (0.12 to 0.19), with 2.5 times fewer particles. <!-- claim: reentry-pf/tuned-rmse-hv -->
-# * For **$\beta$**, the study cannot say by how much the tuned setting is better. Its mean RMSE is 0.75 times the
-#   handout's setting's, but the $\pm$ ranges of the two rows overlap, and over five batches of 10 runs the ratio
-#   goes from below 0.5 to above 1.2. <!-- claim: reentry-pf/tuned-rmse-beta -->
-# * **Calibration.** Every 90% band of the tuned setting holds the truth at least 90% of the time, and its 50% band
-#   of $h$ about half the time. Its 50% bands of $v$ (over 85%) and $\beta$ (68%, and from 55% to 76% over batches
-#   of 10 runs) hold the truth more often than an exact posterior's. <!-- claim: reentry-pf/tuned-coverage -->
-#   It errs on the side of caution.
-# * **Too little noise is over-confident:** with (3, 3, 5) or (3, 3, 50) and $N$ = 2000, the 90% band of $h$ holds
-#   the truth less than 80% of the time. <!-- claim: reentry-pf/small-noise-overconfident -->
 
 # %% [markdown]
 # The tuned setting on the shipped readings. Copy the two cells below into new cells, change `innovation_std` or
@@ -917,8 +875,8 @@ plt.show()
 # **Question 3.** Compare the tuned setting with the handout's setting, using their two rows of the table and the
 # coverage figure. Quote the numbers you use.
 #
-# (a) For each of $h$, $v$ and $\beta$: how much lower is the tuned setting's RMSE, and is the difference larger
-# than the scatter between runs?
+# (a) For each of $h$, $v$ and $\beta$: how much lower is the tuned setting's RMSE? For $\beta$, is the difference
+# larger than the scatter between runs (the $\pm$ column)?
 #
 # (b) Which of the tuned setting's six bands (50% and 90%, for $h$, $v$ and $\beta$) are over-confident, and which
 # under-confident, judged against the exact posterior's row? Name one change of setting that you would try next,
@@ -926,22 +884,24 @@ plt.show()
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "tuning_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
-# **Model answer.** (a) The tuned setting's RMSE of $h$ is 86 m against 188 m, less than half, and of $v$ 14 m/s
-# against 92 m/s, less than a fifth. <!-- claim: reentry-pf/tuned-rmse-hv --> Both differences are many times the
-# scatter. For $\beta$ it is 508 against 678, about a quarter lower, but the $\pm$ two standard errors (about 90 and
-# 110) make the ranges overlap: 50 runs do not show that the tuned setting estimates $\beta$ better. <!-- claim: reentry-pf/tuned-rmse-beta -->
-# Both are above the exact posterior's 323.
+# **Model answer.** (a) The tuned setting's RMSE of $h$ is 86 m against 188 m, less than half (0.46; from 0.43 to
+# 0.50 over five batches of 10 runs), and of $v$ 14 m/s against 92 m/s, less than a fifth (0.15; from 0.12 to
+# 0.19). <!-- claim: reentry-pf/tuned-rmse-hv -->
+# For $\beta$ it is 508 against 678, about a quarter lower, but the $\pm$ two standard errors (about 90 and
+# 110) make the ranges overlap, and over five batches of 10 runs the ratio goes from below 0.5 to above 1.2: 50 runs
+# do not show that the tuned setting estimates $\beta$ better. Both are above the exact posterior's 323. <!-- claim: reentry-pf/tuned-rmse-beta -->
 # (b) None of its bands is over-confident: every 90% band holds the truth at least 90% of the time (96%, 100%, 97%)
-# and the 50% band of $h$ about half of it (55%). The 50% bands of $v$ (93%) and $\beta$ (68%) are under-confident:
-# an exact posterior's hold the truth 51% of the time. <!-- claim: reentry-pf/tuned-coverage -->
+# and the 50% band of $h$ about half of it (55%). The 50% bands of $v$ (93%) and $\beta$ (68%; from 55% to 76% over
+# batches of 10 runs) are under-confident: an exact posterior's hold the truth 51% of the time. <!-- claim: reentry-pf/tuned-coverage -->
 # Next, for example: less noise in $v$ than in $h$, which should bring the 50% coverage of $v$ down towards 51%
-# without making $h$ over-confident (the rows with (3, 3, 5) and (3, 3, 50) show that too little noise in $h$ does). <!-- claim: reentry-pf/small-noise-overconfident -->
+# without making $h$ over-confident. (Too little noise in $h$ does: with (3, 3, 5) and (3, 3, 50) the 90% band of
+# $h$ holds the truth less than 80% of the time.) <!-- claim: reentry-pf/small-noise-overconfident -->
 # Or more particles, or resampling only when the ESS is low, which should lower the RMSE of $\beta$ and narrow its
 # band; or a noise in $\beta$ that shrinks as the readings become informative.
 #
 # **Rubric (2 points).** 1 point for (a): the RMSEs of $h$ and $v$ read from the two rows (less than half, less
 # than a fifth), and for $\beta$ that the difference is within the scatter (the $\pm$ ranges overlap), so it is
-# not established. 1 point for (b): no band over-confident (90% bands at or above 90%, the 50% band of $h$ near
+# not established. Ratios or differences both do. 1 point for (b): no band over-confident (90% bands at or above 90%, the 50% band of $h$ near
 # 50%), the 50% bands of $v$ and $\beta$ under-confident, and one concrete next change with the numbers it should
 # move. Any sensible change earns the point if it is tied to the table.
 # ### END SOLUTION
