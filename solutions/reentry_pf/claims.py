@@ -210,11 +210,11 @@ def _() -> None:
 
 @claim("reentry-pf/fewer-particles-narrower")
 def _() -> None:
-    """Handout's setting: the median width of beta's 90% band at 30 s grows with N (500, 2000, 5000); at N = 500
-    it is narrower than the yardstick in some study runs; and at N = 500 the median band is already below 0.8 of
-    the prior's at 10 s, while the bound there is still above 0.99 of the prior's (narrowing without information)."""
+    """Handout's noise: beta's 90% band at 30 s is narrower with N = 500 than with 2000 and 5000 (medians, in each batch of 10), narrower than the yardstick in some N = 500 runs, and below 0.8 of the prior's at 10 s."""
     medians = [np.median(study().runs[HANDOUT[N]]["width90_beta"][:, -1]) for N in (500, 2000, 5000)]
-    assert medians[0] < medians[1] < medians[2], medians
+    assert [round(m, -1) for m in medians] == [1600, 3550, 4190], medians
+    per_batch = [np.median(study().runs[HANDOUT[N]]["width90_beta"][:, -1].reshape(-1, 10), axis=1) for N in (500, 2000, 5000)]
+    assert np.all(per_batch[0] < np.minimum(per_batch[1], per_batch[2])), per_batch
     assert study().runs[HANDOUT[500]]["width90_beta"][:, -1].min() < 2 * fo.Z90 * crb()[-1]
     at_10 = int(np.flatnonzero(np.isclose(study().width_times, 10.0))[0])
     early = np.median(study().runs[HANDOUT[500]]["width90_beta"][:, at_10]) / prior_band()
@@ -223,10 +223,11 @@ def _() -> None:
 
 @claim("reentry-pf/handout-band-near-prior")
 def _() -> None:
-    """Handout's setting, N = 5000: the median width of beta's 90% band at 30 s is still above 0.8 of the prior's
-    90% band (4935)."""
-    ratio = np.median(study().runs[HANDOUT[5000]]["width90_beta"][:, -1]) / prior_band()
-    assert ratio > 0.8, ratio
+    """The handout's setting: the median width of beta's 90% band at 30 s is 0.8-0.9 of the prior's (4935), 77-98% per batch of 10."""
+    widths = study().runs[HANDOUT[5000]]["width90_beta"][:, -1]
+    ratio = np.median(widths) / prior_band()
+    per_batch = np.median(widths.reshape(-1, 10), axis=1) / prior_band()
+    assert 0.8 < ratio < 0.9 and round(100 * per_batch.min()) == 77 and round(100 * per_batch.max()) == 98, (ratio, per_batch)
 
 
 @claim("reentry-pf/handout-v-too-wide")
@@ -367,12 +368,16 @@ def _() -> None:
 
 @claim("reentry-pf/beta-noise-robust")
 def _() -> None:
-    """Noise (10, 10, 5) against the tuned (10, 10, 50), over t >= 20 s: RMSE of h, v within 5% at N = 2000; beta's 90% band below 30% at N = 500 (tuned: over 60%), below 90% at N = 2000 (tuned: over 95%)."""
+    """Noise (10, 10, 5) against the tuned (10, 10, 50), over t >= 20 s: RMSE of h, v within 5% at N = 2000; beta's 90% coverage (mean, batch range) 83 (75-93) against 97 (93-100), at N = 500 17 (10-32) against 69 (60-73)."""
     for n in ("h", "v"):
         assert abs(mean(SMALL_BETA_NOISE[2000], f"rmse_{n}") / mean(CHOSEN[2000], f"rmse_{n}") - 1) < 0.05, n
-    small = [mean(SMALL_BETA_NOISE[N], "cover90_beta") for N in (500, 2000)]
-    chosen = [mean(CHOSEN[N], "cover90_beta") for N in (500, 2000)]
-    assert small[0] < 0.3 and chosen[0] > 0.6 and small[1] < 0.9 and chosen[1] > 0.95, (small, chosen)
+    # the means over the 50 runs and the range of the means of five batches of 10, in percent, as stated
+    stated = {SMALL_BETA_NOISE[2000]: (83, 75, 93), TUNED_SETTING: (97, 93, 100), SMALL_BETA_NOISE[500]: (17, 10, 32),
+              CHOSEN[500]: (69, 60, 73)}
+    for setting, numbers in stated.items():
+        per_batch = batches(setting, "cover90_beta")
+        found = (round(100 * mean(setting, "cover90_beta")), round(100 * per_batch.min()), round(100 * per_batch.max()))
+        assert found == numbers, (setting.label, found, numbers)
 
 
 @claim("reentry-pf/tuned-band-widens-early")
