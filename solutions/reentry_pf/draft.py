@@ -343,7 +343,8 @@ check_initial_cloud(initial_cloud)
 # **Diagnostics.** If `info` is a dict (not `None`), store two things in it for section 6: `info["ess"]`, the
 # effective sample size $1/\sum_\ell (\hat w^{(\ell)})^2$ of the fitness weights that (c) draws with, and
 # `info["parents"]`, the indices $k_\ell$.
-#
+
+# %% [markdown]
 # **What this algorithm is.** Steps (a) to (d) are an **auxiliary particle filter** (Pitt and Shephard, 1999): its
 # resampling *looks ahead* at the next reading, and (d) corrects for that. The **bootstrap filter** (Gordon,
 # Salmond and Smith, 1993) resamples with the current weights alone. It is given (`falling_object.bootstrap_step`),
@@ -921,8 +922,8 @@ plt.show()
 # 90th percentile). <!-- claim: reentry-pf/yardstick-across-prior -->
 # Near the lab's truth it barely moves: shifting the true $\beta$ by $\pm$400 or $v_0$ by $\pm$50 m/s changes it at
 # 30 s by less than 3%. <!-- claim: reentry-pf/yardstick-insensitive -->
-# So the lesson of Question 2 stands with either curve: the band of the handout's setting is about 5 to 6 times as
-# wide. <!-- claim: reentry-pf/handout-band-far-from-yardstick -->
+# So the lesson of Question 2 stands with either curve: in the median run, the band of the handout's setting is
+# about 6 times as wide (and with the handout's noise and $N$ = 2000, about 5 times). <!-- claim: reentry-pf/handout-band-far-from-yardstick -->
 
 # %% [markdown]
 # **Why score only $t \ge$ 20 s?** Before about 15 s the readings say almost nothing about $\beta$, so even an exact
