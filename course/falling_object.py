@@ -68,6 +68,11 @@ class TuningSetting:
 
 
 HANDOUT_STD: tuple[float, float, float] = (100.0, 100.0, 5.0)
+HANDOUT_SETTING = TuningSetting("auxiliary", N_PARTICLES, HANDOUT_STD)
+"""The handout's setting: the auxiliary filter (pf_step), N = 5000, noise (100 m, 100 m/s, 5)."""
+TUNED_SETTING = TuningSetting("auxiliary", 2000, CHOSEN)
+"""The tuned setting: the auxiliary filter (pf_step), N = 2000, noise (10 m, 10 m/s, 50)."""
+SETTING_NAMES: dict[TuningSetting, str] = {HANDOUT_SETTING: "the handout's setting", TUNED_SETTING: "the tuned setting"}
 TUNING_SETTINGS: tuple[TuningSetting, ...] = (
     *(TuningSetting("auxiliary", 2000, (hv, hv, beta)) for beta in (5.0, 50.0) for hv in (3.0, 10.0, 30.0, 100.0)),
     TuningSetting("auxiliary", 500, HANDOUT_STD),
@@ -206,24 +211,31 @@ def load_tuning(path: str | Path | None = None) -> TuningStudy:
 
 def format_tuning_table(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING_SETTINGS,
                         ideal: dict[str, Vector] | None = None) -> str:
-    """A table of the study: RMSE of h, v, beta and the coverage of the 50% and 90% bands, per setting,
-    and with ``ideal`` (from ideal_scores) a last row with what an exact posterior would score."""
-    rows = [f"{'setting':<44}{'RMSE h [m]':>11}{'v [m/s]':>9}{'beta':>7}{'in 50%: h':>11}{'v':>6}{'beta':>6}"
-            f"{'in 90%: h':>11}{'v':>6}{'beta':>6}"]
-    named = [(setting.label, study.summary(setting)) for setting in settings]
+    """A table of the study: RMSE of h, v, beta (beta's with +- two standard errors of its mean over the
+    seeds) and the coverage of the 50% and 90% bands, per setting; the two named settings (SETTING_NAMES)
+    marked. With ``ideal`` (from ideal_scores) a last row with what an exact posterior would score."""
+    rows = [f"{'setting':<44}{'RMSE h [m]':>11}{'v [m/s]':>9}{'beta':>7}{'+-2 se':>8}{'in 50%: h':>11}{'v':>6}"
+            f"{'beta':>6}{'in 90%: h':>11}{'v':>6}{'beta':>6}"]
+    named = []
+    for setting in settings:
+        betas = study.runs[setting]["rmse_beta"]
+        spread = f"+-{2 * np.std(betas, ddof=1) / np.sqrt(betas.shape[0]):.0f}"
+        named.append((setting.label, study.summary(setting), spread, SETTING_NAMES.get(setting, "")))
     if ideal is not None:
-        named.append(("exact posterior (linearised), expected", ideal))
-    for label, m in named:
-        rows.append(f"{label:<44}" + f"{m['rmse'][0]:>11.0f}{m['rmse'][1]:>9.0f}{m['rmse'][2]:>7.0f}"
+        named.append(("exact posterior (linearised), expected", ideal, "", ""))
+    for label, m, spread, name in named:
+        rows.append(f"{label:<44}" + f"{m['rmse'][0]:>11.0f}{m['rmse'][1]:>9.0f}{m['rmse'][2]:>7.0f}{spread:>8}"
                     + f"{m['cover50'][0]:>11.0%}{m['cover50'][1]:>6.0%}{m['cover50'][2]:>6.0%}"
-                    + f"{m['cover90'][0]:>11.0%}{m['cover90'][1]:>6.0%}{m['cover90'][2]:>6.0%}")
+                    + f"{m['cover90'][0]:>11.0%}{m['cover90'][1]:>6.0%}{m['cover90'][2]:>6.0%}"
+                    + (f"  <- {name}" if name else ""))
     n = len(next(iter(study.runs.values()))["rmse_h"])
-    rows.append(f"(means over {n} simulated half minutes per setting; RMSE and coverage over t = {SCORE_FROM:g} s to 30 s)")
+    rows.append(f"(means over {n} simulated half minutes per setting; RMSE and coverage over t = {SCORE_FROM:g} s to 30 s;")
+    rows.append(" +-2 se: two standard errors of the mean RMSE of beta over the runs)")
     return "\n".join(rows)
 
 
 # =============================================================================================
-# Given parts: the bootstrap filter's step, and the Cramer-Rao bound of beta
+# Given parts: the bootstrap filter's step, and the yardstick of beta (its linearised posterior sd)
 # =============================================================================================
 Dynamics = Callable[[float, np.ndarray], np.ndarray]
 
@@ -262,6 +274,20 @@ def bootstrap_step(
     return x_new, w_new / np.sum(w_new)
 
 
+def scripted_step(parents: list) -> Callable[..., tuple[Matrix, Vector]]:
+    """A step for following run_particle_filter by hand: it moves no particle and changes no weight, and
+    its k-th call reports ``parents[k]`` as the resampled indices (info["parents"]) and N as the ESS."""
+    script = iter(parents)
+
+    def step(x: Matrix, w: Vector, b_next: float, rng: np.random.Generator, innovation_std: Vector | None = None,
+             info: dict | None = None) -> tuple[Matrix, Vector]:
+        if info is not None:
+            info["parents"], info["ess"] = np.asarray(next(script)), float(x.shape[1])
+        return x, w
+
+    return step
+
+
 def state_sensitivities(dynamics: Dynamics, x0: Vector, t: Vector) -> NDArray[np.float64]:
     """Phi_j = dx(t_j) / dx0 of the noise-free model x' = f(x) (``dynamics``) from x0, shape (len(t), 3, 3),
     by central differences of tight ODE solves."""
@@ -285,17 +311,18 @@ def _information(phi: NDArray[np.float64], sigma: float, prior_std: Vector) -> N
     return np.diag(1.0 / np.asarray(prior_std) ** 2) + np.cumsum(S[:, :, None] * S[:, None, :], axis=0) / sigma**2
 
 
-def beta_crb(dynamics: Dynamics, x0: Vector, t: Vector, sigma: float = SIGMA, prior_std: Vector = PRIOR_STD) -> Vector:
-    """The Cramer-Rao bound of beta [kg/(m s^2)] after the readings b_1..b_j, for every t_j (shape (len(t),)).
+def beta_linearised_sd(dynamics: Dynamics, x0: Vector, t: Vector, sigma: float = SIGMA, prior_std: Vector = PRIOR_STD) -> Vector:
+    """The lab's yardstick: the posterior standard deviation of beta [kg/(m s^2)] after the readings
+    b_1..b_j, for the model linearised at x0, for every t_j (shape (len(t),)).
 
     The noise-free model x' = f(x) (``dynamics``) from x0 makes the altitudes h_j(x0) a function of the
     initial state; their sensitivities s_j = dh_j / dx0 give the Fisher information of the readings,
     J_j = C^-1 + sum_{i=1..j} s_i s_i^T / sigma^2, with the prior covariance C = diag(prior_std^2)
-    standing for what is known at t_0. Because J includes the prior, sqrt([J_j^-1]_33) is a Bayesian
-    (Van Trees) bound: a floor for the root mean square error of any estimate of beta, averaged over
-    the prior; here it is evaluated along the true trajectory (x0 = the truth), where it is also the
-    posterior standard deviation of the linearised model. It knows nothing of the filter's
-    artificial process noise.
+    standing for what is known at t_0. Evaluated along the true trajectory (x0 = the truth),
+    sqrt([J_j^-1]_33) is the posterior sd of the model linearised there (a Laplace approximation). It is
+    not a bound at that truth; the Van Trees bound, a floor for the error averaged over the prior,
+    averages the readings' information over prior draws of x0 instead. It knows nothing of the
+    filter's artificial process noise.
     """
     J = _information(state_sensitivities(dynamics, x0, t), sigma, prior_std)
     # [J^-1]_33 by solving J y = e_3
@@ -508,11 +535,11 @@ def print_report(data: RadarData, history: FilterHistory) -> None:
     print(format_report(data, history))
 
 
-def plot_tracking(data: RadarData, history: FilterHistory, title: str = "", crb: Vector | None = None) -> NDArray[np.object_]:
+def plot_tracking(data: RadarData, history: FilterHistory, title: str = "", yardstick: Vector | None = None) -> NDArray[np.object_]:
     """The show and tell: h, v and beta against time with the truth, weighted mean, weighted
-    median and the 50% and 90% credibility bands. With ``crb`` (the Cramer-Rao bound of beta at
-    every t_j, from beta_crb), the beta panels also show the truth +- 1.645 crb: a curve of the
-    width of an ideal 90% band (an ideal band is centred on its estimate, not on the truth, so
+    median and the 50% and 90% credibility bands. With ``yardstick`` (the linearised posterior sd of
+    beta at every t_j, from beta_linearised_sd), the beta panels also show the truth +- 1.645
+    yardstick: a curve of the width of an exact posterior's 90% band (an ideal band is centred on its estimate, not on the truth, so
     only the widths compare).
 
     Altitude and speed change by tens of kilometres and kilometres per second, while the bands
@@ -535,11 +562,11 @@ def plot_tracking(data: RadarData, history: FilterHistory, title: str = "", crb:
             ax.plot(t, history.mean[i] - offset, color="C3", lw=1.3, label="weighted mean")
             ax.plot(t, history.median[i] - offset, color="C1", lw=1.1, ls="--", label="weighted median")
             ax.grid(alpha=0.3)
-        if i == 2 and crb is not None:
+        if i == 2 and yardstick is not None:
             for row, offset in ((0, 0.0), (1, data.x_true[2])):
                 for sign in (-1, 1):
-                    axes[row, 2].plot(t, data.x_true[2] - offset + sign * Z90 * crb, color="C4", lw=1.4, ls=":",
-                                      label=r"truth $\pm$ 1.645 $\times$ Cramér–Rao bound" if sign < 0 else None)
+                    axes[row, 2].plot(t, data.x_true[2] - offset + sign * Z90 * yardstick, color="C4", lw=1.4, ls=":",
+                                      label=r"truth $\pm$ 1.645 $\times$ yardstick (linearised posterior sd)" if sign < 0 else None)
         axes[0, i].set_title(f"{name}: estimate and truth")
         axes[0, i].set_ylabel(label)
         axes[1, i].set_title(f"{name} minus the truth")
@@ -576,12 +603,13 @@ def plot_health(data: RadarData, histories: Mapping[str, FilterHistory]) -> NDAr
     for ax in axes[:2]:
         ax.set_ylim(0, 1.05 * max(h.n_particles for h in histories.values()))
     # the no-information baseline: multinomial resampling with equal weights keeps 1 - 1/e of N as
-    # distinct parents per step, and n such steps leave about 2N / (n + 2) roots (pure genetic drift)
+    # distinct parents per step, and n such steps leave about 2N / (n + 2) roots (pure genetic drift).
+    # Both assume multinomial resampling: systematic resampling of equal weights keeps every particle.
     for N in sorted({h.n_particles for h in histories.values()}):
         n = np.arange(data.t.shape[0])
         axes[1].axhline((1 - np.exp(-1)) * N, color="0.3", lw=1.0, ls="--",
-                        label=f"equal weights: (1 - 1/e) N = {(1 - np.exp(-1)) * N:.0f}")
-        axes[2].semilogy(data.t, 2 * N / (n + 2), color="0.3", lw=1.0, ls="--", label="equal weights: 2N / (n + 2) after n steps")
+                        label=f"multinomial resampling of equal weights: (1 - 1/e) N = {(1 - np.exp(-1)) * N:.0f}")
+        axes[2].semilogy(data.t, 2 * N / (n + 2), color="0.3", lw=1.0, ls="--", label="multinomial, equal weights: 2N / (n + 2) roots after n steps")
     # one legend below the panels, so that it covers no curve: the runs, then each baseline once
     labelled = {label: handle for ax in axes for handle, label in zip(*ax.get_legend_handles_labels())}
     fig.legend(labelled.values(), labelled.keys(), loc="outside lower center", ncol=len(labelled), fontsize=9)
@@ -593,10 +621,11 @@ Z90: float = 1.6448536269514722
 """The 95% point of the standard normal: a Gaussian's 90% band is the mean +- Z90 standard deviations."""
 
 
-def plot_band_widths(study: TuningStudy, settings: list[TuningSetting], t: Vector, crb: Vector, ax: Axes | None = None) -> Axes:
+def plot_band_widths(study: TuningStudy, settings: list[TuningSetting], t: Vector, yardstick: Vector, ax: Axes | None = None) -> Axes:
     """The width of beta's 90% band against time over the study's seeds, one colour per setting:
-    the median over the seeds and the band from the 10th to the 90th percentile. The Cramer-Rao
-    yardstick 2 x 1.645 x crb (crb at the times t) and the prior's 90% band are drawn for comparison."""
+    the median over the seeds and the band from the 10th to the 90th percentile. The width of an exact
+    posterior's band, 2 x 1.645 x yardstick (the linearised posterior sd at the times t), and the prior's
+    90% band are drawn for comparison."""
     import matplotlib.pyplot as plt
 
     if ax is None:
@@ -606,7 +635,7 @@ def plot_band_widths(study: TuningStudy, settings: list[TuningSetting], t: Vecto
         low, mid, high = np.percentile(widths, [10, 50, 90], axis=0)
         ax.fill_between(study.width_times, low, high, color=colour, alpha=0.2, lw=0)
         ax.plot(study.width_times, mid, color=colour, lw=1.6, label=f"{setting.label}: median, 10-90% of {widths.shape[0]} seeds")
-    ax.plot(t, 2 * Z90 * crb, color="C4", lw=1.6, ls=":", label=r"2 $\times$ 1.645 $\times$ Cramér–Rao bound")
+    ax.plot(t, 2 * Z90 * yardstick, color="C4", lw=1.6, ls=":", label=r"2 $\times$ 1.645 $\times$ yardstick (linearised posterior sd)")
     prior = 2 * Z90 * PRIOR_STD[2]
     ax.axhline(prior, color="k", lw=0.8, ls="--", label=f"prior 90% band ({prior:.0f})")
     ax.set_ylim(bottom=0)
@@ -644,7 +673,7 @@ def plot_tuning(study: TuningStudy, settings: tuple[TuningSetting, ...] = TUNING
         ax.set_xlabel(f"fraction of t = {SCORE_FROM:g}-30 s the truth of {name} is inside")
         ax.set_title(f"{name}: coverage of the bands")
         ax.grid(alpha=0.3, axis="x")
-    axes[0].set_yticks(rows, [s.label for s in settings], fontsize=8)
+    axes[0].set_yticks(rows, [s.label + (f" ({SETTING_NAMES[s][4:]})" if s in SETTING_NAMES else "") for s in settings], fontsize=8)
     handles, labels = axes[0].get_legend_handles_labels()
     fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=9)
     fig.suptitle("Which settings are over-confident (left of the dotted lines) or under-confident (right)?")

@@ -3,8 +3,12 @@
 The tuning study (course/data/falling_object_tuning.csv, 50 simulated half minutes per setting)
 is built by ``solutions.reentry_pf.reference.tuning_runs`` and rebuilt byte for byte by
 ``python -m autograder data --check``, so the checks that quote it read the shipped file rather
-than rerun 700 filters. The Cramer-Rao bound is recomputed; the diagnostics of single runs are
-recomputed on 10 fresh seeds.
+than rerun 700 filters. The yardstick (the linearised posterior sd of beta at the truth) and the
+Van Trees bound are recomputed; the diagnostics of single runs are recomputed on 10 fresh seeds.
+
+Issue 33: the RMSE and coverage of beta scatter by about +-25% from one batch of runs to the next,
+so the claims about them state their spread over five batches of 10 study runs (``batches``), or
+compare with the standard error of the mean, rather than a threshold inside that scatter.
 """
 
 from __future__ import annotations
@@ -18,6 +22,9 @@ from course import falling_object as fo
 from solutions.reentry_pf import reference as ref
 
 HANDOUT = {N: fo.TuningSetting("auxiliary", N, fo.HANDOUT_STD) for N in (500, 2000, 5000)}
+HANDOUT_SETTING = fo.HANDOUT_SETTING  # the handout's setting: auxiliary, N = 5000, noise (100, 100, 5)
+TUNED_SETTING = fo.TUNED_SETTING  # the tuned setting: auxiliary, N = 2000, noise (10, 10, 50)
+assert HANDOUT_SETTING == HANDOUT[5000]
 CHOSEN = {N: fo.TuningSetting("auxiliary", N, fo.CHOSEN) for N in (500, 2000)}
 SMALL_BETA_NOISE = {N: fo.TuningSetting("auxiliary", N, (10.0, 10.0, 5.0)) for N in (500, 2000)}
 BOOTSTRAP = {"handout": fo.TuningSetting("bootstrap", 2000, fo.HANDOUT_STD), "chosen": fo.TuningSetting("bootstrap", 2000, fo.CHOSEN)}
@@ -25,7 +32,33 @@ BOOTSTRAP = {"handout": fo.TuningSetting("bootstrap", 2000, fo.HANDOUT_STD), "ch
 
 @functools.cache
 def crb() -> np.ndarray:
-    return fo.beta_crb(ref.tracking_dynamics, fo.X0_TRUE, fo.time_grid())
+    """The yardstick: beta's posterior sd for the model linearised at the truth, at every t_j."""
+    return fo.beta_linearised_sd(ref.tracking_dynamics, fo.X0_TRUE, fo.time_grid())
+
+
+def fisher_information(x0: np.ndarray) -> np.ndarray:
+    """The readings' Fisher information about x0 at every t_j, (T + 1, 3, 3), without the prior's."""
+    s = fo.state_sensitivities(ref.tracking_dynamics, x0, fo.time_grid())[:, 0, :].copy()
+    s[0] = 0.0  # b_0 is in the prior
+    return np.cumsum(s[:, :, None] * s[:, None, :], axis=0) / fo.SIGMA**2
+
+
+@functools.cache
+def van_trees(seed: int, draws: int = 40) -> tuple[np.ndarray, np.ndarray]:
+    """The Van Trees bound of beta at every t_j from ``draws`` prior draws of x0 (the Fisher information
+    averaged over them, plus the prior's), and the linearised posterior sd at 30 s of each draw."""
+    rng = np.random.default_rng([seed, 55])
+    mean = np.array([fo.load().b[0], fo.V_INIT, fo.BETA_INIT])
+    prior_information = np.diag(1.0 / fo.PRIOR_STD**2)
+    informations = [fisher_information(mean + fo.PRIOR_STD * rng.standard_normal(3)) for _ in range(draws)]
+    at_draws = np.array([np.sqrt(np.linalg.inv(f[-1] + prior_information)[2, 2]) for f in informations])
+    bound = np.sqrt(np.linalg.inv(np.mean(informations, axis=0) + prior_information)[:, 2, 2])
+    return bound, at_draws
+
+
+def batches(setting: fo.TuningSetting, column: str, size: int = 10) -> np.ndarray:
+    """The mean of ``column`` over each batch of ``size`` consecutive study runs (5 batches of 10)."""
+    return study().runs[setting][column].reshape(-1, size).mean(axis=1)
 
 
 @functools.cache
@@ -57,25 +90,43 @@ def mean(setting: fo.TuningSetting, column: str) -> float:
     return float(np.mean(study().runs[setting][column]))
 
 
-@claim("reentry-pf/crb-insensitive")
+@claim("reentry-pf/yardstick-insensitive")
 def _() -> None:
-    """The bound at 30 s changes by less than 3% when the truth's beta moves by +-400 or its v0 by +-50."""
+    """The yardstick at 30 s changes by less than 3% when the truth's beta moves by +-400 or its v0 by +-50."""
     for shift in ([0.0, 0.0, 400.0], [0.0, 0.0, -400.0], [0.0, 50.0, 0.0], [0.0, -50.0, 0.0]):
-        moved = fo.beta_crb(ref.tracking_dynamics, fo.X0_TRUE + np.array(shift), fo.time_grid())[-1]
+        moved = fo.beta_linearised_sd(ref.tracking_dynamics, fo.X0_TRUE + np.array(shift), fo.time_grid())[-1]
         assert abs(moved / crb()[-1] - 1) < 0.03, (shift, moved, crb()[-1])
 
 
-@claim("reentry-pf/crb-information")
+@claim("reentry-pf/yardstick-information")
 def _() -> None:
-    """At t = 30 s the Fisher information of beta (readings plus prior) is over 50 times the prior's: a bound of about
-    200 (between 150 and 212)."""
+    """At t = 30 s the information about beta (readings plus prior) is over 50 times the prior's: a yardstick of about 200."""
     ratio = (fo.PRIOR_STD[2] / crb()[-1]) ** 2
-    assert ratio > 50 and crb()[-1] > 150, f"information / prior information at 30 s is {ratio:.1f}, bound {crb()[-1]:.0f}"
+    assert ratio > 50 and 180 < crb()[-1] < 212, f"information / prior information at 30 s is {ratio:.1f}, yardstick {crb()[-1]:.0f}"
 
 
-@claim("reentry-pf/crb-arrives-late")
+@claim("reentry-pf/yardstick-near-van-trees")
 def _() -> None:
-    """The bound is within 1% of the prior's 1500 at 10 s, above 80% of it at 15 s, and falls most between 15 s and 25 s."""
+    """The Van Trees bound (over each of two sets of 40 prior draws) is within 6% of the yardstick at 20 s and 30 s, and 195-215 at 30 s."""
+    for seed in (0, 1):
+        bound, _ = van_trees(seed)
+        for t in (20, 30):
+            j = round(t / fo.DT)
+            assert abs(bound[j] / crb()[j] - 1) < 0.06, (seed, t, bound[j], crb()[j])
+        assert 195 < bound[-1] < 215, (seed, bound[-1])
+
+
+@claim("reentry-pf/yardstick-across-prior")
+def _() -> None:
+    """Over 80 prior draws of x0, the linearised posterior sd of beta at 30 s has its 10th percentile at 170-195 and its 90th at 235-265."""
+    at_draws = np.concatenate([van_trees(seed)[1] for seed in (0, 1)])
+    low, high = np.percentile(at_draws, [10, 90])
+    assert 170 < low < 195 and 235 < high < 265, (low, high)
+
+
+@claim("reentry-pf/information-arrives-late")
+def _() -> None:
+    """The yardstick is within 1% of the prior's 1500 at 10 s, above 80% of it at 15 s, and falls most between 15 s and 25 s."""
     bound = crb()
     j = lambda t: round(t / fo.DT)  # noqa: E731
     assert bound[j(10)] > 0.99 * 1500 and bound[j(15)] > 0.8 * 1500, (bound[j(10)], bound[j(15)])
@@ -83,14 +134,18 @@ def _() -> None:
     assert max(drops, key=drops.get) in (15, 20), drops
 
 
-@claim("reentry-pf/handout-band-far-from-crb")
+@claim("reentry-pf/handout-band-far-from-yardstick")
 def _() -> None:
-    """Handout's setting, N = 2000 and 5000: beta's 90% band at 30 s is over 1.5 times the yardstick in every
-    one of the 50 study runs, and 4 to 8 times it in the median run."""
-    yardstick = 2 * fo.Z90 * crb()[-1]
-    for N in (2000, 5000):
-        ratio = study().runs[HANDOUT[N]]["width90_beta"][:, -1] / yardstick
-        assert ratio.min() > 1.5 and 4 < np.median(ratio) < 8, (N, ratio.min(), np.median(ratio))
+    """Handout's noise, N = 2000 and 5000: beta's 90% band at 30 s is over 1.5 times the yardstick in every study run, and in
+    the median run 4 to 8 times it (about 6 for N = 5000, 5 for N = 2000), also against the Van Trees bound."""
+    for reference in (crb()[-1], van_trees(0)[0][-1], van_trees(1)[0][-1]):
+        band = 2 * fo.Z90 * reference
+        medians = {}
+        for N in (2000, 5000):
+            ratio = study().runs[HANDOUT[N]]["width90_beta"][:, -1] / band
+            assert ratio.min() > 1.5 and 4 < np.median(ratio) < 8, (N, ratio.min(), np.median(ratio))
+            medians[N] = np.median(ratio)
+        assert 5.5 <= medians[5000] < 7 and 4.5 <= medians[2000] < 6, medians
 
 
 @claim("reentry-pf/ess-after-d-high")
@@ -155,11 +210,11 @@ def _() -> None:
 
 @claim("reentry-pf/fewer-particles-narrower")
 def _() -> None:
-    """Handout's setting: the median width of beta's 90% band at 30 s grows with N (500, 2000, 5000); at N = 500
-    it is narrower than the yardstick in some study runs; and at N = 500 the median band is already below 0.8 of
-    the prior's at 10 s, while the bound there is still above 0.99 of the prior's (narrowing without information)."""
+    """Handout's noise: beta's 90% band at 30 s is narrower with N = 500 than with 2000 and 5000 (medians, in each batch of 10), narrower than the yardstick in some N = 500 runs, and below 0.8 of the prior's at 10 s."""
     medians = [np.median(study().runs[HANDOUT[N]]["width90_beta"][:, -1]) for N in (500, 2000, 5000)]
-    assert medians[0] < medians[1] < medians[2], medians
+    assert [round(m, -1) for m in medians] == [1600, 3550, 4190], medians
+    per_batch = [np.median(study().runs[HANDOUT[N]]["width90_beta"][:, -1].reshape(-1, 10), axis=1) for N in (500, 2000, 5000)]
+    assert np.all(per_batch[0] < np.minimum(per_batch[1], per_batch[2])), per_batch
     assert study().runs[HANDOUT[500]]["width90_beta"][:, -1].min() < 2 * fo.Z90 * crb()[-1]
     at_10 = int(np.flatnonzero(np.isclose(study().width_times, 10.0))[0])
     early = np.median(study().runs[HANDOUT[500]]["width90_beta"][:, at_10]) / prior_band()
@@ -168,45 +223,73 @@ def _() -> None:
 
 @claim("reentry-pf/handout-band-near-prior")
 def _() -> None:
-    """Handout's setting, N = 5000: the median width of beta's 90% band at 30 s is still above 0.8 of the prior's
-    90% band (4935)."""
-    ratio = np.median(study().runs[HANDOUT[5000]]["width90_beta"][:, -1]) / prior_band()
-    assert ratio > 0.8, ratio
+    """The handout's setting: the median width of beta's 90% band at 30 s is 0.8-0.9 of the prior's (4935), 77-98% per batch of 10."""
+    widths = study().runs[HANDOUT[5000]]["width90_beta"][:, -1]
+    ratio = np.median(widths) / prior_band()
+    per_batch = np.median(widths.reshape(-1, 10), axis=1) / prior_band()
+    assert 0.8 < ratio < 0.9 and round(100 * per_batch.min()) == 77 and round(100 * per_batch.max()) == 98, (ratio, per_batch)
 
 
 @claim("reentry-pf/handout-v-too-wide")
 def _() -> None:
-    """Handout's setting (N = 2000, 5000): the truth of v is in the 50% band over 90% of the time and in the 90% band
-    over 99% of the time."""
-    for N in (2000, 5000):
-        assert mean(HANDOUT[N], "cover50_v") > 0.9 and mean(HANDOUT[N], "cover90_v") > 0.99, N
+    """The handout's setting: the truth of v is in the 50% band over 90% of the time, in the study and in each batch of 10 runs."""
+    assert mean(HANDOUT_SETTING, "cover50_v") > 0.9 and batches(HANDOUT_SETTING, "cover50_v").min() > 0.9
 
 
 @claim("reentry-pf/handout-v-upward")
 def _() -> None:
-    """Handout's setting (N = 2000, 5000): the 90% interval of v at 30 s reaches below 0 in every one of the 50 study runs."""
+    """The handout's setting (and its noise with N = 2000): the 90% interval of v at 30 s reaches below 0 in all 50 study runs."""
     for N in (2000, 5000):
         assert np.all(study().runs[HANDOUT[N]]["lo90_v_end"] < 0), N
 
 
-@claim("reentry-pf/chosen-rmse")
+@claim("reentry-pf/tuned-rmse-hv")
 def _() -> None:
-    """N = 2000, scored over t >= 20 s: the chosen setting's RMSE of h is below 0.5, of v below 0.2, of beta below
-    0.6 times the handout's; its beta RMSE is within 1.3 to 1.8 times the exact posterior's, the handout's over 2.5."""
-    ratios = [mean(CHOSEN[2000], f"rmse_{n}") / mean(HANDOUT[2000], f"rmse_{n}") for n in fo.STATE_NAMES]
-    assert ratios[0] < 0.5 and ratios[1] < 0.2 and ratios[2] < 0.6, ratios
-    to_ideal = [mean(s, "rmse_beta") / ideal()["rmse"][2] for s in (CHOSEN[2000], HANDOUT[2000])]
-    assert 1.3 < to_ideal[0] < 1.8 and to_ideal[1] > 2.5, to_ideal
+    """Tuned over handout's setting, RMSE over t >= 20 s: h 0.42-0.5 (0.4-0.52 per batch of 10), v 0.12-0.18 (0.1-0.21); the table's 86, 188, 14, 92."""
+    for n, (low, high), (batch_low, batch_high) in (("h", (0.42, 0.5), (0.4, 0.52)), ("v", (0.12, 0.18), (0.1, 0.21))):
+        ratio = mean(TUNED_SETTING, f"rmse_{n}") / mean(HANDOUT_SETTING, f"rmse_{n}")
+        per_batch = batches(TUNED_SETTING, f"rmse_{n}") / batches(HANDOUT_SETTING, f"rmse_{n}")
+        assert low < ratio < high and batch_low < per_batch.min() and per_batch.max() < batch_high, (n, ratio, per_batch)
+    table = [round(mean(s, f"rmse_{n}")) for n in ("h", "v") for s in (TUNED_SETTING, HANDOUT_SETTING)]
+    assert table == [86, 188, 14, 92], table
 
 
-@claim("reentry-pf/chosen-coverage")
+def two_se(setting: fo.TuningSetting, column: str) -> float:
+    """Two standard errors of the mean of ``column`` over the study's runs, as the table prints it for beta's RMSE."""
+    runs = study().runs[setting][column]
+    return float(2 * np.std(runs, ddof=1) / np.sqrt(runs.shape[0]))
+
+
+@claim("reentry-pf/tuned-rmse-beta")
 def _() -> None:
-    """N = 2000, chosen setting, scored over t >= 20 s: every 90% band holds the truth at least 90% of the time; the
-    50% band of h 45-60%, of v over 85%, of beta over 60%, while the exact posterior's 50% bands score 50-53%."""
-    c90 = [mean(CHOSEN[2000], f"cover90_{n}") for n in fo.STATE_NAMES]
-    c50 = [mean(CHOSEN[2000], f"cover50_{n}") for n in fo.STATE_NAMES]
-    assert min(c90) >= 0.9 and 0.45 <= c50[0] <= 0.6 and c50[1] > 0.85 and c50[2] > 0.6, (c50, c90)
+    """Beta's RMSE, tuned over handout's setting: 0.7-0.8 (508 against 678, +-2 se about 90 and 110, overlapping); per batch of 10 below 0.5 to above 1.2."""
+    tuned, handout = mean(TUNED_SETTING, "rmse_beta"), mean(HANDOUT_SETTING, "rmse_beta")
+    assert 0.7 < tuned / handout < 0.8 and (round(tuned), round(handout)) == (508, 678), (tuned, handout)
+    spreads = two_se(TUNED_SETTING, "rmse_beta"), two_se(HANDOUT_SETTING, "rmse_beta")
+    assert 80 < spreads[0] < 100 and 100 < spreads[1] < 120 and tuned + spreads[0] > handout - spreads[1], spreads
+    per_batch = batches(TUNED_SETTING, "rmse_beta") / batches(HANDOUT_SETTING, "rmse_beta")
+    assert per_batch.min() < 0.5 and per_batch.max() > 1.2, per_batch
+    assert round(ideal()["rmse"][2]) == 323 and ideal()["rmse"][2] < tuned, ideal()["rmse"]
+
+
+@claim("reentry-pf/beta-rmse-spread")
+def _() -> None:
+    """The handout's setting: the 10th percentile of one run's beta RMSE is 120-180, the 90th 1100-1300."""
+    low, high = np.percentile(study().runs[HANDOUT_SETTING]["rmse_beta"], [10, 90])
+    assert 120 < low < 180 and 1100 < high < 1300, (low, high)
+
+
+@claim("reentry-pf/tuned-coverage")
+def _() -> None:
+    """Tuned setting, over t >= 20 s: 90% bands 96/100/97%, 50% bands h 55%, v 93%, beta 68% (55-76% per batch of 10); exact posterior 50-53%."""
+    c90 = [mean(TUNED_SETTING, f"cover90_{n}") for n in fo.STATE_NAMES]
+    c50 = [mean(TUNED_SETTING, f"cover50_{n}") for n in fo.STATE_NAMES]
+    assert min(c90) >= 0.9 and 0.45 <= c50[0] <= 0.6 and c50[1] > 0.85 and 0.6 < c50[2] < 0.75, (c50, c90)
+    assert [round(100 * c) for c in c90 + c50] == [96, 100, 97, 55, 93, 68], (c90, c50)
+    per_batch = batches(TUNED_SETTING, "cover50_beta")
+    assert 0.5 < per_batch.min() and per_batch.max() < 0.8 and round(100 * per_batch.min()) == 55 and round(100 * per_batch.max()) == 76, per_batch
     assert np.all((0.5 <= ideal()["cover50"]) & (ideal()["cover50"] <= 0.53)), ideal()["cover50"]
+    assert np.all(ideal()["cover50"] < min(c50[1:])), ideal()["cover50"]
 
 
 @claim("reentry-pf/small-noise-overconfident")
@@ -217,23 +300,28 @@ def _() -> None:
         assert mean(setting, "cover90_h") < 0.8, (beta, mean(setting, "cover90_h"))
 
 
-@claim("reentry-pf/chosen-needs-particles")
+@claim("reentry-pf/tuned-needs-particles")
 def _() -> None:
-    """Chosen setting: with N = 500 beta's 90% band holds the truth less than 80% of the time (over 90% with N = 2000)."""
+    """Tuned noise: with N = 500 beta's 90% band holds the truth less than 80% of the time, in each batch of 10 (over 90% with N = 2000)."""
+    assert batches(CHOSEN[500], "cover90_beta").max() < 0.8, batches(CHOSEN[500], "cover90_beta")
     assert mean(CHOSEN[500], "cover90_beta") < 0.8 < 0.9 < mean(CHOSEN[2000], "cover90_beta")
 
 
 @claim("reentry-pf/bootstrap-similar")
 def _() -> None:
-    """N = 2000, handout's and chosen setting: the bootstrap filter's RMSE of h and v is within 10% of the auxiliary
-    filter's, and every coverage within 7 percentage points."""
+    """N = 2000, handout's and tuned noise: bootstrap RMSE of h, v within 10% of the auxiliary's, their coverage within 7 points; beta's gaps within its batch scatter."""
     for name, aux in (("handout", HANDOUT[2000]), ("chosen", CHOSEN[2000])):
         boot = BOOTSTRAP[name]
         for n in ("h", "v"):
             ratio = mean(boot, f"rmse_{n}") / mean(aux, f"rmse_{n}")
             assert 0.9 < ratio < 1.1, (name, n, ratio)
-        for column in (f"cover{p}_{n}" for p in (50, 90) for n in fo.STATE_NAMES):
+        for column in (f"cover{p}_{n}" for p in (50, 90) for n in ("h", "v")):
             assert abs(mean(boot, column) - mean(aux, column)) < 0.07, (name, column)
+        # beta: the gap between the two filters' means is smaller than the range of either filter's batch means
+        for column in ("rmse_beta", "cover50_beta", "cover90_beta"):
+            gap = abs(mean(boot, column) - mean(aux, column))
+            scatter = min(np.ptp(batches(boot, column)), np.ptp(batches(aux, column)))
+            assert gap < scatter, (name, column, gap, scatter)
 
 
 @claim("reentry-pf/euler-error-small")
@@ -254,44 +342,48 @@ def _() -> None:
 
 @claim("reentry-pf/ideal-whole-run")
 def _() -> None:
-    """Scored over the whole run (t_1..t_T) at the lab's truth, an exact posterior's beta bands would hold the truth
-    70-75% (50% band) and 95-97% (90% band) of the time; scored over t >= 20 s, every band of h, v, beta scores
-    50-53% and 90-92%."""
+    """Scored over the whole run (t_1..t_T) at the lab's truth, an exact posterior's beta bands would hold the truth 70-75% (50% band) and 95-97% (90%)."""
     whole = ideal(fo.DT)
     assert 0.70 < whole["cover50"][2] < 0.75 and 0.95 < whole["cover90"][2] < 0.97, whole
+    assert abs((fo.BETA_INIT - fo.X0_TRUE[2]) / fo.PRIOR_STD[2] - 0.56) < 0.005
+
+
+@claim("reentry-pf/ideal-scored")
+def _() -> None:
+    """Scored over t >= 20 s, an exact posterior's 50% bands of h, v and beta score 50-53% and its 90% bands 90-92%."""
     late = ideal()
     assert np.all((0.5 <= late["cover50"]) & (late["cover50"] <= 0.53)), late
     assert np.all((0.9 <= late["cover90"]) & (late["cover90"] <= 0.92)), late
 
 
-@claim("reentry-pf/chosen-band-width")
+@claim("reentry-pf/tuned-band-width")
 def _() -> None:
-    """Chosen setting, N = 2000: beta's 90% band at 30 s is 3 to 5 times the yardstick in the median study run and
-    over 2 times in every run; with N = 500 its median is below that of N = 2000 and its 90% band holds the truth
-    less than 75% of the scored time."""
+    """Tuned setting: beta's 90% band at 30 s is 3 to 5 times the yardstick in the median study run, and in the median run of each batch of 10."""
     yardstick = 2 * fo.Z90 * crb()[-1]
-    ratio = study().runs[CHOSEN[2000]]["width90_beta"][:, -1] / yardstick
-    assert 3 < np.median(ratio) < 5 and ratio.min() > 2, (np.median(ratio), ratio.min())
-    small = np.median(study().runs[CHOSEN[500]]["width90_beta"][:, -1]) / yardstick
-    assert small < np.median(ratio) and mean(CHOSEN[500], "cover90_beta") < 0.75, (small, mean(CHOSEN[500], "cover90_beta"))
+    ratio = study().runs[TUNED_SETTING]["width90_beta"][:, -1] / yardstick
+    assert 3 < np.median(ratio) < 5, np.median(ratio)
+    per_batch = np.median(ratio.reshape(-1, 10), axis=1)
+    assert 3 < per_batch.min() and per_batch.max() < 5, per_batch
 
 
 @claim("reentry-pf/beta-noise-robust")
 def _() -> None:
-    """Noise (10, 10, 5) against the chosen (10, 10, 50), scored over t >= 20 s: the same RMSE within 5% at N = 2000;
-    beta's 90% band holds the truth less than 30% of the time at N = 500 (chosen: over 60%) and less than 90% at
-    N = 2000 (chosen: over 95%)."""
-    for n in fo.STATE_NAMES:
+    """Noise (10, 10, 5) against the tuned (10, 10, 50), over t >= 20 s: RMSE of h, v within 5% at N = 2000; beta's 90% coverage (mean, batch range) 83 (75-93) against 97 (93-100), at N = 500 17 (10-32) against 69 (60-73)."""
+    for n in ("h", "v"):
         assert abs(mean(SMALL_BETA_NOISE[2000], f"rmse_{n}") / mean(CHOSEN[2000], f"rmse_{n}") - 1) < 0.05, n
-    small = [mean(SMALL_BETA_NOISE[N], "cover90_beta") for N in (500, 2000)]
-    chosen = [mean(CHOSEN[N], "cover90_beta") for N in (500, 2000)]
-    assert small[0] < 0.3 and chosen[0] > 0.6 and small[1] < 0.9 and chosen[1] > 0.95, (small, chosen)
+    # the means over the 50 runs and the range of the means of five batches of 10, in percent, as stated
+    stated = {SMALL_BETA_NOISE[2000]: (83, 75, 93), TUNED_SETTING: (97, 93, 100), SMALL_BETA_NOISE[500]: (17, 10, 32),
+              CHOSEN[500]: (69, 60, 73)}
+    for setting, numbers in stated.items():
+        per_batch = batches(setting, "cover90_beta")
+        found = (round(100 * mean(setting, "cover90_beta")), round(100 * per_batch.min()), round(100 * per_batch.max()))
+        assert found == numbers, (setting.label, found, numbers)
 
 
-@claim("reentry-pf/chosen-band-widens-early")
+@claim("reentry-pf/tuned-band-widens-early")
 def _() -> None:
-    """Chosen setting, N = 2000: in 30% to 70% of the study runs beta's 90% band is wider than the prior's at some
+    """Tuned setting, N = 2000: in 30% to 70% of the study runs beta's 90% band is wider than the prior's at some
     whole second between 10 s and 18 s."""
     times = (study().width_times >= 10 - 1e-9) & (study().width_times <= 18 + 1e-9)
-    wider = np.mean(study().runs[CHOSEN[2000]]["width90_beta"][:, times].max(axis=1) > prior_band())
+    wider = np.mean(study().runs[TUNED_SETTING]["width90_beta"][:, times].max(axis=1) > prior_band())
     assert 0.3 <= wider <= 0.7, wider

@@ -1,0 +1,968 @@
+# ---
+# jupyter:
+#   jupytext:
+#     text_representation:
+#       extension: .py
+#       format_name: percent
+#       format_version: '1.3'
+#       jupytext_version: 1.19.6
+#   kernelspec:
+#     display_name: Python 3 (ipykernel)
+#     language: python
+#     name: python3
+# ---
+
+# %% [markdown]
+# # Lab reentry-pf: tracking a falling object, and its ballistic coefficient, with a particle filter
+#
+# An object (a meteorite, or a space module) falls through the atmosphere. A radar on the ground measures its
+# altitude ten times a second, with errors of about 500 m. From those readings we want its altitude, its speed and
+# its **ballistic coefficient** $\beta$, which sums up how its mass, shape and size let the air slow it down. The
+# model is nonlinear, so you will write a **particle filter**: a cloud of thousands of guesses, moved by the model,
+# weighed against each reading, and resampled.
+#
+# **What you will do**
+# 1. Write the model, and simulate the truth and the radar readings.
+# 2. Write the handout's particle filter (an *auxiliary particle filter*) one piece at a time.
+# 3. Measure it against a yardstick of how well $\beta$ can be known, and check the health of its resampling.
+# 4. Read a study of many settings, and judge which of its differences are real.
+#
+# **What is graded, and about how long each part takes**
+#
+# | part | what you write | points | about |
+# |---|---|---|---|
+# | 1. The model | `tracking_dynamics` | 1 | 15 min |
+# | 2. The truth and the radar | `simulate_radar`, Question 1 | 3 | 25 min |
+# | 3. The prior cloud | `initial_cloud` | 1 | 10 min |
+# | 4. One step of the particle filter | `pf_step` | 3 | 45 min |
+# | 5. Weighted credibility intervals | `credibility_interval` | 2 | 20 min |
+# | 6. The filter over half a minute | `run_particle_filter` | 2 | 25 min |
+# | 7. Show and tell, and a yardstick | Question 2 | 2 | 20 min |
+# | 8. Tuning | Question 3 | 2 | 20 min |
+# | **all** | 6 functions, 3 written answers | **16** | **about 3 h** |
+#
+# Section 9, "Going further", is optional reading: nothing there is graded.
+#
+# **How this notebook works.** Each blank is one function in a cell that says `YOUR CODE HERE`. Below it, a
+# read-only cell runs *visible checks* on cases you can work out by hand; their messages say what to fix. When you
+# are graded, *hidden tests* compare your function with a reference on random inputs, and each function is graded
+# on its own. The test of `pf_step` is statistical: a correct step fails it with probability below one in a million.
+# A graded function must leave the arrays it is given unchanged, and draw every random number from the `rng` it is
+# given, never from `np.random`. The three written answers are marked by hand. The grey cells are locked: grading
+# puts back their originals. Before you submit, press **Validate**: it lists each blank that is not written yet or
+# fails its visible checks.
+#
+# *Credit.* This lab follows the Day 5 exercise of the course "Bayesian Scientific Computing" by Daniela
+# Calvetti and Erkki Somersalo (Case Western Reserve University), given in Lyngby in December 2019. Its
+# model, numbers and algorithm are theirs. The auxiliary particle filter is due to Pitt and Shephard (1999),
+# the bootstrap filter to Gordon, Salmond and Smith (1993). The text, code and data here are our own, and so
+# are any errors. Where the handout is ambiguous, we say so and say which reading we use.
+
+# %% nbgrader={"grade": false, "grade_id": "setup", "locked": true, "schema_version": 3, "solution": false, "task": false}
+# Set-up: run this cell first.
+# %xmode Minimal
+# %matplotlib inline
+from functools import partial
+
+import numpy as np
+import matplotlib.pyplot as plt
+from scipy.integrate import solve_ivp
+
+from course import falling_object
+from course.falling_object import (BETA_INIT, CHOSEN_STD, DT, ETA, GAMMA, INNOVATION_STD, PRIOR_STD, SIGMA, V_INIT,
+                                   X0_TRUE, FilterHistory, G, check_history)
+from course.checks import check_array, check_close, check_pair, check_true, passed, require, validate
+
+# %% [markdown]
+# ## 1. The model
+#
+# The state is $x = [h, v, \beta]$: the altitude $h$ in **m**, the **downward** speed $v$ in **m/s** ($v > 0$
+# while the object falls) and the ballistic coefficient $\beta$ in kg/(m s$^2$). The object falls,
+# gravity pulls it down, and the air drags it back in proportion to the air density $\rho(h)$ and $v^2$:
+#
+# $$\frac{dh}{dt} = -v \quad (1), \qquad \frac{dv}{dt} = g - g\,\frac{\rho(h)\, v^2}{2\beta} \quad (2), \qquad
+#   \frac{d\beta}{dt} = 0 \quad (3), \qquad \rho(h) = \gamma\, e^{-\eta h} \quad (4),$$
+#
+# with $g$ = `G` = 9.81 m/s$^2$, $\gamma$ = `GAMMA` = 1.754 kg/m$^3$ and $\eta$ = `ETA` = 1.39e-4 1/m. Together,
+# $\dot x = f(x)$ with $f(x) = [-v,\ g - g\rho(h)v^2/(2\beta),\ 0]$ (5). Equation (3) says that $\beta$ is a
+# constant of the object; we just do not know it.
+#
+# A cloud of $N$ particles is an array of shape `(3, N)`: rows $h$, $v$, $\beta$, and column $\ell$ is particle
+# $x^{(\ell)}$. Write `tracking_dynamics(t, x)`, the handout's `TrackingDynamics`, so that it takes one state,
+# shape `(3,)`, or a cloud, shape `(3, N)`, and returns $f$ with the same shape. The ODE solver passes the time `t`;
+# the model does not use it. No loop: `h, v, beta = x` unpacks the rows, and NumPy works on all of them at once.
+
+# %% nbgrader={"grade": false, "grade_id": "load_data", "locked": true, "schema_version": 3, "solution": false, "task": false}
+data = falling_object.load()
+print(f"{data.t.size} radar readings, t = {data.t[0]:.1f} s to {data.t[-1]:.1f} s, every {DT} s")
+print(f"truth at t = 0: h = {data.x_true[0, 0]:.0f} m, v = {data.x_true[1, 0]:.0f} m/s, beta = {data.x_true[2, 0]:.0f}")
+print(f"first readings b_0, b_1, b_2 = {np.round(data.b[:3])} m (radar noise sigma = {SIGMA:.0f} m)")
+
+# %% nbgrader={"grade": false, "grade_id": "tracking_dynamics", "locked": false, "schema_version": 3, "solution": true, "task": false}
+def tracking_dynamics(t, x):
+    """f(x) of equation (5) for x of shape (3,) or (3, N); returns the same shape."""
+    ### BEGIN SOLUTION
+    h, v, beta = np.asarray(x, dtype=float)
+    # rho(h) = gamma exp(-eta h)   (4)
+    rho = GAMMA * np.exp(-ETA * h)
+    # dh/dt = -v   (1);   dv/dt = g - g rho(h) v^2 / (2 beta)   (2);   dbeta/dt = 0   (3)
+    return np.stack([-v, G - G * rho * v**2 / (2 * beta), np.zeros_like(beta)])
+    ### END SOLUTION
+
+# %% nbgrader={"grade": false, "grade_id": "check_tracking_dynamics", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(tracking_dynamics)
+# Visible checks. At the ground (h = 0) the density is gamma = 1.754 kg/m^3. For v = 200 m/s and beta = 1754 the
+# drag is g rho v^2 / (2 beta) = 9.81 * 1.754 * 200^2 / 3508 = 9.81 * 20 = 196.2 m/s^2, so f = [-200, 9.81 - 196.2, 0].
+f = check_array(tracking_dynamics(0.0, np.array([0.0, 200.0, 1754.0])), "tracking_dynamics(0, [0, 200, 1754])", (3,),
+                "One state in, one derivative [dh/dt, dv/dt, dbeta/dt] out.")
+check_close(f, [-200.0, 9.81 - 196.2, 0.0], "f at h = 0 m, v = 200 m/s, beta = 1754",
+            "dh/dt = -v (v > 0 is downward), dv/dt = g - g rho v^2 / (2 beta), dbeta/dt = 0.")
+# Far above the atmosphere (h = 1000 km) there is no air: free fall, dv/dt = g.
+check_close(tracking_dynamics(0.0, np.array([1e6, 3000.0, 2e4])), [-3000.0, 9.81, 0.0], "f at h = 1000 km",
+            "Is rho(h) = GAMMA * exp(-ETA * h), with the minus sign?")
+# A cloud of three particles, shape (3, 3): column l is the derivative of particle l alone.
+cloud = np.array([[0.0, 1e6, 30_000.0], [200.0, 3000.0, 2500.0], [1754.0, 2e4, 19_161.0]])
+F = check_array(tracking_dynamics(0.0, cloud), "tracking_dynamics(0, cloud) for 3 particles", (3, 3),
+                "Unpack the rows with h, v, beta = x and build the result with np.stack; np.zeros_like(beta) "
+                "gives dbeta/dt = 0 of the right shape.")
+check_close(F[:, 0], f, "the derivative of particle 0 of the cloud", "Each column should depend on its own particle only.")
+passed("tracking_dynamics")
+
+# %% nbgrader={"grade": true, "grade_id": "test_tracking_dynamics", "locked": true, "points": 1, "schema_version": 3, "solution": false, "task": false}
+# Hidden tests of tracking_dynamics (1 point): random single states and clouds of 1, 7 and 1000 particles.
+# Validate (and this cell) first checks that tracking_dynamics passes its visible checks; the points come only
+# from the hidden tests, which use the reference for every other blank.
+validate(tracking_dynamics)
+### BEGIN HIDDEN TESTS
+from solutions.reentry_pf.hidden_tests import check_tracking_dynamics
+check_tracking_dynamics(tracking_dynamics)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ## 2. The truth and the radar
+#
+# The radar reads the altitude at $t_j = j\,\Delta t$, $\Delta t$ = 0.1 s, $j = 0, 1, \dots, 300$: half a minute.
+# Each reading is the true altitude plus Gaussian noise,
+#
+# $$b_j = q^T x(t_j) + \varepsilon_j = h(t_j) + \sigma e_j, \qquad q = [1, 0, 0]^T, \qquad e_j \sim N(0, 1),$$
+#
+# with $\sigma$ = `SIGMA` = 500 m. Write `simulate_radar(x0, t, sigma, rng)`. It computes the noiseless truth
+# `x_true`, shape `(3, len(t))`, with `scipy.integrate.solve_ivp(..., method="RK45", t_eval=t)` (MATLAB's `ode45`)
+# from `x0` at `t[0]` to `t[-1]`, then draws `e = rng.standard_normal(len(t))` **in one call** from the `rng` you
+# are given, and returns `(x_true, b)`.
+#
+# Every result is measured against the truth, so it must be far more accurate than the radar: choose
+# `solve_ivp`'s tolerances `rtol` and `atol` so that the altitude is right to well under a metre. (Compare the
+# default `rtol=1e-3` with a much tighter solve.) The shipped `data` came from this computation, from
+# $x_0 = [61000\ \mathrm{m}, 3048\ \mathrm{m/s}, 19161]$; the visible checks compare your truth with it.
+
+# %% nbgrader={"grade": false, "grade_id": "simulate_radar", "locked": false, "schema_version": 3, "solution": true, "task": false}
+def simulate_radar(x0, t, sigma, rng):
+    """Truth x_true (3, len(t)) from x0 at the times t [s], and readings b (len(t),) [m]."""
+    ### BEGIN SOLUTION
+    t = np.asarray(t, dtype=float)
+    # x' = f(x), x(t_0) = x0, solved with RK45 (ode45) and reported at every t_j
+    solution = solve_ivp(
+        tracking_dynamics, (t[0], t[-1]), np.asarray(x0, dtype=float), method="RK45", t_eval=t, rtol=1e-10, atol=1e-8
+    )
+    if not solution.success:
+        raise RuntimeError(f"solve_ivp failed: {solution.message}")
+    x_true = solution.y
+    # b_j = q^T x(t_j) + sigma e_j,  q = [1, 0, 0],  e ~ N(0, I) drawn in one call
+    b = x_true[0] + sigma * rng.standard_normal(t.shape[0])
+    return x_true, b
+    ### END SOLUTION
+
+# %% nbgrader={"grade": false, "grade_id": "check_simulate_radar", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(simulate_radar)
+# Visible checks on the lab's case: x0 = [61000 m, 3048 m/s, 19161], t_j = 0.1 j s for j = 0..300.
+x_sim, b_sim = check_pair(simulate_radar(falling_object.X0_TRUE, data.t, SIGMA, np.random.default_rng(1)),
+                          "simulate_radar", "x_true", "b")
+x_sim = check_array(x_sim, "x_true", (3, 301), "One column per time t_j: rows h, v, beta (solve_ivp's .y).")
+b_sim = check_array(b_sim, "b", (301,), "One reading per time t_j.")
+check_close(x_sim[:, 0], falling_object.X0_TRUE, "the truth at t_0", "The solution starts at x0.")
+# A grid that starts at t_0 = 5 s: the object is at x0 at t_0, not at t = 0.
+x_late, _ = check_pair(simulate_radar(falling_object.X0_TRUE, np.array([5.0, 5.1]), SIGMA, np.random.default_rng(1)),
+                       "simulate_radar", "x_true", "b")
+check_close(check_array(x_late, "x_true on t = [5.0, 5.1] s", (3, 2))[:, 0], falling_object.X0_TRUE,
+            "the truth at t_0 = 5 s", "Start the integration at t[0], where the object is at x0, not at t = 0.")
+check_close(x_sim[2], np.full(301, 19_161.0), "the true beta", "dbeta/dt = 0: beta never changes.")
+# The shipped truth came from the same equations with tight tolerances: yours should agree to 1 m and 0.25 m/s.
+check_close(x_sim[0], data.x_true[0], "your true altitude against the shipped truth",
+            "Pass tighter rtol and atol to solve_ivp: the default rtol = 1e-3 is about 20 m off here.",
+            rtol=0.0, atol=1.0, show_expected=False)
+check_close(x_sim[1], data.x_true[1], "your true speed against the shipped truth",
+            "Pass tighter rtol and atol to solve_ivp.", rtol=0.0, atol=0.25, show_expected=False)
+# The noise: b - h should be sigma times one call of rng.standard_normal(len(t)) on the generator you were given.
+e = np.random.default_rng(1).standard_normal(301)
+check_close(b_sim - x_sim[0], SIGMA * e, "the radar noise b - h",
+            "Draw e = rng.standard_normal(len(t)) in one call, from the rng argument, and add sigma * e to h.",
+            rtol=1e-9, atol=1e-6, show_expected=False)
+passed("simulate_radar")
+
+# %% nbgrader={"grade": true, "grade_id": "test_simulate_radar", "locked": true, "points": 2, "schema_version": 3, "solution": false, "task": false}
+# Hidden tests of simulate_radar (2 points): random starts, time grids and noise levels; the truth to 1 m
+# and 0.25 m/s, and the noise draw by draw.
+# Validate (and this cell) first checks that simulate_radar passes its visible checks; the points come only
+# from the hidden tests, which use the reference for every other blank.
+validate(simulate_radar)
+### BEGIN HIDDEN TESTS
+from solutions.reentry_pf.hidden_tests import check_simulate_radar
+check_simulate_radar(simulate_radar)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# **Question 1.** Which tolerances did you give `solve_ivp`, and why those? Say how accurate the truth is
+# then, compared with the radar noise, and what the tighter tolerances cost.
+
+# %% [markdown] nbgrader={"grade": true, "grade_id": "tolerance_answer", "locked": false, "points": 1, "schema_version": 3, "solution": true, "task": false}
+# ### BEGIN SOLUTION
+# **Model answer.** `rtol=1e-10, atol=1e-8`. RK45 controls the local error to about `atol + rtol * |x|`; with
+# $|h| \le 61000$ m and $|v| \le 3100$ m/s that keeps the truth within about $10^{-5}$ m and $10^{-5}$ m/s of
+# the exact solution (checked against a DOP853 solve at `rtol=1e-13`). That is eight orders of magnitude
+# below the radar's $\sigma$ = 500 m, so the truth is exact for every comparison in the lab, and the result
+# does not depend on the solver's step-size heuristics. The default `rtol=1e-3` is off by about 20 m in $h$ and
+# 6 m/s in $v$: still below $\sigma$, but visible when we compare the filter with the truth. The cost is about
+# 650 evaluations of $f$ instead of 75, a few milliseconds. `atol` only matters for components near zero (here
+# none; $\beta$ is constant).
+#
+# **Rubric (1 point).** Tolerances tighter than the defaults (`rtol` of $10^{-6}$ or smaller) with a reason
+# that compares the solver's error with the 500 m radar noise or with the accuracy the comparisons need.
+# ### END SOLUTION
+
+# %% [markdown]
+# ## 3. The prior cloud
+#
+# The filter starts from a cloud of $N$ particles drawn around a first guess: the first reading for the
+# altitude, and $v_\text{init}$ = `V_INIT` = 3000 m/s and $\beta_\text{init}$ = `BETA_INIT` = 20000 for the rest,
+#
+# $$x^{(\ell)} = \begin{bmatrix} b_0 \\ v_\text{init} \\ \beta_\text{init} \end{bmatrix} + C^{1/2} w^{(\ell)},
+#   \qquad w^{(\ell)} \sim N(0, I_3), \qquad \ell = 1, \dots, N,$$
+#
+# where $C^{1/2}$ is diagonal with the prior standard deviations `PRIOR_STD` = (500 m, 200 m/s, 1500). Every
+# particle gets the weight $1/N$. (The handout uses the letter $w$ for both the random draws and the
+# weights; they are different things.)
+#
+# Write `initial_cloud(b0, N, rng)`: draw all the $w^{(\ell)}$ as `rng.standard_normal((3, N))` **in one call**
+# (column $\ell$ is $w^{(\ell)}$) and return the cloud, shape `(3, N)`, and the weights, shape `(N,)`.
+
+# %% nbgrader={"grade": false, "grade_id": "initial_cloud", "locked": false, "schema_version": 3, "solution": true, "task": false}
+def initial_cloud(b0, N, rng):
+    """Prior cloud x (3, N) around [b0, V_INIT, BETA_INIT] and equal weights w (N,)."""
+    ### BEGIN SOLUTION
+    mean = np.array([b0, V_INIT, BETA_INIT])
+    # x^(l) = [h_init, v_init, beta_init] + C^(1/2) w^(l),  w^(l) ~ N(0, I_3),  C^(1/2) = diag(PRIOR_STD)
+    x = mean[:, None] + PRIOR_STD[:, None] * rng.standard_normal((3, N))
+    # w^(l) = 1 / N
+    w = np.full(N, 1.0 / N)
+    return x, w
+    ### END SOLUTION
+
+# %% nbgrader={"grade": false, "grade_id": "check_initial_cloud", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(initial_cloud)
+# Visible checks. Four particles around b0 = 60000 m; the same seed gives the same standard normal draws z.
+x_prior, w_prior = check_pair(initial_cloud(60_000.0, 4, np.random.default_rng(7)), "initial_cloud", "x", "w")
+x_prior = check_array(x_prior, "the prior cloud", (3, 4), "One column per particle: rows h, v, beta.")
+w_prior = check_array(w_prior, "the prior weights", (4,))
+check_close(w_prior, np.full(4, 0.25), "the prior weights for N = 4", "Every particle starts with weight 1/N.")
+z = np.random.default_rng(7).standard_normal((3, 4))
+check_close(x_prior, np.array([[60_000.0], [3000.0], [20_000.0]]) + np.array([[500.0], [200.0], [1500.0]]) * z,
+            "the prior cloud for b0 = 60000 and N = 4",
+            "Draw z = rng.standard_normal((3, N)) from the rng argument (not np.random: the same seed must give "
+            "the same cloud), in one call, multiply row i by the prior standard deviation of "
+            "variable i (PRIOR_STD[:, None] * z), and add the mean [b0, V_INIT, BETA_INIT] as a column.")
+# A large cloud has the prior's mean and standard deviations.
+x_big, _ = initial_cloud(60_000.0, 100_000, np.random.default_rng(8))
+check_close(x_big.mean(axis=1), [60_000.0, 3000.0, 20_000.0], "the mean of 100000 prior particles", rtol=2e-3)
+check_close(x_big.std(axis=1), PRIOR_STD, "the standard deviations of 100000 prior particles",
+            "Scale by the standard deviations (500, 200, 1500), not by the variances.", rtol=0.02)
+passed("initial_cloud")
+
+# %% nbgrader={"grade": true, "grade_id": "test_initial_cloud", "locked": true, "points": 1, "schema_version": 3, "solution": false, "task": false}
+# Hidden tests of initial_cloud (1 point): random first readings, N = 1, 5 and 2000, seeded generators.
+# Validate (and this cell) first checks that initial_cloud passes its visible checks; the points come only
+# from the hidden tests, which use the reference for every other blank.
+validate(initial_cloud)
+### BEGIN HIDDEN TESTS
+from solutions.reentry_pf.hidden_tests import check_initial_cloud
+check_initial_cloud(initial_cloud)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ## 4. One step of the particle filter (an auxiliary particle filter)
+#
+# Write `pf_step(x, w, b_next, rng, *, innovation_std=INNOVATION_STD, info=None)`. It takes the cloud `x`, shape
+# `(3, N)`, at $t_j$, its normalised weights `w`, shape `(N,)`, and the next reading `b_next`, and returns the cloud
+# at $t_{j+1}$ and its normalised weights. It takes four steps, the handout's (a) to (d); the next cells give them
+# in the order you write them.
+#
+# **(a) Propagate** every particle with one Forward Euler step of the model:
+# $\hat x^{(\ell)} = x^{(\ell)} + \Delta t\, f(x^{(\ell)})$, with $\Delta t$ = `DT` = 0.1 s. These are the
+# *candidates*. One call of `tracking_dynamics` on the whole cloud does it: no loop over the particles.
+
+# %% [markdown]
+# **(b) Fitness.** Weigh each candidate by how well its altitude $\hat x^{(\ell)}_1$ explains the new reading,
+# then normalise:
+#
+# $$\hat w^{(\ell)} = w^{(\ell)} \exp\Big(-\frac{1}{2\sigma^2}\big|\hat x^{(\ell)}_1 - b_{j+1}\big|^2\Big), \qquad
+#   \hat w^{(\ell)} \leftarrow \hat w^{(\ell)} \Big/ \textstyle\sum_k \hat w^{(k)}.$$
+#
+# Compute it in logarithms. When a reading is tens of $\sigma$ from every particle, every exponential underflows
+# to 0, and normalising gives 0/0. Instead, compute
+# $\log \hat w^{(\ell)} = \log w^{(\ell)} - |\hat x^{(\ell)}_1 - b_{j+1}|^2 / 2\sigma^2$, subtract the largest, then
+# exponentiate and normalise. The weights are the same, and nothing underflows.
+
+# %% [markdown]
+# **(c) Resample and perturb.** Draw $N$ indices $k_1, \dots, k_N$ **with replacement**, with probabilities
+# $\hat w$ (multinomial resampling: fit candidates are copied several times, unfit ones die out). Then give each
+# copy its own random perturbation:
+#
+# $$x^{(\ell)}_\text{new} = \hat x^{(k_\ell)} + D^{1/2} w^{(\ell)}, \qquad w^{(\ell)} \sim N(0, I_3).$$
+#
+# $D^{1/2}$ is diagonal with the standard deviations `innovation_std`. Use the keyword argument, not the constant:
+# its default is the handout's `INNOVATION_STD` = (100 m, 100 m/s, 5), and section 8 tries others.
+# `rng.choice(N, size=N, p=w_hat)` draws the indices, `x_hat[:, k]` copies the chosen columns, and
+# `rng.standard_normal((3, N))` draws all the perturbations at once.
+#
+# Without the perturbation, the copies of a candidate would stay identical. The handout calls it the *innovation*;
+# we call it the **artificial process noise**, since the model (5) has none: $D$ is a setting of the filter, not a
+# property of the object. (In a Kalman filter, the innovation is the residual $y - Hx$.)
+
+# %% [markdown]
+# **(d) Re-weigh.** The perturbation moved each particle away from the candidate it copies, so correct for it,
+# again in logarithms, and normalise:
+#
+# $$w^{(\ell)} = \exp\Big(-\frac{1}{2\sigma^2}\Big(\big|(x^{(\ell)}_\text{new})_1 - b_{j+1}\big|^2
+#   - \big|\hat x^{(k_\ell)}_1 - b_{j+1}\big|^2\Big)\Big).$$
+#
+# > **Reading of the handout.** In (d) the handout writes $x_1^{(k_\ell)}$ for the second altitude. It means the
+# > *propagated parent candidate* $\hat x^{(k_\ell)}_1$ from (a), before the perturbation. (In (c) its index range
+# > $\{1, \dots, n\}$ means $\{1, \dots, N\}$.)
+
+# %% [markdown]
+# **Diagnostics.** If `info` is a dict (not `None`), store two things in it for section 6: `info["ess"]`, the
+# effective sample size $1/\sum_\ell (\hat w^{(\ell)})^2$ of the fitness weights that (c) draws with, and
+# `info["parents"]`, the indices $k_\ell$.
+
+# %% [markdown]
+# **What this algorithm is.** Steps (a) to (d) are an **auxiliary particle filter** (Pitt and Shephard, 1999): its
+# resampling *looks ahead* at the next reading, and (d) corrects for that. The **bootstrap filter** (Gordon,
+# Salmond and Smith, 1993) resamples with the current weights alone. It is given (`falling_object.bootstrap_step`),
+# and section 7 runs both.
+
+# %% nbgrader={"grade": false, "grade_id": "pf_step", "locked": false, "schema_version": 3, "solution": true, "task": false}
+def pf_step(x, w, b_next, rng, *, innovation_std=INNOVATION_STD, info=None):
+    """Steps (a)-(d): cloud x (3, N), weights w (N,), reading b_next [m] -> new (x, w)."""
+    ### BEGIN SOLUTION
+    N = x.shape[1]
+    # (a) x^(l) = x^(l) + dt f(x^(l)): Forward Euler for every particle at once
+    x_hat = x + DT * tracking_dynamics(0.0, x)
+    # (b) log w^(l) = log w(l) - |x^_1(l) - b_{j+1}|^2 / (2 sigma^2)   (a zero weight gives -inf)
+    with np.errstate(divide="ignore"):
+        log_w_hat = np.log(w) - (x_hat[0] - b_next) ** 2 / (2 * SIGMA**2)
+    # w^(l) = w^(l) / sum w^, computed as exp(log w^ - max log w^) / sum(...)
+    w_hat = np.exp(log_w_hat - np.max(log_w_hat))
+    w_hat /= np.sum(w_hat)
+    # (c) k_l drawn with replacement with probabilities w^ (multinomial resampling): k_l is the
+    #     first index whose cumulative weight exceeds u_l ~ U(0, 1). Sorting the u_l does not
+    #     change the draw, and lets the search and the copy run through memory in order.
+    cdf = np.cumsum(w_hat)
+    cdf /= cdf[-1]
+    k = np.searchsorted(cdf, np.sort(rng.random(N)), side="right")
+    # x_new(l) = x^(k_l) + D^(1/2) w(l),  w(l) ~ N(0, I_3),  D^(1/2) = diag(innovation_std)
+    x_new = x_hat[:, k] + np.asarray(innovation_std)[:, None] * rng.standard_normal((3, N))
+    # (d) log w(l) = -(|x_new_1(l) - b_{j+1}|^2 - |x^_1(k_l) - b_{j+1}|^2) / (2 sigma^2),
+    #     with x^_1(k_l) the propagated parent before the innovation
+    log_w = -((x_new[0] - b_next) ** 2 - (x_hat[0, k] - b_next) ** 2) / (2 * SIGMA**2)
+    # w(l) = w(l) / sum w
+    w_new = np.exp(log_w - np.max(log_w))
+    if info is not None:
+        # diagnostics: ESS = 1 / sum w^2 of the resampling weights, and the parents k_l
+        info["ess"] = 1.0 / np.sum(w_hat**2)
+        info["parents"] = k
+    return x_new, w_new / np.sum(w_new)
+    ### END SOLUTION
+
+# %% nbgrader={"grade": false, "grade_id": "check_pf_step", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(pf_step)
+rng = np.random.default_rng(5)
+# Visible check 1: a cloud of 2000 particles around h = 60000 m and a reading 300 m below it. The step returns
+# 2000 particles and 2000 normalised, non-negative weights.
+x_c = np.array([[60_000.0], [3000.0], [20_000.0]]) + np.array([[500.0], [200.0], [1500.0]]) * rng.standard_normal((3, 2000))
+w_c = np.full(2000, 1 / 2000)
+x_new, w_new = check_pair(pf_step(x_c, w_c, 59_700.0, rng), "pf_step", "x", "w")
+x_new = check_array(x_new, "the new particles", (3, 2000), "Return the new cloud, shape (3, N).")
+w_new = check_array(w_new, "the new weights", (2000,), "Return one weight per particle.")
+check_close(np.sum(w_new), 1.0, "the sum of the new weights", "Normalise the weights of step (d).")
+check_close(np.minimum(w_new, 0.0), np.zeros(2000), "the negative part of the new weights", "Weights are never negative.")
+# Here the reading says little about beta, so the new cloud keeps about the prior's spread of beta, 1500: resampling
+# draws many different parents, not only the fittest.
+check_close(np.std(x_new[2]), 1500.0, "the spread of beta in the new cloud",
+            "Draw N indices at random with the probabilities w^ (for example rng.choice(N, size=N, p=w_hat)).", rtol=0.2)
+# Visible check 2: particle 0 (h = 20000 m, v = 3000 m/s, beta = 20000) carries almost all the weight, and the
+# others (beta = 30000) have weight 1e-12 each. Resampling then copies particle 0 every time, and the innovation
+# spreads the copies around its candidate, whose altitude is 20000 - 0.1 * 3000 = 19700 m, with standard
+# deviations (100, 100, 5).
+x_d = np.tile([[20_000.0], [3000.0], [30_000.0]], 2000)
+x_d[2, 0] = 20_000.0
+w_d = np.full(2000, 1e-12)
+w_d[0] = 1.0
+x_new, w_new = pf_step(x_d, w_d / np.sum(w_d), 19_700.0, rng)
+# Every particle has the altitude and speed of particle 0 here, so the spread of the new altitudes and speeds is the
+# innovation's alone, whatever was resampled. It is checked first: an innovation of the wrong size moves the means too.
+check_true(np.all(np.ptp(x_new[:2], axis=1) > 0), "the copies of particle 0 all have the same altitude and speed",
+           "Give each new particle its own draw of the innovation, after resampling: x^[:, k] + "
+           "innovation_std[:, None] * rng.standard_normal((3, N)), one column of draws per particle, not one for all.")
+check_close(np.std(x_new[:2], axis=1), INNOVATION_STD[:2], "the spread of the altitudes and speeds of the copies of particle 0",
+            "After resampling, add innovation_std[:, None] * rng.standard_normal((3, N)), with the argument innovation_std "
+            "(INNOVATION_STD by default): it holds standard deviations, not variances, so do not square it.", rtol=0.1)
+check_close(np.mean(x_new[2]), 20_000.0, "the mean beta of the new particles",
+            "Resample with the probabilities of (b), which include the old weights w: almost every new particle should "
+            "be a copy of particle 0.", rtol=0.0, atol=1.0)
+check_close(np.mean(x_new[0]), 19_700.0, "the mean altitude of the new particles",
+            "Propagate before you resample: Forward Euler moves h from 20000 m to 19700 m in 0.1 s.", rtol=0.0, atol=25.0)
+check_close(np.std(x_new[2]), INNOVATION_STD[2], "the spread of beta of the copies of particle 0",
+            "After resampling, add innovation_std[:, None] * rng.standard_normal((3, N)): standard deviations, not "
+            "variances, and one fresh draw per new particle.", rtol=0.1)
+# Visible check 3: a reading 70 sigma below the cloud. The weights must still be finite and normalised.
+x_new, w_new = pf_step(x_c, w_c, 25_000.0, rng)
+w_new = check_array(w_new, "the weights after a reading 70 sigma from the cloud", (2000,),
+                    "exp(-(h - b)^2 / (2 sigma^2)) is 0 for every particle here: work with log-weights and subtract "
+                    "the largest before you exponentiate.")
+check_close(np.sum(w_new), 1.0, "the sum of the weights after a distant reading")
+# The fittest candidate is then the lowest one, at min(h - 0.1 v): resampling copies it and its nearest neighbours.
+check_close(np.mean(x_new[0]), np.min(x_c[0] - 0.1 * x_c[1]), "the mean altitude after a reading far below the cloud",
+            "The new particles should descend from the lowest candidates: if they come from the highest, check the sign of "
+            "your log-weights, -(h - b)^2 / (2 sigma^2). If exp() of your fitness weights underflows to 0 for every "
+            "particle, normalising gives NaN: work with log-weights.", rtol=0.0, atol=150.0)
+# Visible check 4: the keyword innovation_std sets the artificial process noise D^(1/2), and a dict passed as info
+# receives the ESS of the fitness weights (all the weight is on particle 0 here, so it is 1) and the parents k_l (all 0).
+info = {}
+x_new, w_new = pf_step(x_d, w_d / np.sum(w_d), 19_700.0, rng, innovation_std=np.array([50.0, 20.0, 1.0]), info=info)
+check_close(np.std(x_new, axis=1), [50.0, 20.0, 1.0], "the spread of the copies of particle 0 with innovation_std=(50, 20, 1)",
+            "Use the keyword argument innovation_std for D^(1/2), not the constant INNOVATION_STD.", rtol=0.1)
+check_close(info.get("ess", np.nan), 1.0, "info['ess'] when one candidate has all the fitness weight",
+            "Store info['ess'] = 1 / sum(w_hat**2), the ESS of the fitness weights (b), when info is a dict.", rtol=1e-6)
+check_close(np.asarray(info.get("parents", [-1])), np.zeros(2000), "info['parents'] when every new particle copies particle 0",
+            "Store the indices k you resampled with: info['parents'] = k.")
+# Visible check 5: equal old weights, 20000 particles around h = 60000 m (so candidates around 59700 m), and a reading
+# 500 m below the candidates. The candidates' altitudes (standard deviation 500 m) and the reading (sigma = 500 m) are two
+# Gaussians: the new cloud's weighted mean altitude lies at about 59445 m (halfway; the 100 m process noise moves it
+# 5 m), and the ESS of the fitness weights is about N sqrt(3)/2 exp(-1/6) = 0.733 N (the candidates' spread is
+# sqrt(500^2 + 20^2) m, a little over 500 m).
+rng_e = np.random.default_rng(6)
+x_e = np.array([[60_000.0], [3000.0], [20_000.0]]) + np.array([[500.0], [200.0], [1500.0]]) * rng_e.standard_normal((3, 20_000))
+info = {}
+x_new, w_new = pf_step(x_e, np.full(20_000, 1 / 20_000), 59_200.0, rng_e, info=info)
+check_close(info.get("ess", np.nan) / 20_000, np.sqrt(3) / 2 * np.exp(-1 / 6),
+            "info['ess'] / N for equal old weights and a reading 500 m below the candidates",
+            "It is the ESS 1 / sum(w_hat**2) of the fitness weights w^ of (b), made from the propagated candidates x^_1, "
+            "not of the old weights (equal here, so their ESS is N).", rtol=0.02)
+check_close(x_new[0] @ w_new, 59_450.0, "the weighted mean altitude of the new cloud",
+            "(b) weighs the propagated candidates x^_1 = x_1 - dt v (not the old altitudes), and (d) divides out the "
+            "parent's fitness: w = exp(-(|x_new_1 - b|^2 - |x^_1(k_l) - b|^2) / (2 sigma^2)).", rtol=0.0, atol=30.0)
+# Visible check 6: every draw comes from rng, so two generators of the same seed give the same step.
+first = pf_step(x_c, w_c, 59_700.0, np.random.default_rng(7))
+again = pf_step(x_c, w_c, 59_700.0, np.random.default_rng(7))
+check_true(all(np.array_equal(a, b) for a, b in zip(first, again)),
+           "two calls of pf_step with generators of the same seed gave different steps",
+           "Draw every random number from the rng argument (rng.choice, rng.standard_normal), never from np.random: "
+           "the grader and run_particle_filter give pf_step the generator to use.")
+passed("pf_step")
+
+# %% nbgrader={"grade": true, "grade_id": "test_pf_step", "locked": true, "points": 3, "schema_version": 3, "solution": false, "task": false}
+# Hidden tests of pf_step (3 points), statistical, with the reference tracking_dynamics: the weights follow (d)
+# and sum to 1 (also for a distant reading); info['ess'] and info['parents']; the resampling follows the fitness weights (a chi-square test);
+# the artificial process noise has the right spread and centre, also for another innovation_std; and the posterior of beta after a whole run agrees with
+# reference runs. A correct step fails with probability below 1e-6.
+# Validate (and this cell) first checks that pf_step passes its visible checks; the points come only
+# from the hidden tests, which use the reference for every other blank.
+validate(pf_step)
+### BEGIN HIDDEN TESTS
+from solutions.reentry_pf.hidden_tests import check_pf_step
+check_pf_step(pf_step)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ## 5. Weighted credibility intervals
+#
+# After step (d) the particles carry unequal weights, so every summary of the cloud must use them: the weighted
+# mean, and weighted quantiles. Sort the samples $s_{(1)} \le \dots \le s_{(N)}$, carry each sample's weight
+# $w_{(i)}$ along, and accumulate: $F_i = \sum_{k \le i} w_{(k)} / \sum_k w_k$. The **weighted quantile** of order
+# $a \in [0, 1]$ is the first sorted sample whose cumulative weight reaches $a$,
+#
+# $$q(a) = s_{(i)}, \qquad i = \min\{i : F_i \ge a\}.$$
+#
+# The central $p\%$ credibility interval is $[\,q((1 - p/100)/2),\ q((1 + p/100)/2)\,]$, and $p = 0$ gives the
+# weighted median twice.
+#
+# > **Handout correction.** The handout builds the interval by sorting the $N$ particle values and throwing away
+# > the same *number* of them at each end, $i_\min = [(1 - p/100)N/2]$ and $i_\max = [(1 + p/100)N/2]$. That counts
+# > every particle once, which is right only when the weights are equal: after resampling, but not after step (d),
+# > which leaves unequal weights. With weights, throw away the same *weight* at each end.
+#
+# Write `credibility_interval(samples, weights, p)` for one variable's values `samples` (N,), their weights (N,),
+# non-negative and not necessarily normalised, and $p$ in percent, a number or an array of numbers; return
+# `(lo, hi)` with the shape of `p`. `order = np.argsort(samples)` sorts, `weights[order]` carries the weights
+# along, and `np.searchsorted(F, a)` finds the first $i$ with $F_i \ge a$ for a whole array of orders $a$ at once
+# (clamp the index to $N - 1$).
+
+# %% nbgrader={"grade": false, "grade_id": "credibility_interval", "locked": false, "schema_version": 3, "solution": true, "task": false}
+def credibility_interval(samples, weights, p):
+    """The central p% interval (lo, hi) of weighted samples (N,); p a number or an array, in percent."""
+    ### BEGIN SOLUTION
+    order = np.argsort(samples)
+    s = samples[order]
+    # F_i = sum of the weights of the i smallest samples, normalised so that F_N = 1
+    cdf = np.cumsum(weights[order])
+    cdf /= cdf[-1]
+    # orders of the lower and upper quantiles: (1 -+ p/100) / 2
+    a_lo, a_hi = 0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200
+    # q(a) = s_i with the smallest i such that F_i >= a (clamped to the last sample)
+    last = s.shape[0] - 1
+    return s[np.minimum(np.searchsorted(cdf, a_lo), last)], s[np.minimum(np.searchsorted(cdf, a_hi), last)]
+    ### END SOLUTION
+
+# %% nbgrader={"grade": false, "grade_id": "check_credibility_interval", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(credibility_interval)
+# Visible checks. The samples 4, 1, 3, 2 sort to 1, 2, 3, 4. With equal weights the cumulative weights are 0.25, 0.5,
+# 0.75, 1, so the median (order 0.5) is 2.
+samples = np.array([4.0, 1.0, 3.0, 2.0])
+interval = check_pair(credibility_interval(samples, np.ones(4), 0), "credibility_interval", "lo", "hi")
+check_close(interval, [2.0, 2.0], "the weighted median (p = 0) of 4, 1, 3, 2 with equal weights",
+            "Sort, accumulate the weights in sorted order, normalise by the total, and take the first sample whose "
+            "cumulative weight reaches the order 0.5.")
+# The 50% interval of the same equal weights: its orders are (1 - 50/100) / 2 = 0.25 and (1 + 50/100) / 2 = 0.75, reached
+# first by 1 and by 3.
+check_close(credibility_interval(samples, np.ones(4), 50), [1.0, 3.0], "the 50% interval of 4, 1, 3, 2 with equal weights",
+            "p is in percent: the orders are (1 - p/100) / 2 and (1 + p/100) / 2, so 0.25 and 0.75 for p = 50.")
+# Weights 0.1, 0.1, 0.7, 0.1 on the samples 4, 1, 3, 2: in sorted order 1, 2, 3, 4 they are 0.1, 0.1, 0.7, 0.1 and
+# accumulate to 0.1, 0.2, 0.9, 1. The 50% interval (orders 0.25 and 0.75) is [3, 3]; the 90% interval (0.05, 0.95) is [1, 4].
+weights = np.array([0.1, 0.1, 0.7, 0.1])
+check_close(credibility_interval(samples, weights, 50), [3.0, 3.0], "the 50% interval of 4, 1, 3, 2 weighted 0.1, 0.1, 0.7, 0.1",
+            "Carry the weights along when you sort: weights[order] with order = np.argsort(samples).")
+check_close(credibility_interval(samples, weights, 90), [1.0, 4.0], "the 90% interval of the same weighted samples",
+            "The orders are (1 - p/100) / 2 and (1 + p/100) / 2, with p in percent.")
+# p may be an array: one interval per entry, in one call. Unnormalised weights give the same answer.
+lo, hi = credibility_interval(samples, 10 * weights, np.array([0.0, 50.0, 90.0]))
+check_close(np.stack([lo, hi]), [[3.0, 3.0, 1.0], [3.0, 3.0, 4.0]], "the intervals for p = [0, 50, 90] with weights x 10",
+            "Normalise the cumulative weights by their total, and let np.searchsorted find all the orders at once.")
+# Each weight belongs to its sample: with all the weight on the sample 3, listed first, every quantile is 3.
+check_close(credibility_interval(np.array([3.0, 1.0, 2.0]), np.array([1.0, 0.0, 0.0]), 50), [3.0, 3.0],
+            "the 50% interval of 3, 1, 2 weighted 1, 0, 0",
+            "Sort the weights with their samples: weights[order], with order = np.argsort(samples).")
+passed("credibility_interval")
+
+# %% nbgrader={"grade": true, "grade_id": "test_credibility_interval", "locked": true, "points": 2, "schema_version": 3, "solution": false, "task": false}
+# Hidden tests of credibility_interval (2 points): random samples with N from 1 to 5000, random weights (some
+# zero, some heavy, not normalised), and p as a number or an array.
+# Validate (and this cell) first checks that credibility_interval passes its visible checks; the points come only
+# from the hidden tests, which use the reference for every other blank.
+validate(credibility_interval)
+### BEGIN HIDDEN TESTS
+from solutions.reentry_pf.hidden_tests import check_credibility_interval
+check_credibility_interval(credibility_interval)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ## 6. The filter over half a minute of readings
+#
+# `run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD)` starts from
+# `initial_cloud(b[0], N, rng)` at $t_0$, then for $j = 1, \dots, T$ takes one filter step with the reading `b[j]`.
+# The step is `pf_step` unless another one is given (write `step = pf_step if step is None else step`); call it as
+# `step(x, w, b[j], rng, innovation_std=innovation_std, info=info)` with one dict `info`, so that it reports on
+# its resampling. At every $t_j$, including $t_0$, record in a `FilterHistory` (from `course.falling_object`;
+# `FilterHistory.empty(len(b), N)` makes one full of NaN for you to fill):
+#
+# * `mean[:, j]`: the **weighted** mean $\sum_\ell w^{(\ell)} x^{(\ell)}$ of $h$, $v$ and $\beta$;
+# * `median[:, j]`, `lo50[:, j]`, `hi50[:, j]`, `lo90[:, j]`, `hi90[:, j]`: the weighted median and the weighted
+#   50% and 90% credibility intervals of each variable, from one call `credibility_interval(x[i], w, np.array([0, 50, 90]))`;
+# * `ess[j]`: the effective sample size $1 / \sum_\ell (w^{(\ell)})^2$ of the weights the step returned, which is
+#   $N$ for equal weights and 1 when one particle has all the weight;
+# * the health of the resampling: `ess_resample[j] = info["ess"]`; `parents[j]`, the number of distinct indices
+#   in `info["parents"]` (`np.unique(...).size`); and `roots[j]`, the number of particles of $t_0$ that still have
+#   descendants. For the last, keep an array `root` with `root[l]` the particle of $t_0$ that particle `l`
+#   descends from: `np.arange(N)` at $t_0$, then `root = root[info["parents"]]` after each step. At $t_0$ nothing
+#   has been resampled, and all three are $N$.
+#
+# Return the history. A loop over the readings is fine; there is still no loop over the particles.
+
+# %% nbgrader={"grade": false, "grade_id": "run_particle_filter", "locked": false, "schema_version": 3, "solution": true, "task": false}
+def run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD):
+    """A particle filter over the readings b (T + 1,) with N particles; returns a FilterHistory."""
+    ### BEGIN SOLUTION
+    step = pf_step if step is None else step
+    history = FilterHistory.empty(len(b), N)
+    # the prior cloud at t_0 is centred on the first reading, h_init = b_0
+    x, w = initial_cloud(b[0], N, rng)
+    # root(l): the particle of t_0 that particle l descends from
+    root = np.arange(N)
+    info: dict = {"ess": float(N), "parents": root}
+    for j in range(len(b)):
+        if j > 0:
+            # one step from t_{j-1} to t_j, with the reading b_j
+            x, w = step(x, w, b[j], rng, innovation_std=innovation_std, info=info)
+            root = root[info["parents"]]
+        # weighted mean sum_l w(l) x(l)
+        history.mean[:, j] = x @ w
+        for i in range(3):
+            # weighted median (p = 0) and the weighted 50% and 90% credibility intervals
+            lo, hi = credibility_interval(x[i], w, np.array([0.0, 50.0, 90.0]))
+            history.median[i, j], history.lo50[i, j], history.hi50[i, j] = lo[0], lo[1], hi[1]
+            history.lo90[i, j], history.hi90[i, j] = lo[2], hi[2]
+        # ESS = 1 / sum_l w(l)^2
+        history.ess[j] = 1.0 / np.sum(w**2)
+        history.ess_resample[j] = info["ess"]
+        history.parents[j] = np.unique(info["parents"]).size
+        history.roots[j] = np.unique(root).size
+    return history
+    ### END SOLUTION
+
+# %% nbgrader={"grade": false, "grade_id": "check_run_particle_filter", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(run_particle_filter, initial_cloud, pf_step, credibility_interval)
+# Visible checks on the first 21 readings (2 s) with N = 500.
+short = run_particle_filter(data.b[:21], 500, np.random.default_rng(3))
+check_history(short, n_times=21, n_particles=500)
+# At t_0 every weight is 1/N: the ESS is N, nothing has been resampled, and the weighted mean is the plain mean of the
+# prior cloud, drawn first from the generator you were given.
+check_close(short.ess[0], 500.0, "the effective sample size at t_0", "ESS = 1 / sum w^2, which is N for equal weights.")
+check_close([short.ess_resample[0], short.parents[0], short.roots[0]], [500.0, 500.0, 500.0],
+            "ess_resample, parents and roots at t_0", "Before the first step nothing is resampled: all three are N.")
+x_first, _ = initial_cloud(data.b[0], 500, np.random.default_rng(3))
+check_close(short.mean[:, 0], x_first.mean(axis=1), "the mean at t_0",
+            "At t_0 record the prior cloud from initial_cloud(b[0], N, rng), before any step.")
+# With equal weights the weighted median of 500 values is the 250th or the 251st smallest (the cumulative weight of
+# the 250th is 0.5 up to rounding): its distance to the nearer of the two is 0.
+middle = np.sort(x_first, axis=1)[:, 249:251]
+check_close(np.min(np.abs(short.median[:, :1] - middle), axis=1), np.zeros(3), "the weighted median at t_0",
+            "Record the weighted median credibility_interval(x[i], w, 0), one of the samples (not np.median).")
+# At t_1: the cloud after one pf_step with the reading b[1], from the same generator. Its weights are no longer equal.
+rng = np.random.default_rng(3)
+x_first, w_first = initial_cloud(data.b[0], 500, rng)
+x_one, w_one = pf_step(x_first, w_first, data.b[1], rng)
+check_close(short.mean[:, 1], x_one @ w_one, "the mean at t_1",
+            "Step j uses the reading b[j]; record the weighted mean sum_l w_l x_l (x @ w), not the plain mean.")
+# The bootstrap step resamples with the weights of the step before, so its ess_resample[j] is ess[j - 1].
+boot = run_particle_filter(data.b[:6], 500, np.random.default_rng(4), step=partial(falling_object.bootstrap_step,
+                           dynamics=tracking_dynamics), innovation_std=CHOSEN_STD)
+check_close(boot.ess_resample[1:], boot.ess[:-1], "ess_resample of a bootstrap run against its ess one step earlier",
+            "Call the step you are given (step = pf_step only when step is None) with innovation_std=innovation_std and "
+            "info=info, and record info['ess'].")
+# A run you can follow by hand, N = 3, with a step that moves nothing and resamples with the parents [0, 0, 1], then
+# [2, 2, 1]. Particle l's new parent is parents[l], whose root is root[parents[l]]: the roots become [0, 0, 1] (2 of
+# them), then [1, 1, 0] (still 2).
+scripted_step = falling_object.scripted_step([np.array([0, 0, 1]), np.array([2, 2, 1])])
+hand = run_particle_filter(data.b[:3], 3, np.random.default_rng(5), step=scripted_step)
+check_close(hand.roots, [3.0, 2.0, 2.0], "history.roots of a run with the parents [0, 0, 1], then [2, 2, 1]",
+            "Particle l's new parent is parents[l], and its root is that parent's root: root = root[info['parents']], "
+            "not info['parents'][root].")
+passed("run_particle_filter")
+
+# %% nbgrader={"grade": true, "grade_id": "test_run_particle_filter", "locked": true, "points": 2, "schema_version": 3, "solution": false, "task": false}
+# Hidden tests of run_particle_filter (2 points): random readings of 1 to 25 times, N = 50 to 1000, another
+# innovation_std, and the bootstrap step, with the reference initial_cloud, pf_step and credibility_interval, so
+# that only your loop, summaries and diagnostics are graded.
+# Validate (and this cell) first checks that run_particle_filter passes its visible checks; the points come only
+# from the hidden tests, which use the reference for every other blank.
+validate(run_particle_filter)
+### BEGIN HIDDEN TESTS
+from solutions.reentry_pf.hidden_tests import check_run_particle_filter
+check_run_particle_filter(run_particle_filter)
+### END HIDDEN TESTS
+
+# %% [markdown]
+# ## 7. Show and tell, and a yardstick
+#
+# Now the whole half minute with **the handout's setting**: the auxiliary filter of `pf_step`, $N$ = 5000
+# particles, and artificial process noise (100 m, 100 m/s, 5). From here on, "the handout's setting" means exactly
+# this filter, $N$ and noise. The table gives the estimates at the last reading, the error of the weighted mean
+# over the run, and how often the truth lay inside each band.
+
+# %% nbgrader={"grade": false, "grade_id": "run_lab", "locked": true, "schema_version": 3, "solution": false, "task": false}
+# NBVAL_CHECK_OUTPUT
+require(run_particle_filter, initial_cloud, pf_step, credibility_interval)
+# the handout's setting: the auxiliary particle filter, N = 5000, artificial process noise (100 m, 100 m/s, 5)
+history = run_particle_filter(data.b, falling_object.N_PARTICLES, np.random.default_rng(falling_object.RUN_SEED))
+falling_object.print_report(data, history)
+
+# %% [markdown]
+# **The yardstick.** How well could $\beta$ be known from these readings? The noise-free model makes each altitude
+# $h_j$ a function of the initial state $x_0 = (h_0, v_0, \beta)$. The sensitivities $s_j = \partial h_j / \partial
+# x_0$ give the information that the readings $b_1, \dots, b_j$ hold; add the prior's, $C^{-1}$:
+#
+# $$J_j = C^{-1} + \sum_{i=1}^{j} \frac{s_i s_i^T}{\sigma^2}, \qquad \text{yardstick}_j = \sqrt{(J_j^{-1})_{33}}.$$
+#
+# We compute $J_j$ along the true trajectory. The yardstick is then the **posterior standard deviation of $\beta$
+# for the model linearised at the truth**: about the spread that an exact posterior would have here. It is not a
+# floor that no filter can beat at this one truth. (Section 9 compares it with the Van Trees bound, which is a
+# floor for the error averaged over the prior.) `falling_object.beta_linearised_sd` computes it with your
+# `tracking_dynamics`.
+
+# %% nbgrader={"grade": false, "grade_id": "crb", "locked": true, "schema_version": 3, "solution": false, "task": false}
+# NBVAL_CHECK_OUTPUT
+require(tracking_dynamics)
+yardstick = falling_object.beta_linearised_sd(tracking_dynamics, X0_TRUE, data.t)
+for t_j in (0, 10, 15, 20, 25, 30):
+    j = round(t_j / DT)
+    print(f"t = {t_j:>2} s: yardstick (linearised posterior sd) of beta {yardstick[j]:6.0f}, "
+          f"information / prior information {(PRIOR_STD[2] / yardstick[j]) ** 2:5.1f}")
+
+# %% [markdown]
+# The readings are far from useless: by $t$ = 30 s their information about $\beta$ is more than 50 times the
+# prior's. <!-- claim: reentry-pf/yardstick-information -->
+# It arrives late: at 10 s the yardstick is still the prior's 1500, at 15 s it is above 80% of it, and it falls
+# fastest between 15 s and 25 s, when the object is low enough for the drag to matter. <!-- claim: reentry-pf/information-arrives-late -->
+
+# %% [markdown]
+# In the figure, the bottom row shows each curve minus the truth. In the $\beta$ panels, the dotted curves are the
+# truth $\pm$ 1.645 times the yardstick: as wide as an exact posterior's 90% band. That band would be centred on its
+# own estimate, not on the truth, so compare only the widths.
+
+# %% nbgrader={"grade": false, "grade_id": "plot_tracking", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(run_particle_filter, tracking_dynamics)
+axes = falling_object.plot_tracking(data, history, yardstick=yardstick,
+                                    title="The handout's setting: auxiliary particle filter, N = 5000, noise (100, 100, 5)")
+plt.show()
+
+# %% [markdown]
+# ### The health of the filter, and the bootstrap filter
+#
+# The weights that step (d) leaves are close to equal: their ESS stays above 0.6 $N$ at every step in every one of
+# 10 runs on fresh readings with the handout's noise and $N$ = 2000. <!-- claim: reentry-pf/ess-after-d-high -->
+# That says nothing about the resampling, which comes *before* (d). The next figure shows, for `pf_step` and for
+# the bootstrap filter (same readings and setting): the ESS of the weights each step resampled with, the number of
+# distinct parents each resampling drew, and the number of particles of $t_0$ that still have descendants.
+
+# %% [markdown]
+# The dashed lines are the baseline of a filter that learns nothing: *multinomial* resampling of equal weights.
+# It keeps $1 - 1/e \approx$ 63% of the particles as distinct parents at each step, and after $n$ steps leaves
+# about $2N/(n + 2)$ roots, by chance alone (genetic drift). <!-- claim: reentry-pf/equal-weights-drift -->
+# Both baselines hold for multinomial resampling only, the kind that (c) asks for. If your `pf_step` resamples
+# systematically (which is also accepted), its distinct parents and roots lie above these lines: systematic
+# resampling of equal weights keeps every particle.
+
+# %% nbgrader={"grade": false, "grade_id": "plot_health", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(run_particle_filter, tracking_dynamics)
+bootstrap = partial(falling_object.bootstrap_step, dynamics=tracking_dynamics)
+boot = run_particle_filter(data.b, falling_object.N_PARTICLES, np.random.default_rng(falling_object.RUN_SEED), step=bootstrap)
+axes = falling_object.plot_health(data, {"auxiliary (pf_step)": history, "bootstrap": boot})
+plt.show()
+
+# %% [markdown]
+# One run is not enough to judge the width of $\beta$'s 90% band. The figure below takes the handout's noise from
+# the study of section 8: 50 simulated half minutes for each of $N$ = 500, 2000 and 5000.
+
+# %% nbgrader={"grade": false, "grade_id": "band_widths", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(tracking_dynamics)
+study = falling_object.load_tuning()
+handout = [s for s in falling_object.TUNING_SETTINGS if s.filter == "auxiliary" and s.innovation_std == falling_object.HANDOUT_STD]
+ax = falling_object.plot_band_widths(study, handout, data.t, yardstick)
+plt.show()
+
+# %% [markdown]
+# **Why the handout's setting learns little.** Its artificial process noise does not match the model's errors.
+# The filter's only model error is the Forward Euler step, which misses the true trajectory by at most 2 m in $h$
+# and 1 m/s in $v$ per step. <!-- claim: reentry-pf/euler-error-small -->
+# The noise in $v$, 100 m/s per step, is far larger, so the filter can explain the drag's slowing as random kicks
+# to $v$ instead of as $\beta$. Its bands of $v$ are much too wide: in the study of section 8, the truth of
+# $v$ lies inside the 50% band over 90% of the time, <!-- claim: reentry-pf/handout-v-too-wide -->
+# and at 30 s the 90% interval reaches below zero (upward motion) in every one of the 50 runs. <!-- claim: reentry-pf/handout-v-upward -->
+# The noise in $\beta$, 5 per step, is too small to replace the diversity that each resampling destroys. So the
+# spread of $\beta$ in the cloud comes from the few particles of $t_0$ whose descendants survive, and the band's
+# width depends on $N$ (figure above). <!-- claim: reentry-pf/fewer-particles-narrower -->
+
+# %% [markdown]
+# **Question 2.** Read the $\beta$ panels and the two figures after them. (a) How does the 90% band of $\beta$ of
+# the handout's setting compare with the yardstick at 30 s, and what does the gap mean? (b) What happens to the
+# ancestry of the cloud, and how does the band's width depend on $N$? Explain with steps (c) and (d) and the
+# artificial process noise.
+
+# %% [markdown] nbgrader={"grade": true, "grade_id": "beta_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
+# ### BEGIN SOLUTION
+# **Model answer.** (a) The readings carry a lot of information about $\beta$: the yardstick falls from the prior's
+# 1500 to about 200 by 30 s, <!-- claim: reentry-pf/yardstick-information --> most of it after 15 s, when the drag
+# becomes strong. <!-- claim: reentry-pf/information-arrives-late --> The handout's setting does not use it.
+# Its 90% band at 30 s is over 1.5 times the yardstick's width in every one of the 50 study runs, and 4 to 8 times
+# in the median run with the handout's noise: about 6 times with $N$ = 5000 and 5 times with $N$ = 2000. <!-- claim: reentry-pf/handout-band-far-from-yardstick -->
+# With $N$ = 5000 the median band at 30 s is still about 85% of the prior's 90% band (4935; from 77% to 98% over
+# batches of 10 runs), <!-- claim: reentry-pf/handout-band-near-prior -->
+# so the filter has learnt little about $\beta$. The gap means the filter throws information away, not that the
+# radar says little about $\beta$. One cause is the noise in $v$: 100 m/s in every 0.1 s step lets the filter
+# explain the drag's slowing as random kicks instead of as $\beta$.
+# (b) The other cause is the resampling. Each step keeps about 60% of the particles as distinct parents, just under
+# the 63% ($1 - 1/e$) that multinomial resampling keeps even when all weights are equal: <!-- claim: reentry-pf/parents-fraction -->
+# most of the loss is the resampling's own randomness, not the weights.
+# The losses compound. With equal weights, 300 resamplings leave about $2N/(n+2)$ = 33 of 5000 roots by chance alone, <!-- claim: reentry-pf/equal-weights-drift -->
+# and the handout's setting keeps fewer than 30 in every study run,
+# more than a third of that baseline in the median run. <!-- claim: reentry-pf/roots-collapse --> All the $\beta$
+# values in the cloud then descend from those few, spread only by the artificial noise of 5 per step, so the band says
+# more about the ancestry than about the readings. With the handout's noise the median width at 30 s is much smaller
+# with $N$ = 500 (about 1600) than with 2000 or 5000 (about 3550 and 4190), in every batch of 10 study runs too.
+# With $N$ = 500 the median band is below 80% of the prior's already at 10 s, when the yardstick still equals the
+# prior's sd, and at 30 s it is narrower than the yardstick in some runs. <!-- claim: reentry-pf/fewer-particles-narrower -->
+# Such bands are over-confident: the yardstick barely depends on where it is evaluated. <!-- claim: reentry-pf/yardstick-insensitive -->
+# The ESS after (d) hides all this: it stays high because (d) only
+# corrects for the small perturbation. The fitness weights that drive the resampling drop below 0.35 $N$ at some
+# reading in most runs with $N$ = 2000, <!-- claim: reentry-pf/fitness-ess --> but their median ESS over a run stays
+# above 0.8 $N$, <!-- claim: reentry-pf/fitness-ess-typical --> so resampling only when the ESS falls below $N/2$
+# would skip most steps. Systematic or residual resampling, which draw each parent close to $N w_l$ times, would also
+# lose less diversity per step.
+#
+# **Rubric (2 points).** 1 point for (a): the band is several times wider than the yardstick (or still close to
+# the prior's width at large $N$), and this means the filter loses information that the readings hold (the large
+# noise in $v$, the resampling), not that the radar says little about $\beta$. 1 point for (b): the ancestry
+# collapses to a few particles of $t_0$, about as fast as resampling equal weights at every step would (the dashed
+# baselines), so the band's width depends on $N$ and on the run (smaller $N$ gives narrower, over-confident bands),
+# and the ESS after (d) does not show it. A student who blames the weights instead of the resampling at every step,
+# but reads the figures correctly otherwise, loses no points. Naming a remedy (systematic or residual resampling,
+# resampling only when the ESS is low) is welcome but not required.
+# ### END SOLUTION
+
+# %% [markdown]
+# ## 8. Tuning
+#
+# Section 7 showed the defects of the handout's setting. **The study** ran each of 14 settings (the filter, $N$ and
+# the artificial process noise) on the same 50 simulated half minutes: the lab's truth, fresh radar noise, fresh
+# filter draws. The table gives, for each setting, the RMSE of the weighted mean of $h$, $v$ and $\beta$, and the
+# fraction of the time the truth lay inside the 50% and the 90% bands (the *coverage*). Both are scored over the
+# last 10 s, $t \ge$ 20 s, when the readings have said something about $\beta$. <!-- claim: reentry-pf/information-arrives-late -->
+# The scores ship in `course/data/falling_object_tuning.csv`.
+
+# %% [markdown]
+# **How to read it.** The last row is what an exact posterior would score: 50% to 53% for every 50% band and 90% to
+# 92% for every 90% band. <!-- claim: reentry-pf/ideal-scored -->
+# Coverage below that means over-confident bands (too narrow), above it under-confident ones (too wide).
+
+# %% [markdown]
+# Two rows are marked with the names the lab uses. **The handout's setting** is `auxiliary`, $N$ = 5000, noise
+# (100, 100, 5): the filter of section 7. **The tuned setting** is `auxiliary`, $N$ = 2000, noise (10 m, 10 m/s,
+# 50): less noise in $h$ and $v$, more in $\beta$, and fewer particles.
+
+# %% [markdown]
+# **Read the noise too.** Each number is a mean over 50 runs, and runs differ, $\beta$ most. With the handout's
+# setting, one run's RMSE of $\beta$ lies between about 150 and 1200 (10th to 90th percentile). <!-- claim: reentry-pf/beta-rmse-spread -->
+# So the table gives the RMSE of $\beta$ with $\pm$ two standard errors of its mean. When the ranges of two rows
+# overlap, the study has not shown that they differ.
+
+# %% nbgrader={"grade": false, "grade_id": "tuning_table", "locked": true, "schema_version": 3, "solution": false, "task": false}
+# NBVAL_CHECK_OUTPUT
+require(tracking_dynamics)
+study = falling_object.load_tuning()
+# what an exact posterior would score over the same readings (linearised at the truth, expected values)
+ideal = falling_object.ideal_scores(tracking_dynamics, X0_TRUE, data.t)
+print(falling_object.format_tuning_table(study, ideal=ideal))
+
+# %% nbgrader={"grade": false, "grade_id": "tuning_figure", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(tracking_dynamics)
+axes = falling_object.plot_tuning(study, ideal=ideal)
+plt.show()
+
+# %% [markdown]
+# The tuned setting on the shipped readings. Copy the two cells below into new cells, change `innovation_std` or
+# $N$, and see what your setting does to the bands and to the gap from the yardstick.
+
+# %% nbgrader={"grade": false, "grade_id": "run_chosen", "locked": true, "schema_version": 3, "solution": false, "task": false}
+# NBVAL_CHECK_OUTPUT
+require(run_particle_filter, initial_cloud, pf_step, credibility_interval, tracking_dynamics)
+# the tuned setting on the shipped readings: N = 2000, noise (10, 10, 50) (copy this cell to try your own)
+tuned = run_particle_filter(data.b, 2000, np.random.default_rng(falling_object.RUN_SEED), innovation_std=CHOSEN_STD)
+falling_object.print_report(data, tuned)
+
+# %% nbgrader={"grade": false, "grade_id": "plot_chosen", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(run_particle_filter, tracking_dynamics)
+axes = falling_object.plot_tracking(data, tuned, yardstick=yardstick,
+                                    title="The tuned setting: auxiliary particle filter, N = 2000, noise (10, 10, 50)")
+plt.show()
+
+# %% [markdown]
+# **Question 3.** Compare the tuned setting with the handout's setting, using their two rows of the table and the
+# coverage figure. Quote the numbers you use.
+#
+# (a) For each of $h$, $v$ and $\beta$: how much lower is the tuned setting's RMSE? For $\beta$, is the difference
+# larger than the scatter between runs (the $\pm$ column)?
+#
+# (b) Which of the tuned setting's six bands (50% and 90%, for $h$, $v$ and $\beta$) are over-confident, and which
+# under-confident, judged against the exact posterior's row? Name one change of setting that you would try next,
+# and say which numbers of the table it should move.
+
+# %% [markdown] nbgrader={"grade": true, "grade_id": "tuning_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
+# ### BEGIN SOLUTION
+# **Model answer.** (a) The tuned setting's RMSE of $h$ is 86 m against 188 m, less than half (0.46; from 0.43 to
+# 0.50 over five batches of 10 runs), and of $v$ 14 m/s against 92 m/s, less than a fifth (0.15; from 0.12 to
+# 0.19). <!-- claim: reentry-pf/tuned-rmse-hv -->
+# For $\beta$ it is 508 against 678, about a quarter lower, but the $\pm$ two standard errors (about 90 and
+# 110) make the ranges overlap, and over five batches of 10 runs the ratio goes from below 0.5 to above 1.2: 50 runs
+# do not show that the tuned setting estimates $\beta$ better. Both are above the exact posterior's 323. <!-- claim: reentry-pf/tuned-rmse-beta -->
+# (b) None of its bands is over-confident: every 90% band holds the truth at least 90% of the time (96%, 100%, 97%)
+# and the 50% band of $h$ about half of it (55%). The 50% bands of $v$ (93%) and $\beta$ (68%; from 55% to 76% over
+# batches of 10 runs) are under-confident: an exact posterior's hold the truth 51% of the time. <!-- claim: reentry-pf/tuned-coverage -->
+# Next, for example: less noise in $v$ than in $h$, which should bring the 50% coverage of $v$ down towards 51%
+# without making $h$ over-confident. (Too little noise in $h$ does: with (3, 3, 5) and (3, 3, 50) the 90% band of
+# $h$ holds the truth less than 80% of the time.) <!-- claim: reentry-pf/small-noise-overconfident -->
+# Or more particles, or resampling only when the ESS is low, which should lower the RMSE of $\beta$ and narrow its
+# band; or a noise in $\beta$ that shrinks as the readings become informative.
+#
+# **Rubric (2 points).** 1 point for (a): the RMSEs of $h$ and $v$ read from the two rows (less than half, less
+# than a fifth), and for $\beta$ that the difference is within the scatter (the $\pm$ ranges overlap), so it is
+# not established. Ratios or differences both do. 1 point for (b): no band over-confident (90% bands at or above 90%, the 50% band of $h$ near
+# 50%), the 50% bands of $v$ and $\beta$ under-confident, and one concrete next change with the numbers it should
+# move. Any sensible change earns the point if it is tied to the table.
+# ### END SOLUTION
+
+# %% [markdown]
+# ## 9. Going further
+#
+# Nothing in this section is graded. It backs up the main text with checks and ablations.
+#
+# **The yardstick and the Van Trees bound.** The Van Trees bound averages the readings' information over truths
+# drawn from the prior before it adds the prior's. It is a floor for the RMSE of any estimate of $\beta$, averaged
+# over that prior, but not at one truth. At 20 s and at 30 s it is within 6% of the yardstick of section 7
+# (about 205 against 200 at 30 s). <!-- claim: reentry-pf/yardstick-near-van-trees -->
+# From one prior draw to another, the linearised posterior sd at 30 s ranges from about 180 to 250 (10th to
+# 90th percentile). <!-- claim: reentry-pf/yardstick-across-prior -->
+# Near the lab's truth it barely moves: shifting the true $\beta$ by $\pm$400 or $v_0$ by $\pm$50 m/s changes it at
+# 30 s by less than 3%. <!-- claim: reentry-pf/yardstick-insensitive -->
+# So the lesson of Question 2 stands with either curve: in the median run, the band of the handout's setting is
+# about 6 times as wide (and with the handout's noise and $N$ = 2000, about 5 times). <!-- claim: reentry-pf/handout-band-far-from-yardstick -->
+
+# %% [markdown]
+# **Why score only $t \ge$ 20 s?** Before about 15 s the readings say almost nothing about $\beta$, so even an exact
+# posterior is close to the prior. The lab's truth, $\beta$ = 19161, happens to sit 0.56 prior standard deviations
+# from the prior's mean. Over the whole run, an exact posterior's 50% band of $\beta$ would hold it about 72% of the
+# time and its 90% band about 96%, which would look "too wide". <!-- claim: reentry-pf/ideal-whole-run -->
+
+# %% [markdown]
+# **Why 50 in $\beta$ and not 5?** With $N$ = 2000, noise (10, 10, 5) has about the same RMSE of $h$ and $v$ as the
+# tuned setting (within 5%), but its 90% band of $\beta$ holds the truth 83% of the time (75% to 93% over batches
+# of 10 runs; the tuned setting: 97%, 93% to 100%). With $N$ = 500 that band holds the truth 17% of the time (10% to
+# 32%; the tuned noise: 69%, 60% to 73%). <!-- claim: reentry-pf/beta-noise-robust -->
+# The larger noise keeps the band from collapsing with the ancestry. The price is a band at 30 s 3 to 5 times the
+# yardstick in the median run. <!-- claim: reentry-pf/tuned-band-width -->
+# Even so, $N$ = 500 is too few for the tuned noise: its 90% band of $\beta$ then holds the truth less than 80% of the
+# time. <!-- claim: reentry-pf/tuned-needs-particles -->
+# Before the readings become informative, the tuned band of $\beta$ can grow wider than the prior's (in 30% to 70%
+# of the study's runs it does at some second between 10 s and 18 s): <!-- claim: reentry-pf/tuned-band-widens-early -->
+# the random walk of 50 per step adds about $50\sqrt{100}$ = 500 of spread every 10 s, faster than the early
+# readings remove it.
+
+# %% [markdown]
+# **Bootstrap or auxiliary?** Here the look-ahead buys little: with the handout's noise and with the tuned noise
+# ($N$ = 2000 both), the bootstrap filter's RMSE of $h$ and $v$ is within 10% of the auxiliary filter's, and the
+# coverage of $h$ and $v$ within 7 percentage points. <!-- claim: reentry-pf/bootstrap-similar -->
+# The numbers of $\beta$ differ too, but by less than they scatter from one batch of 10 runs to the next. <!-- claim: reentry-pf/bootstrap-similar -->
+# The
+# fitness weights of (b) are usually close to equal (with $N$ = 2000, the median of their ESS over a run is above
+# 0.8 $N$ in each of 10 runs): <!-- claim: reentry-pf/fitness-ess-typical -->
+# the radar's 500 m noise is broad next to the spread of the predicted altitudes, so looking ahead changes few
+# draws.
+#
+# **Another lab, other conventions.** This lab keeps its handout's conventions: $v$ is the *downward* speed and $\beta$ the ballistic
+# coefficient, which *divides* the drag (a dense, compact object has a large $\beta$ and is slowed little). The
+# reentry-srekf lab follows a different handout: there $v$ is the upward velocity (negative while the vehicle falls)
+# and the drag is *multiplied* by a ballistic drag coefficient $c$ in m$^2$/kg. Each lab keeps its handout's
+# convention so that it reads side by side with its handout.
+#
+# **Less random resampling.** Systematic or residual resampling draw each parent close to $N \hat w^{(\ell)}$ times,
+# and resampling only when the ESS falls below about $N/2$ skips most steps. Both lose less diversity than
+# multinomial resampling at every step. A resample-move step (an MCMC move after resampling) restores diversity
+# without adding noise to the model.
