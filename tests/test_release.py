@@ -129,6 +129,23 @@ def test_leak_detector_finds_a_reference_body_in_a_notebook(tmp_path):
     ]
 
 
+def test_a_function_of_a_drafts_visible_checks_is_no_leak(tmp_path, monkeypatch):
+    """A draft is the notebook as text: a helper that its check cell defines is in the release by design,
+    and is not reported; a reference's body in the same notebook still is."""
+    helper = ("def scripted(x):\n    y = x + 1\n    z = y * 2\n    w = z - 3\n    return [y, z, w, x, y + z]\n")
+    root = tmp_path / "root"
+    (root / "solutions" / "lab").mkdir(parents=True)
+    (root / "solutions" / "lab" / "draft.py").write_text(f"# %%\n{helper}\n# %%\n{REFERENCE_PREDICT}")
+    (root / "solutions" / "lab" / "reference.py").write_text(REFERENCE_PREDICT.replace("forecast", "predict"))
+    monkeypatch.setattr(leaks, "ROOT", root)
+    release = tmp_path / "release"
+    release.mkdir()
+    nb = nbformat.v4.new_notebook(cells=[nbformat.v4.new_code_cell(helper), nbformat.v4.new_code_cell(REFERENCE_PREDICT)])
+    nbformat.write(nb, release / "lab.ipynb")
+    assert [str(leak) for leak in leaks.find_leaks(release)] == [
+        "lab.ipynb: function forecast has the body of solutions/lab/reference.py:predict"]
+
+
 @about(*LABS)
 def test_course_implements_no_blank():
     assert leaks.blanks_in_course() == []
