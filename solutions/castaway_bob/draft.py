@@ -28,7 +28,7 @@
 # 4. Write one step of a Kalman filter with a known input.
 # 5. Write two filters: a rank-2 filter that knows nothing about the sea, and a rank-4 filter that knows the
 #    current. Like the handout, we call the length of a filter's state vector its **rank**: the rank-2 state is
-#    Bob's position (x, y), the rank-4 state adds his velocity. (It is not the rank of a matrix.)
+#    Bob's position (x, y), the rank-4 state adds his own velocity. (It is not the rank of a matrix.)
 # 6. Score them over many simulated drifts, with a control we give you, and decide whether the handout's
 #    ranking holds.
 #
@@ -757,8 +757,8 @@ check_run_rank4(run_rank4)
 # $\vec e \sim \mathcal N(0, \sigma_v^2 I_2)$, a random walk of the velocity, and $\sigma_v = \sigma_F = 0.02$ m/s. It starts
 # from the first fix with velocity $0 \pm$ the current's speed, the size of the velocity it has to learn, just as the
 # rank-4 filter starts from the spread of Bob's own velocity. `ocean.constant_velocity_filter` builds it from your
-# `kalman_step`, `transition_matrix` and `observation_matrix`. (Section 8 says why the handout calls for it, and checks
-# that its step does not flatter the rank-4 filter.)
+# `kalman_step`, `transition_matrix` and `observation_matrix`. (Section 8 says how it bears on the handout's rank-2
+# filter, and checks that its step does not flatter the rank-4 filter.)
 
 # %% [markdown]
 # Now all four estimators follow Bob's drift. On the left is the whole drift over the vortex street. On

@@ -1021,7 +1021,8 @@ else:
 #
 # Nothing in this section is graded. It holds the notes behind the main text: where the model's atmosphere holds,
 # why the RK4 step is given, how fast the filter learns $v$ and $c$, where the spike of the averaged NEES at $t = 0$
-# comes from, and a few experiments to try. Its claims are checked like all the others.
+# comes from, why each simulated fall has its own initial mean, and a few experiments to try. Its claims are checked
+# like all the others.
 
 # %% [markdown]
 # ### Where this atmosphere holds
@@ -1056,13 +1057,17 @@ else:
 # %% [markdown]
 # ### The spike of the averaged NEES at $t = 0$
 #
-# The spike in the figure, about 10, rests on a few of the 40 falls. The first range update takes the range's slope at the prior mean, typically 2200 m from the truth. The range is
-# curved enough there to put the altitude too high by tens to hundreds of metres, against a posterior $\sigma_h$ of
-# about 56 m. So about one first update in seven has a NEES above 9.35, where a consistent update has one in 40,
+# The spike in the figure of part 9, about 10, rests on a few of the 40 falls. The first range update takes the
+# range's slope at the prior mean, typically 2200 m from the truth. The range is curved enough there to put the
+# altitude too high by tens to hundreds of metres, against a posterior $\sigma_h$ of about 56 m. So about one first update in seven has a NEES above 9.35, where a consistent update has one in 40,
 # while from $\sigma_h = 1000$ m down the rate is within about half a point of consistent. <!-- claim: reentry-srekf/first-update-nees-spike -->
+
+# %% [markdown]
+# ### Why each fall has its own initial mean
 #
-# Each fall's filter starts from its own initial mean for a related reason. Starting every fall from the same
-# $\boldsymbol{\mu}_0$ would give every fall the same initial error, and test the filter on that one error only.
+# In part 9 each fall's filter starts from its own initial mean, a draw around the true state. Starting every fall
+# from the same $\boldsymbol{\mu}_0$ would give every fall the same initial error, and test the filter on that one
+# error only.
 
 # %% [markdown]
 # ### To explore
