@@ -888,8 +888,8 @@ axes = falling_object.plot_tuning(study, ideal=ideal)
 plt.show()
 
 # %% [markdown]
-# The tuned setting on the shipped readings. Its report scores the whole run, 0 to 30 s, of one run; the table
-# scores $t \ge$ 20 s over 50 runs, so compare settings with the table. Copy the two cells below into new cells,
+# The tuned setting on the shipped readings. Its report scores one run over the whole half minute, 0 to 30 s; the
+# table scores 50 runs over $t \ge$ 20 s, so compare settings with the table. Copy the two cells below into new cells,
 # change `innovation_std` or $N$, and see what your setting does to the bands and to the gap from the yardstick.
 
 # %% nbgrader={"grade": false, "grade_id": "run_chosen", "locked": true, "schema_version": 3, "solution": false, "task": false}
