@@ -308,7 +308,7 @@ VISIBLY_FAILED = {
                           "bootstrap_pf_step/noise-before-f", "unscented_points/centre-weight-one-over-n-plus-kappa",
                           "ekf_update/angle-index-hard-coded", "ekf_update/wraps-every-component",
                           "bootstrap_pf_step/noise-L-untransposed"),
-    "reentry-pf": ("run_particle_filter/roots-composed-backwards",),
+    "reentry-pf": ("run_particle_filter/roots-composed-backwards", "run_particle_filter/drops-innovation-std"),
     "reentry-srekf": ("sqrt_time_update/noise-transposed", "sqrt_measurement_update/noise-transposed",
                       "sqrt_measurement_update/noise-variance"),
 }
@@ -323,7 +323,8 @@ found case (d) too loose for it (8e-8 of the variance, under the default rtol of
 passed them, as every u they gave had one entry, until the fairness review of the messages added a u of two.
 castaway-bob's run_rank4/global-sigma-gps passed them until the fairness review of castaway-bob's checks (helper-42)
 found that no case of run_rank4 gave another sigma_gps (case (g) now does); its sigma_F ones until the second round
-of that review found the same of sigma_F (case (h))."""
+of that review found the same of sigma_F (case (h)). reentry-pf's run_particle_filter/drops-innovation-std passed them
+until a student trial's follow-up added a run with innovation_std = (1, 1, 1) and a look at the width of v's band."""
 
 VISIBLE_MESSAGES = {
     "train-kf": {"nees/root": ("take no square root", None),
@@ -378,6 +379,9 @@ VISIBLE_MESSAGES = {
         "pf_step/variance-innovation": ("standard deviations, not variances", "Propagate before you resample"),
         "pf_step/innovation-shared": ("its own draw of the innovation", "old weights w"),
         "credibility_interval/percent-as-fraction": ("p is in percent", "Carry the weights along"),
+        # a student trial: a loop that dropped innovation_std passed every visible check (a case with a small noise now
+        # looks at the spread of v)
+        "run_particle_filter/drops-innovation-std": ("innovation_std=innovation_std", None),
     },
 }
 """Mistakes whose visible check must say a given phrase, the hint that points at the cause, and must not say

@@ -48,7 +48,8 @@
 # are graded, *hidden tests* compare your function with a reference on random inputs, and each function is graded
 # on its own. The test of `pf_step` is statistical: a correct step fails it with probability below one in a million.
 # A graded function must leave the arrays it is given unchanged, and draw every random number from the `rng` it is
-# given, never from `np.random`. The three written answers are marked by hand. The grey cells are locked: grading
+# given, never from `np.random`. You may add cells of your own to try things out: they are not graded. The three
+# written answers are marked by hand. The grey cells are locked: grading
 # puts back their originals. Before you submit, press **Validate**: it lists each blank that is not written yet or
 # fails its visible checks.
 #
@@ -213,7 +214,11 @@ check_simulate_radar(simulate_radar)
 
 # %% [markdown]
 # **Question 1.** Which tolerances did you give `solve_ivp`, and why those? Say how accurate the truth is
-# then, compared with the radar noise, and what the tighter tolerances cost.
+# then, compared with the radar noise, and what the tighter tolerances cost: the number of evaluations of $f$
+# (`solve_ivp`'s result has it as `.nfev`), or the time the solve takes.
+#
+# To find out, add a cell of your own below this one (cells you add are not graded): solve once with the
+# defaults and once with much tighter tolerances, and compare the altitudes and the `.nfev` of the two.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "tolerance_answer", "locked": false, "points": 1, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -529,6 +534,12 @@ require(credibility_interval)
 # 0.75, 1, so the median (order 0.5) is 2.
 samples = np.array([4.0, 1.0, 3.0, 2.0])
 interval = check_pair(credibility_interval(samples, np.ones(4), 0), "credibility_interval", "lo", "hi")
+# lo and hi have the shape of p: one value per probability in p. So a number p gives two numbers, not arrays.
+for value, which in zip(interval, ("lo", "hi")):
+    check_array(value, f"{which} for the number p = 0", (),
+                "lo and hi have the shape of p, one value per probability in p: a number p gives a number, and an "
+                "array of 3 probabilities gives arrays of 3. Keep p's shape (np.asarray(p) does; np.atleast_1d(p) "
+                "or np.array([p]) adds an axis).")
 check_close(interval, [2.0, 2.0], "the weighted median (p = 0) of 4, 1, 3, 2 with equal weights",
             "Sort, accumulate the weights in sorted order, normalise by the total, and take the first sample whose "
             "cumulative weight reaches the order 0.5.")
@@ -544,7 +555,11 @@ check_close(credibility_interval(samples, weights, 50), [3.0, 3.0], "the 50% int
 check_close(credibility_interval(samples, weights, 90), [1.0, 4.0], "the 90% interval of the same weighted samples",
             "The orders are (1 - p/100) / 2 and (1 + p/100) / 2, with p in percent.")
 # p may be an array: one interval per entry, in one call. Unnormalised weights give the same answer.
-lo, hi = credibility_interval(samples, 10 * weights, np.array([0.0, 50.0, 90.0]))
+lo, hi = check_pair(credibility_interval(samples, 10 * weights, np.array([0.0, 50.0, 90.0])), "credibility_interval",
+                    "lo", "hi")
+for value, which in ((lo, "lo"), (hi, "hi")):
+    check_array(value, f"{which} for p = [0, 50, 90]", (3,),
+                "lo and hi have the shape of p, one value per probability in p: here 3 of each.")
 check_close(np.stack([lo, hi]), [[3.0, 3.0, 1.0], [3.0, 3.0, 4.0]], "the intervals for p = [0, 50, 90] with weights x 10",
             "Normalise the cumulative weights by their total, and let np.searchsorted find all the orders at once.")
 # Each weight belongs to its sample: with all the weight on the sample 3, listed first, every quantile is 3.
@@ -642,6 +657,17 @@ x_first, w_first = initial_cloud(data.b[0], 500, rng)
 x_one, w_one = pf_step(x_first, w_first, data.b[1], rng)
 check_close(short.mean[:, 1], x_one @ w_one, "the mean at t_1",
             "Step j uses the reading b[j]; record the weighted mean sum_l w_l x_l (x @ w), not the plain mean.")
+# The keyword innovation_std reaches the step. The prior's 90% band of v is 2 x 1.645 x 200 = 658 m/s wide. With the
+# handout's noise, 100 m/s in every step, it is about 1200 m/s wide at t = 2 s; with a noise of 1 m/s per step it
+# stays under 700 m/s.
+small = run_particle_filter(data.b[:21], 500, np.random.default_rng(3), innovation_std=np.array([1.0, 1.0, 1.0]))
+check_history(small, n_times=21, n_particles=500)
+width_v = small.hi90[1, -1] - small.lo90[1, -1]
+check_true(width_v < 800.0,
+           f"with innovation_std = (1, 1, 1) the 90% band of v at t = 2 s is {width_v:.0f} m/s wide, about as wide as "
+           "with the handout's noise (100 m/s per step), so the filter did not use the innovation_std it was given",
+           "Pass it on to the step: step(x, w, b[j], rng, innovation_std=innovation_std, info=info). Without it, the "
+           "step uses its default, the handout's INNOVATION_STD, in every run.")
 # The bootstrap step resamples with the weights of the step before, so its ess_resample[j] is ess[j - 1].
 boot = run_particle_filter(data.b[:6], 500, np.random.default_rng(4), step=partial(falling_object.bootstrap_step,
                            dynamics=tracking_dynamics), innovation_std=CHOSEN_STD)
@@ -675,11 +701,13 @@ check_run_particle_filter(run_particle_filter)
 #
 # Now the whole half minute with **the handout's setting**: the auxiliary filter of `pf_step`, $N$ = 5000
 # particles, and artificial process noise (100 m, 100 m/s, 5). From here on, "the handout's setting" means exactly
-# this filter, $N$ and noise. The table gives the estimates at the last reading, the error of the weighted mean
-# over the run, and how often the truth lay inside each band.
+# this filter, $N$ and noise. The table gives the estimates at the last reading, and two scores of the **whole
+# run**, 0 to 30 s: the RMSE of the weighted mean, and how often the truth lay inside each band. (The study of
+# section 8 scores only $t \ge$ 20 s, so its numbers differ from these.)
 
 # %% nbgrader={"grade": false, "grade_id": "run_lab", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
+# (the kit's tests check that this cell prints the same on every run)
 require(run_particle_filter, initial_cloud, pf_step, credibility_interval)
 # the handout's setting: the auxiliary particle filter, N = 5000, artificial process noise (100 m, 100 m/s, 5)
 history = run_particle_filter(data.b, falling_object.N_PARTICLES, np.random.default_rng(falling_object.RUN_SEED))
@@ -700,6 +728,7 @@ falling_object.print_report(data, history)
 
 # %% nbgrader={"grade": false, "grade_id": "crb", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
+# (the kit's tests check that this cell prints the same on every run)
 require(tracking_dynamics)
 yardstick = falling_object.beta_linearised_sd(tracking_dynamics, X0_TRUE, data.t)
 for t_j in (0, 10, 15, 20, 25, 30):
@@ -846,6 +875,7 @@ plt.show()
 
 # %% nbgrader={"grade": false, "grade_id": "tuning_table", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
+# (the kit's tests check that this cell prints the same on every run)
 require(tracking_dynamics)
 study = falling_object.load_tuning()
 # what an exact posterior would score over the same readings (linearised at the truth, expected values)
@@ -858,11 +888,13 @@ axes = falling_object.plot_tuning(study, ideal=ideal)
 plt.show()
 
 # %% [markdown]
-# The tuned setting on the shipped readings. Copy the two cells below into new cells, change `innovation_std` or
-# $N$, and see what your setting does to the bands and to the gap from the yardstick.
+# The tuned setting on the shipped readings. Its report scores one run over the whole half minute, 0 to 30 s; the
+# table scores 50 runs over $t \ge$ 20 s, so compare settings with the table. Copy the two cells below into new cells,
+# change `innovation_std` or $N$, and see what your setting does to the bands and to the gap from the yardstick.
 
 # %% nbgrader={"grade": false, "grade_id": "run_chosen", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
+# (the kit's tests check that this cell prints the same on every run)
 require(run_particle_filter, initial_cloud, pf_step, credibility_interval, tracking_dynamics)
 # the tuned setting on the shipped readings: N = 2000, noise (10, 10, 50) (copy this cell to try your own)
 tuned = run_particle_filter(data.b, 2000, np.random.default_rng(falling_object.RUN_SEED), innovation_std=CHOSEN_STD)
@@ -956,11 +988,9 @@ plt.show()
 # the radar's 500 m noise is broad next to the spread of the predicted altitudes, so looking ahead changes few
 # draws.
 #
-# **Another lab, other conventions.** This lab keeps its handout's conventions: $v$ is the *downward* speed and $\beta$ the ballistic
-# coefficient, which *divides* the drag (a dense, compact object has a large $\beta$ and is slowed little). The
-# reentry-srekf lab follows a different handout: there $v$ is the upward velocity (negative while the vehicle falls)
-# and the drag is *multiplied* by a ballistic drag coefficient $c$ in m$^2$/kg. Each lab keeps its handout's
-# convention so that it reads side by side with its handout.
+# **Conventions.** As in the handout, $v$ is the *downward* speed and $\beta$ *divides* the drag: a dense, compact
+# object has a large $\beta$ and is slowed little. Other texts may use an upward velocity, or a coefficient that
+# multiplies the drag; check the signs before you compare their formulas with these.
 #
 # **Less random resampling.** Systematic or residual resampling draw each parent close to $N \hat w^{(\ell)}$ times,
 # and resampling only when the ESS falls below about $N/2$ skips most steps. Both lose less diversity than

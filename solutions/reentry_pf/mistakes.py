@@ -113,6 +113,11 @@ MISTAKES = (
     Mistake("run_particle_filter", "ignores-step", "the step argument ignored: always the auxiliary pf_step",
             "step = pf_step if step is None else step", "step = pf_step",
             hint="Your run_particle_filter behaves as if it ignored the step argument and always used pf_step."),
+    # A student trial: a loop that did not pass innovation_std to the step passed every visible check.
+    Mistake("run_particle_filter", "drops-innovation-std", "the step called without innovation_std: every run uses the handout's noise",
+            "x, w = step(x, w, b[j], rng, innovation_std=innovation_std, info=info)", "x, w = step(x, w, b[j], rng, info=info)",
+            hint="Your run_particle_filter behaves as if it did not pass innovation_std on to the step, so every run used the "
+                 "step's default, the handout's noise: call step(..., innovation_std=innovation_std, info=info)."),
     Mistake("run_particle_filter", "ess-of-sum", "ESS as 1 / (sum w)^2, which is always 1",
             "1.0 / np.sum(w**2)", "1.0 / np.sum(w) ** 2",
             hint="Your run_particle_filter behaves as if the ESS were 1 / (sum w)^2, which is always 1: square each weight before summing."),
