@@ -916,7 +916,7 @@ print(f"pooled over all falls and steps: {np.mean(held):.1%} of the NEES values 
 # wide altitude, as the text says.) <!-- claim: reentry-srekf/first-update-nees-spike --> So the filter is inconsistent: overconfident
 # (its covariance too small for its errors): strongly during its first 20 s or so, while it is learning $c$ and $v$,
 # most likely because the EKF linearises the drag at a poorly known state; mildly up to 30 or 40 s; and it is close to
-# consistent only from about 40 s on. A score that pools all steps of all falls hides
+# consistent only from about 40 s on. <!-- claim: reentry-srekf/average-nees-many-falls --> A score that pools all steps of all falls hides
 # this, because the long consistent part dilutes the early part: in these 40 falls 91% of the single NEES values
 # lie inside the single-step band $[0.22,\ 9.35]$, not far from the 95% of a consistent filter, though the share is
 # 85% before 20 s and 96% after. The other sets tell the same story: pooled, 86 to 94%, always short of 95% and
