@@ -8,7 +8,9 @@ start from initial errors drawn from the prior, filtered by ``course.starship.fi
 ranges with tolerances stated in each check. The claims of part 9 about the NEES averaged over 40 falls, and the
 lag of part 10, are quoted twice: for these 40 falls, and over the nine other sets of 40 falls of ``OTHER_SETS``
 (seeds 500-539 and 1000-1039, 2000-2039, ..., 8000-8039), which the checks recompute (``fall_sets``: about 1 s
-for all nine). The rate claims' tolerances were also checked on the set of seeds 500-539.
+for all nine). The rate claims' tolerances were also checked on the set of seeds 500-539. The averages that the text
+gives over many falls (average-nees-many-falls) and the lag's "nearly all" are checked over 2000 fresh falls
+(``MANY_FALL_SEEDS``, 20000-21999), built the same way (about 20 s under load).
 """
 
 from __future__ import annotations
@@ -399,33 +401,73 @@ def _() -> None:
 @claim("reentry-srekf/average-nees-consistent-late")
 def _() -> None:
     """These 40 falls: from 20 s on the NEES averaged over them stays between 2.7 and 3.7, inside its band at every step.
-    Nine other sets: the average over 20-30 s ranges from 2.3 to 6.0 by set, but over 40-50 s it is 2.7 to 3.5, inside
-    the band at 90% of the steps or more, in every set."""
+    Nine other sets: the average over 20-30 s ranges from 2.3 to 6.0 by set."""
     # Measured, shipped set (7100-7139) / other sets 500-539, 1000-1039, 2000-2039, ..., 8000-8039: window averages
     # 20-30 s 3.24 / 3.82 2.27 4.66 3.36 3.64 5.98 3.46 2.94 3.64; 30-40 s 3.34 / 3.50 2.35 3.85 2.90 3.28 3.83 3.03 2.80
-    # 3.75; 40-50 s 3.17 / 3.38 3.19 3.13 3.30 3.17 3.24 2.71 3.02 3.47, inside the band at 100% / 98 100 100 100 100 98
-    # 100 100 90% of the steps of 40-50 s; from 20 s on inside at 100% / 79 70 46 98 94 52 98 100 85%. The old wording
-    # (from 20 s on 2.8-4.2 in every 10 s window and inside at >= 60% of the steps) fails on five of the nine other sets:
-    # 1000, 2000, 5000, 6000, 7000. Four more sets (9000-9039 to 12000-12039) agree: 40-50 s 2.63 to 3.41, inside at
-    # >= 91% of the steps.
+    # 3.75; 40-50 s 3.17 / 3.38 3.19 3.13 3.30 3.17 3.24 2.71 3.02 3.47. The text said until the science review that
+    # by 40 s every set of 40 had settled (2.7 to 3.5 over 40-50 s, inside the band at >= 90% of the steps): true of
+    # these nine, but random sets of 40 fresh falls miss 2.7-3.5 about one time in four (the review: 22% on 400 falls of
+    # the lab's simulator, 27% on 2000 of its own), so the late part is now stated over many falls
+    # (average-nees-many-falls).
     late, lower, upper = _average_nees_in(20.0, np.inf)
     assert np.all((late >= lower) & (late <= upper)), "from 20 s on the shipped falls' average NEES leaves its band"
     _as_quoted(late.min(), 2.7, 1, "the lowest average NEES of the shipped falls from 20 s on")
     _as_quoted(late.max(), 3.7, 1, "the highest average NEES of the shipped falls from 20 s on")
-    settling, settled = [], []
-    for falls in _other_sets():
-        window, _, _ = _average_nees_in(20.0, 30.0, falls)
-        settling.append(window.mean())
-        window, lower, upper = _average_nees_in(40.0, 50.0, falls)
-        inside = np.mean((window >= lower) & (window <= upper))
-        assert inside >= 0.9 - 1e-9, (
-            f"in a set of falls the average NEES is inside its band at only {inside:.0%} of the steps of 40-50 s")
-        settled.append(window.mean())
+    settling = [_average_nees_in(20.0, 30.0, falls)[0].mean() for falls in _other_sets()]
     _as_quoted(min(settling), 2.3, 1, "the lowest average NEES over 20-30 s")
     _as_quoted(max(settling), 6.0, 1, "the highest average NEES over 20-30 s")
-    _as_quoted(min(settled), 2.7, 1, "the lowest average NEES over 40-50 s")
-    _as_quoted(max(settled), 3.5, 1, "the highest average NEES over 40-50 s")
-    assert lower <= min(settled) and max(settled) <= upper, "an average over 40-50 s lies outside the band"
+
+
+MANY_FALL_SEEDS = range(20000, 22000)
+"""Seeds of the 2000 fresh falls of the many-fall claims (no other check, and no set of the notebook, uses them)."""
+
+
+@functools.cache
+def _many_falls() -> starship.MonteCarloRun:
+    """2000 fresh falls (MANY_FALL_SEEDS), simulated and filtered with the reference's model by ``fall_sets`` (about
+    20 s of one core under load), once ``_other_sets`` has checked that ``fall_sets`` reproduces the shipped falls (the
+    lab's own simulator, ``course.starship.simulate_falls``) and the reference filter's run on them."""
+    _other_sets()
+    return fall_sets.filter_sets([fall_sets.simulate_sets(list(MANY_FALL_SEEDS))])[0]
+
+
+@claim("reentry-srekf/average-nees-many-falls")
+def _() -> None:
+    """Over 2000 fresh falls the NEES averaged over the falls is well above 3 in every window up to 20 s (0-5, 5-10 and
+    10-20 s), about 3.8 over 20-30 s, 3.4 over 30-40 s and 3.1 over 40-50 s; each half of the falls (1000 each) agrees:
+    falling from window to window, above 3.3 over 20-30 s and 2.9-3.3 over 40-50 s. And 40 falls cannot tell 3.4 from 3:
+    the 50 sets of 40 that the 2000 make spread by 0.3 to 0.8 (sd) in their averages over 20-30, 30-40 and 40-50 s."""
+    # Measured (seeds 20000-21999): window averages 5.39 (0-5 s), 13.3 (5-10 s), 5.89 (10-20 s), 3.81 (20-30 s), 3.38
+    # (30-40 s), 3.11 (40-50 s); halves 3.97 / 3.66, 3.42 / 3.35, 3.14 / 3.08 over the last three windows; without the
+    # worst 1% of falls in each window 3.47, 3.21, 3.02. Sets of 40: sd 0.72, 0.46, 0.36 over the last three windows. The
+    # band of an average over 2000 falls is [2.89, 3.11]. The science review found 3.61, 3.24, 2.97 over 400 falls of
+    # the lab's simulator and 3.89, 3.44, 3.10 over 2000 of its own: heavy tails (one fall with a large early error
+    # lifts an average a long way) make these averages settle slowly, hence the tolerances.
+    falls = _many_falls()
+    assert falls.nees.shape[0] == 2000
+    windows = ((0.0, 5.0), (5.0, 10.0), (10.0, 20.0), (20.0, 30.0), (30.0, 40.0), (40.0, 50.0))
+
+    def averages(nees: np.ndarray) -> list[float]:
+        return [float(nees[:, (falls.t >= a) & (falls.t < b)].mean()) for a, b in windows]
+
+    def between(value: float, low: float, high: float, what: str) -> None:
+        assert low <= value <= high, f"{what} is {value:.3f}, outside {low:g} to {high:g}"
+
+    every = averages(falls.nees)
+    assert min(every[:3]) >= 4.5, f"the window averages up to 20 s are {np.round(every[:3], 2)}"
+    between(every[3], 3.6, 4.0, "the average over 20-30 s (about 3.8)")
+    between(every[4], 3.25, 3.55, "the average over 30-40 s (about 3.4)")
+    between(every[5], 3.0, 3.2, "the average over 40-50 s (about 3.1)")
+    for half in (falls.nees[:1000], falls.nees[1000:]):
+        late = averages(half)[3:]
+        assert late[0] > late[1] > late[2], f"in half of the falls the averages over 20-50 s are {np.round(late, 2)}"
+        between(late[0], 3.3, np.inf, "in half of the falls the average over 20-30 s")
+        between(late[2], 2.9, 3.3, "in half of the falls the average over 40-50 s")
+    for a, b in windows[3:]:
+        sets = falls.nees[:, (falls.t >= a) & (falls.t < b)].mean(axis=1).reshape(50, 40).mean(axis=1)
+        between(float(sets.std()), 0.3, 0.8, f"the sd of the averages of 50 sets of 40 falls over {a:g}-{b:g} s")
+
+
 def _() -> None:
     """From 20 s on, the NEES averaged over 40 falls is 2.8-4.2 in every 10 s window and inside its band at >= 60% of the steps."""
     # Measured (seeds 7100-7139 / 500-539): window averages 3.2 / 3.8 (20-30 s), 3.3 / 3.5 (30-40 s),
@@ -488,7 +530,8 @@ def _() -> None:
 @claim("reentry-srekf/sigma-h-peak-after-crossing")
 def _() -> None:
     """Shipped fall: crossing at 33.9 s, sigma_h ~20 m at 30 s, widest (27-31 m) at 38-39 s. Lag from crossing to widest:
-    4.1 to 4.9 s in the 40 falls of part 9; 3.6 to 5.0 s over nine other sets of 40, 4 to 5 s in all but two of 360."""
+    4.1 to 4.9 s in the 40 falls of part 9; 3.6 to 5.0 s over nine other sets of 40, 4 to 5 s in nearly all falls (at
+    least 95% of those 360 and of 2000 fresh falls)."""
     data, _, std = _shipped()
     crossing = _crossing_time(data.t, data.h)
     widest = _widest_altitude_band_after_first_seconds(data.t, std)
@@ -508,8 +551,11 @@ def _() -> None:
     others = np.concatenate([_lags(falls) for falls in _other_sets()])
     _as_quoted(others.min(), 3.6, 1, "the shortest lag over the other sets [s]")
     _as_quoted(others.max(), 5.0, 1, "the longest lag over the other sets [s]")
-    outside = int(np.sum((others < 4.0 - 1e-9) | (others > 5.0 + 1e-9)))
-    assert outside == 2, f"the lag is outside 4-5 s in {outside} of {others.size} falls"
+    # "4 to 5 s in nearly all falls": 2 of these 360 outside; the science review found about 10 of 400 fresh falls
+    # outside (3.6-5.1 s), so the check asks for at most 5% outside, here and over the 2000 fresh falls.
+    for lags, what in ((others, "the other sets"), (_lags(_many_falls()), "2000 fresh falls")):
+        outside = np.mean((lags < 4.0 - 1e-9) | (lags > 5.0 + 1e-9))
+        assert outside <= 0.05, f"over {what} the lag is outside 4-5 s in {outside:.1%} of the falls"
 
 
 # ---------------------------------------------------------------------------------------------
