@@ -110,8 +110,9 @@ def build_lab(lab: Lab) -> bool:
     leak check) and print its inventory. Prints each cell that failed, by its line in the draft and its
     grade_id, with the error; returns whether the build succeeded."""
     if not lab.draft.exists():
-        raise FileNotFoundError(f"{lab.id} has no draft, {lab.draft.relative_to(ROOT)}: a lab made before drafts is "
-                                "edited in its notebook (docs/adding-a-lab.md).")
+        raise FileNotFoundError(f"{lab.id} has no draft, {lab.draft.relative_to(ROOT)}: `jupytext --to py:percent "
+                                f"{lab.source_notebook.relative_to(ROOT)} -o {lab.draft.relative_to(ROOT)}` makes one from "
+                                "its notebook (docs/adding-a-lab.md).")
     nb = notebook_from_draft(lab.draft)
     if data.ships_data(lab):
         for path in data.rebuild([lab]):
