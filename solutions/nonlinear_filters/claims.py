@@ -3,8 +3,9 @@
 Filters are ranked by the median over runs of each run's own metric (the lecture's metric of one run), the
 same statistic for every filter, in the text, the tables and here. Every ranking claim that involves the
 particle filter is checked twice: on the runs as they are, and with one lost run added to the particle
-filter's runs (LOST_RUN: an 11 km time-RMS position error, as an independent review's PF lost about one run
-in 400), so that it holds whichever way such a run falls. The lost-run study (4000 runs of every filter at
+filter's runs (LOST_RUN_KM: an 11 km time-RMS position error), so that it holds whichever way such a run
+falls. The study below saw one such catastrophe in 4000 runs (exact 95% interval 0.0006-0.14%), so one in the
+400-run table is a conservative case, kept as a check. The lost-run study (4000 runs of every filter at
 T = 5 s in 40 batches of 100, seeds LOST_STUDY_SEED + b, shipped as a record: solutions/records/
 nonlinear_filters_lost_runs.records.npz, rebuilt in part by tests/test_nonlinear_filters_reference.py) gives
 the particle filter's lost-run rate and the independent batches of the ranking claims.
@@ -46,8 +47,10 @@ def _shipped() -> air_traffic.ShippedResults:
 
 
 LOST_RUN_KM = 11.0
-"""The injected lost run: a time-RMS position error of 11 km (and 11 km at the last return), a time-RMS velocity
-error of 1 km/s and a turn-rate error of 1 rad/s: the size of the lost run an independent PF showed."""
+"""The injected lost run: a time-RMS position error of 11 km (and 11 km at the last return; a lecture metric of
+11/sqrt(5) = 4.9 km), a time-RMS velocity error of 1 km/s and a turn-rate error of 1 rad/s: the size of a
+catastrophe (the study's was 16.8 km). One such run in 400 is about ten times the study's rate of one in 4000,
+and above its 95% upper bound (0.14%): a conservative check, not an estimate."""
 STUDY_BATCHES = ref.LOST_STUDY_BATCHES
 
 
@@ -285,7 +288,7 @@ def _() -> None:
 
 @claim("nonlinear-filters/pf-ahead-of-cut8")
 def _() -> None:
-    """By the median, the PF's position error is 10-25% below CUT8's, its velocity error below CUT8's and its turn-rate error about half of CUT8's (0.35-0.6 times): in the table, the study and every study batch, with and without one lost PF run added."""
+    """By the median, the PF's position error is 17% below CUT8's in the table (to the percent) and 10-25% below in the study and every study batch of 100 runs, its velocity error below CUT8's and its turn-rate error about half of CUT8's (0.35-0.6 times): in the table, the study and every study batch, with and without one lost PF run added."""
     def check(t: dict) -> str | None:
         pf, c8 = t["pf"]["median"], t["cut8"]["median"]
         position, turn = pf["position"] / c8["position"], pf["turn_rate"] / c8["turn_rate"]
@@ -294,35 +297,35 @@ def _() -> None:
         return None
 
     _ranking_holds(check)
+    for inject in (False, True):
+        t = _tables(inject)[0]
+        below = 1 - t["pf"]["median"]["position"] / t["cut8"]["median"]["position"]
+        assert round(100 * below) == 17, f"the table (lost run added: {inject}): PF {100 * below:.1f}% below CUT8"
 
 
 @claim("nonlinear-filters/pf-near-lecture")
 def _() -> None:
-    """Without its lost runs, the PF's lecture metric (position, velocity, turn rate) is within 15% of the lecture's PF row (115.47 m, 24.16 m/s, 0.0393 rad/s): in the table, the 4000 study runs and at least 90% of the study batches, with and without one lost PF run added."""
-    def check(t: dict) -> str | None:
+    """Without its lost runs, the PF's lecture metric (position, velocity, turn rate) is within 3% of the lecture's PF row (115.47 m, 24.16 m/s, 0.0393 rad/s): in the 400-run table and over the 4000 study runs (seen 1.5-2.5%)."""
+    for label, t in (("shipped table", _tables(False)[0]), ("4000 study runs", _pooled(False))):
         for quantity in air_traffic.QUANTITIES:
             ratio = t["pf"]["excluding_lost"][quantity] / air_traffic.LECTURE_TABLE[quantity]["pf"]
-            if abs(ratio - 1) >= 0.15:
-                return f"PF {quantity} without lost runs, {ratio:.3f} times the lecture's"
-        return None
-
-    _ranking_holds(check, 0.9)
+            assert abs(ratio - 1) < 0.03, f"{label}: PF {quantity} without lost runs, {ratio:.3f} times the lecture's"
 
 
 CATASTROPHE_KM = 5.0
 """A catastrophe: a run whose time-RMS position error is above 5 km (the particles lost the aircraft for good)."""
 PF_LOST, PF_LOST_INTERVAL = 7, (0.07, 0.36)
 """The PF's lost runs of the study (final position error above 1 km) and their exact 95% interval, in % to 2 decimals."""
-PF_CATASTROPHES, PF_CATASTROPHE_INTERVAL, PF_WORST_KM, PF_OTHERS_BELOW_KM = 1, (0.0, 0.14), 16.8, 1.5
-NEAR_MISS_BELOW_KM = 1.1
-"""A bound (km) on the time-RMS position error of the PF's lost runs that are not catastrophes."""
-"""The PF's catastrophes in the study, their exact 95% interval (%), the largest time-RMS position error (km, to 0.1),
-and a bound (km) on the time-RMS position error of every other run."""
+PF_CATASTROPHES, PF_CATASTROPHE_INTERVAL, PF_WORST_KM, PF_OTHERS_BELOW_KM = 1, (0.0006, 0.14), 16.8, 1.5
+"""The PF's catastrophes in the study, their exact 95% interval (%, the lower end to 4 decimals, the upper to 2), the
+largest time-RMS position error (km, to 0.1), and a bound (km) on the time-RMS position error of every other run."""
+NEAR_MISS_FINAL_KM = (1.1, 2.1)
+"""The final position errors (km, to 0.1) of the PF's lost runs that are not catastrophes: their least and largest."""
 
 
 @claim("nonlinear-filters/pf-lost-rate")
 def _() -> None:
-    """Over the study's 4000 runs the PF lost 7 (0.07-0.36%, exact 95% interval), 6 of them near misses (time-RMS position error under 1.1 km) and 1 a catastrophe (16.8 km; 95% interval up to 0.14%), with every other run below 1.5 km."""
+    """Over the study's 4000 runs the PF lost 7 (about 0.2%; exact 95% interval 0.07-0.36%), from near misses (1.1 to 2.1 km off at the end) to 1 catastrophe (a time-RMS position error of 16.8 km; exact 95% interval 0.0006-0.14%), with every other run below 1.5 km."""
     runs = _study_runs("pf")
     lost = runs["final_position"] > 1000.0 * air_traffic.LOST_KM
     catastrophe = runs["time_rms_position"] > 1000.0 * CATASTROPHE_KM
@@ -333,12 +336,14 @@ def _() -> None:
         k = int(flags.sum())
         low, high = _clopper_pearson(k, n)
         assert k == count, f"the PF's {what}: {k} of {n}"
-        assert (round(100 * low, 2), round(100 * high, 2)) == interval, f"{what}: 95% interval {100 * low:.3f}-{100 * high:.3f}%"
+        digits = 4 if what == "catastrophes" else 2
+        assert (round(100 * low, digits), round(100 * high, 2)) == interval, f"{what}: 95% interval {100 * low:.5f}-{100 * high:.3f}%"
     assert np.all(lost[catastrophe]), "a catastrophe that is not lost"
     worst, others = runs["time_rms_position"].max() / 1000, runs["time_rms_position"][~catastrophe].max() / 1000
     assert round(worst, 1) == PF_WORST_KM and others < PF_OTHERS_BELOW_KM, f"worst {worst:.2f} km, others up to {others:.2f} km"
-    near = runs["time_rms_position"][lost & ~catastrophe] / 1000
-    assert near.max() < NEAR_MISS_BELOW_KM, f"lost runs that are not catastrophes reach {near.max():.2f} km"
+    assert round(100 * lost.mean(), 1) == 0.2, f"lost {100 * lost.mean():.2f}%"
+    near = runs["final_position"][lost & ~catastrophe] / 1000
+    assert (round(near.min(), 1), round(near.max(), 1)) == NEAR_MISS_FINAL_KM, f"near misses end {near.min():.2f}-{near.max():.2f} km off"
 
 
 @claim("nonlinear-filters/study-mean-behind")
@@ -350,9 +355,12 @@ def _() -> None:
 
 @claim("nonlinear-filters/one-lost-run-moves-the-mean")
 def _() -> None:
-    """One lost run of 11 km added to the PF's 400 shipped runs lifts its mean position metric from under 120 m to over 250 m, behind CUT4's, CUT6's and CUT8's means, and moves its median by under 1 m."""
+    """One lost run with an 11 km time-RMS position error (a lecture metric of 4.9 km) added to the PF's 400 shipped runs lifts its mean position metric from under 120 m to over 250 m (more than double), behind CUT4's, CUT6's and CUT8's means, and moves its median by under 1 m."""
+    assert _lost_run()["time_rms_position"][0] == 1000.0 * LOST_RUN_KM == 11_000.0
+    assert round(_lost_run()["metric"][0, 0] / 1000, 1) == 4.9, _lost_run()["metric"]
     before, after = (_tables(inject)[0] for inject in (False, True))
     assert before["pf"]["position"] < 120 and after["pf"]["position"] > 250, (before["pf"]["position"], after["pf"]["position"])
+    assert after["pf"]["position"] > 2 * before["pf"]["position"], (before["pf"]["position"], after["pf"]["position"])
     assert all(after["pf"]["position"] > after[name]["position"] for name in ("cut4", "cut6", "cut8")), after["pf"]
     moved = abs(after["pf"]["median"]["position"] - before["pf"]["median"]["position"])
     assert moved < 1.0, f"the PF's median moved by {moved:.2f} m"
@@ -393,10 +401,10 @@ def _() -> None:
 
 @claim("nonlinear-filters/lost-runs")
 def _() -> None:
-    """Lost runs: CKF 40-60%, UKF 30-50%, CUT4 1-8%, CUT6 under 2%, CUT8 under 1%: in the 400-run table and pooled over the 390 batch runs."""
-    ranges = {"ckf": (0.40, 0.60), "ukf": (0.30, 0.50), "cut4": (0.01, 0.08), "cut6": (0.0, 0.02), "cut8": (0.0, 0.01)}
+    """Lost runs: CKF 40-60%, UKF about one in three (25-40%; seen 33.5% in the table, 34.8% over the 4000 study runs, 39.7% pooled over the batches), CUT4 1-8%, CUT6 under 2%, CUT8 under 1%: in the 400-run table, pooled over the 390 batch runs and over the 4000 study runs."""
+    ranges = {"ckf": (0.40, 0.60), "ukf": (0.25, 0.40), "cut4": (0.01, 0.08), "cut6": (0.0, 0.02), "cut8": (0.0, 0.01)}
     for name, (low, high) in ranges.items():
-        fractions = _lost_fraction(name)
+        fractions = (*_lost_fraction(name), _pooled(False)[name]["lost_runs"] / 4000)
         assert all(low <= f <= high for f in fractions), f"{name}: lost fractions {fractions}, claimed {low}-{high}"
 
 
@@ -481,8 +489,18 @@ def _closest_approach(legs: tuple) -> tuple[float, float]:
 
 @claim("nonlinear-filters/closest-approach")
 def _() -> None:
-    """The flight passes closest to the radar at t = 240 s (3.1 km, inside the first turn), the flight without turns at
-    t = 210 s (10 km); on both, the bearing changes fastest within 5 s of that sample."""
+    """The flight passes closest to the radar at t = 240 s (3.1 km, 25 s after the first turn ends), the flight without
+    turns at t = 210 s (10 km); on both, the bearing changes fastest within 5 s of that sample, and the CKF's and UKF's
+    shipped position RMSE_k curves depart (straight-curves-depart) within 45 s of it."""
+    turn_ends = sum(duration for duration, _ in air_traffic.LEGS[:2])
+    assert air_traffic.LEGS[1][1] != 0 and air_traffic.LEGS[2][1] == 0 and turn_ends == 215.0, air_traffic.LEGS
+    assert _closest_approach(air_traffic.LEGS)[0] - turn_ends == 25.0
+    shipped = _shipped()
+    for legs, curves in ((air_traffic.LEGS, {n: c[:, 0] for n, c in shipped.rmse_curves.items()}),
+                         (air_traffic.STRAIGHT_LEGS, shipped.straight_position_rmse)):
+        closest = _closest_approach(legs)[0]
+        for name in ("ckf", "ukf"):
+            assert abs(_departure(curves[name]) - closest) <= 45.0, f"{name} departs at {_departure(curves[name])} s, closest at {closest} s"
     for legs, (t, r) in ((air_traffic.LEGS, (240.0, 3127.0)), (air_traffic.STRAIGHT_LEGS, (210.0, 10002.0))):
         found = _closest_approach(legs)
         assert found[0] == t and abs(found[1] - r) < 1.0, f"closest approach {found}"
@@ -686,9 +704,9 @@ def _many_particles() -> list[int]:
 
 @claim("nonlinear-filters/more-particles-help")
 def _() -> None:
-    """At T = 20 s, 20 000 particles lose about half of the runs (25-75%, pooled over two seeds of 16 runs; seen: 10
-    and 6 of 16, and 8 of 16 on seed 307), where 5000 lose over 85% of the shipped sweep's 200. With a true rate of
-    50%, 32 runs fall outside 8-24 lost with probability about 0.2%."""
+    """At T = 20 s, 20 000 particles lose half to two thirds of the runs (checked 25-75%, pooled over two seeds of 16
+    runs; seen: 10 and 6 of 16, and 8 of 16 on seed 307; an independent review saw 32 of 48), where 5000 lose over 85%
+    of the shipped sweep's 200. With a true rate of 58%, 32 runs fall outside 8-24 lost with probability about 1.4%."""
     shipped = _shipped()
     few = shipped.sweep_lost["pf"][list(shipped.sweep_T).index(20.0)]
     lost = _many_particles()

@@ -38,8 +38,8 @@
 # | 1. The Kalman update, twice | two derivations | 6 | 45 min |
 # | 2, 3. Point sets and their moments | `cubature_points`, `unscented_points`, `cut4_points`, `moment_error`, Question 1 | 8 | 50 min |
 # | 5–7. The filters | `sigma_point_predict`, `sigma_point_update`, `ekf_update`, `bootstrap_pf_step` | 10 | 1 h 10 min |
-# | 8. Seven filters on the turning aircraft | Question 2 | 3 | 25 min |
-# | **all** | 8 functions, 4 written answers | **27** | **about 3 h** |
+# | 8. Seven filters on the turning aircraft | Question 2 (three parts, a point each) | 3 | 45 min |
+# | **all** | 8 functions, 4 written answers | **27** | **about 3½ h** |
 #
 # Section 4 (the aircraft and the radar) has nothing to write: read it before section 5. Section 9,
 # "Going further", is optional and not graded.
@@ -408,7 +408,7 @@ for name, (Z, w) in rules.items():
 # $Q = L_1 \begin{bmatrix} T^3/3 & T^2/2 \\ T^2/2 & T \end{bmatrix}$ for each axis and $T L_2$ for $\Omega$,
 # with $L_1 = 0.16$, $L_2 = 0.01$.
 #
-# Look at the last diagonal entry of $Q$ printed below: $Q_{44} = T L_2 = 0.05\ (\mathrm{rad/s})^2$, a turn-rate
+# Look at the last diagonal entry of $Q$ printed below: `Q[4, 4]` $= T L_2 = 0.05\ (\mathrm{rad/s})^2$, a turn-rate
 # standard deviation of 0.22 rad/s (12.8°/s) added at every step, more than four times the sharpest true turn
 # (3°/s). <!-- claim: nonlinear-filters/turn-noise-size -->
 # The true flight has no random turn rate; this noise is the filters' cautious model, and it is what strains the
@@ -816,8 +816,8 @@ air_traffic.print_table(shipped.table, shipped.runs)
 # %% [markdown]
 # **What the first table shows.** By the median, the particle filter has the smallest position, velocity and
 # turn-rate errors of the seven filters. <!-- claim: nonlinear-filters/pf-best-all -->
-# Its position error is 10% to 25% below CUT8's, its velocity error is smaller, and its turn-rate error is about
-# half of CUT8's. <!-- claim: nonlinear-filters/pf-ahead-of-cut8 -->
+# Its position error is 17% below CUT8's (10% to 25% in every batch of 100 runs), its velocity error is smaller,
+# and its turn-rate error is about half of CUT8's. <!-- claim: nonlinear-filters/pf-ahead-of-cut8 -->
 # The Gaussian filters line up by the degree of their rules: in position CUT6 and CUT8 are level, then come
 # CUT4, the UKF, the CKF and the EKF. <!-- claim: nonlinear-filters/position-ordering -->
 # CUT8 has the smallest velocity and turn-rate errors of the six Gaussian filters. <!-- claim: nonlinear-filters/cut8-best-gaussian -->
@@ -825,8 +825,8 @@ air_traffic.print_table(shipped.table, shipped.runs)
 # The particle filter pays for its lead with 5000 model evaluations per step, against 355 for CUT8.
 
 # %% [markdown]
-# **Lost and diverged runs.** The CKF loses between 40% and 60% of the runs, the UKF between 30% and 50%, CUT4
-# between 1% and 8%, CUT6 under 2% and CUT8 under 1%. <!-- claim: nonlinear-filters/lost-runs -->
+# **Lost and diverged runs.** The CKF loses between 40% and 60% of the runs, the UKF about one in three (25% to
+# 40%), CUT4 between 1% and 8%, CUT6 under 2% and CUT8 under 1%. <!-- claim: nonlinear-filters/lost-runs -->
 # The EKF loses more than nine runs in ten. <!-- claim: nonlinear-filters/ekf-loses-most -->
 # Divergence is more common than loss: the CKF diverges in 65-90% of the runs, the UKF in 50-75%, CUT4 and CUT6
 # in 3-12%, and CUT8 in none of the 400. <!-- claim: nonlinear-filters/diverged-runs -->
@@ -836,14 +836,14 @@ air_traffic.print_table(shipped.table, shipped.runs)
 
 # %% [markdown]
 # **How often does the particle filter lose a run?** Too rarely for 400 runs to tell, so we ran all seven
-# filters on 4000 more runs (40 batches of 100, seeds of their own). The particle filter lost 7, about 0.2%
-# (95% interval 0.07% to 0.36%). Six were near misses: a time-RMS position error under 1.1 km, but just over
-# 1 km off at the end. One was a catastrophe, a time-RMS error of 16.8 km, when no other run went above
-# 1.5 km: a rate below 0.14% (95% interval). <!-- claim: nonlinear-filters/pf-lost-rate -->
+# filters on 4000 more runs (40 batches of 100, seeds of their own). The particle filter lost 7 of them, about
+# 0.2%. Its lost runs range from near misses, 1.1 to 2.1 km off at the end, to a catastrophe: one run with a
+# time-RMS position error of 16.8 km, where no other run went above 1.5 km. One catastrophe in 4000 runs is a
+# rate somewhere between 0.0006% and 0.14% (exact 95% interval). <!-- claim: nonlinear-filters/pf-lost-rate -->
 #
 # One such run is enough to upset a mean. Over the 4000 runs, the particle filter's mean position metric is
 # above CUT6's and CUT8's, although its median is the smallest. <!-- claim: nonlinear-filters/study-mean-behind -->
-# Add a run with an 11 km error to the 400 of the table: its mean rises from under 120 m to over 250 m, behind
+# Add a run with an 11 km time-RMS position error (a metric of 4.9 km) to the 400 of the table: its mean rises from under 120 m to over 250 m, behind
 # CUT4, CUT6 and CUT8, while its median moves by less than 1 m. <!-- claim: nonlinear-filters/one-lost-run-moves-the-mean -->
 # That is why we rank by the median: every ranking of the particle filter above holds with such a run added.
 
@@ -869,25 +869,28 @@ plt.show()
 # covariance.
 
 # %% [markdown]
-# **Question 2.** Connect the tables with your moment table. Why do the CKF and the UKF lose the aircraft so
-# often, and why does each extra order of exactness (CUT4, CUT6, CUT8) help? Does the largest degree-4 moment
-# error rank the CKF and the UKF? Why can a run's velocity error be huge while its position is tracked, and
-# why is the median a better summary than the mean for filters that lose or diverge in some runs? Why is the
-# particle filter the best filter at T = 5 s, what does it pay for that, and why does it fall behind CUT8 when
-# the radar reports less often?
+# **Question 2** (3 points, one for each part). Connect the tables with your moment table, in a few sentences
+# per part.
+#
+# * **(a)** Why do the CKF and the UKF lose the aircraft so often, and why does each extra order of exactness
+#   (CUT4, CUT6, CUT8) help? Does the largest degree-4 moment error rank the CKF and the UKF?
+# * **(b)** Why can a run's velocity error be huge while its position is tracked, and why is the median a better
+#   summary than the mean for filters that lose or diverge in some runs?
+# * **(c)** Why is the particle filter the best filter at T = 5 s, what does it pay for that, and why does it fall
+#   behind CUT8 when the radar reports less often?
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "comparison_question", "locked": false, "points": 3, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
 # **Model answer.** Every Gaussian filter here computes the same expectations (the predicted mean and covariance,
 # $\hat y$, $P_{yy}$, $P_{xy}$); they differ only in how exactly. The coordinated-turn step mixes the turn rate
 # with the velocity through $\sin(\Omega T)/\Omega$ and $(1-\cos\Omega T)/\Omega$, and the filters' model gives
-# the turn rate a large noise ($Q_{44}$: 0.22 rad/s per step), so the predicted covariance depends on fourth and
+# the turn rate a large noise (`Q[4, 4]`: 0.22 rad/s per step), so the predicted covariance depends on fourth and
 # higher moments of the prior. It is this noise, not the turns, that matters: without the turns the CKF and the
 # UKF still lose a large fraction of the runs, and with a ten times smaller $L_2$ they lose none. <!-- claim: nonlinear-filters/straight-flight-still-lost --> <!-- claim: nonlinear-filters/small-turn-noise-no-loss -->
 # The CKF and the UKF are exact only to
 # degree 3 (their degree-4 errors are 2 and 3 in the moment table), so after a step their covariance is wrong in
 # size and shape; the update then corrects in the wrong directions, the error outgrows the covariance, and the
-# filter never recovers: the CKF loses 40-60% of the runs and the UKF 30-50%. <!-- claim: nonlinear-filters/lost-runs --> The largest
+# filter never recovers: the CKF loses 40-60% of the runs and the UKF about one in three. <!-- claim: nonlinear-filters/lost-runs --> The largest
 # moment error does not rank these two: the UKF's is larger (3 against 2), yet it loses fewer runs than the CKF. <!-- claim: nonlinear-filters/ukf-ahead-of-ckf -->
 # A single number per degree does not say which moments the model needs, nor where the
 # points sit (the UKF keeps a centre point and spreads the others to $\sqrt 6$ instead of $\sqrt 5$).
@@ -900,7 +903,7 @@ plt.show()
 # make the whole mean: CUT6's mean velocity metric is more than ten times CUT8's, <!-- claim: nonlinear-filters/cut8-velocity-gap --> but
 # without the diverged runs CUT4 and CUT6 are within a factor 1.5 of CUT8. <!-- claim: nonlinear-filters/velocity-without-diverged --> For
 # a filter that loses or diverges in some runs the mean mixes two groups of runs, and one lost run can move it
-# more than hundreds of good ones (an 11 km run would more than double the particle filter's mean); <!-- claim: nonlinear-filters/one-lost-run-moves-the-mean -->
+# more than hundreds of good ones (a run with an 11 km time-RMS position error would more than double the particle filter's mean); <!-- claim: nonlinear-filters/one-lost-run-moves-the-mean -->
 # the median describes a typical run. The particle filter assumes no Gaussian: its particles carry the curved,
 # non-Gaussian predicted distribution that an uncertain turn rate produces through the step, so it needs no
 # moments at all. At T = 5 s it has the smallest median position, velocity and turn-rate errors of all seven
@@ -910,17 +913,18 @@ plt.show()
 # less often, the turn-rate noise spreads the predicted particles wider, it loses most runs at T = 20 s, and
 # from T = 15 s on CUT8 has the smaller median position error. <!-- claim: nonlinear-filters/pf-falls-behind --> <!-- claim: nonlinear-filters/pf-lost-at-long-intervals -->
 #
-# **Rubric (3 points).** 1 point: links the ordering of the Gaussian filters in position to the degree of
+# **Rubric (3 points).** (a) 1 point: links the ordering of the Gaussian filters in position to the degree of
 # exactness (degree-4 errors of CKF and UKF; CUT4/6/8 exact to 5/7/9), through the predicted covariance after
 # steps with a large turn-rate noise; the point is also earned by an answer that blames the turn-rate
 # uncertainty without separating the noise from the turns, but not by one that blames the turns alone. Noting
-# that the largest moment error does not rank the UKF and the CKF is expected for full marks on this point. An
+# that the largest moment error does not rank the UKF and the CKF is expected for full marks on this point: an
+# answer without it gets ½ point. An
 # answer that reads CUT6 and CUT8 as level in position, or CUT8 as ahead by its velocity and its lack of
 # diverged runs, reads the table correctly.
-# 1 point: the huge velocity errors come from diverged runs, in which the unmeasured velocity and turn rate run
+# (b) 1 point: the huge velocity errors come from diverged runs, in which the unmeasured velocity and turn rate run
 # away while the radar keeps the position close (so they are often not lost); a few of them make the mean (CUT6
 # against CUT8 in velocity), and the median describes a typical run because a few bad runs cannot move it.
-# An answer that explains the velocity errors by lost runs alone gets half of this point. 1 point: the particle
+# An answer that explains the velocity errors by lost runs alone gets half of this point. (c) 1 point: the particle
 # filter is the best at T = 5 s (smallest median errors in all three quantities, rarely a lost run) because it
 # represents the non-Gaussian predicted distribution directly; it costs thousands of points per step, and the
 # sweep over T shows it losing most runs at long intervals, where its predicted particles spread too wide for
@@ -951,8 +955,8 @@ air_traffic.print_robust_table(shipped.table)
 #
 # **The lecture's table.** By the lecture's metric (a mean), our CUT6 and CUT8 position numbers are within 20%
 # of the lecture's. <!-- claim: nonlinear-filters/cut-matches-lecture -->
-# Without its lost runs, our particle filter's mean is within 15% of the lecture's row, in the table, over the
-# 4000 runs and with an 11 km run added. <!-- claim: nonlinear-filters/pf-near-lecture -->
+# Without its lost runs, our particle filter's mean is within 3% of the lecture's row in all three quantities,
+# in the table and over the 4000 runs. <!-- claim: nonlinear-filters/pf-near-lecture -->
 # The mean ranks CUT8 ahead of CUT6 in position, as the lecture does, while the medians call them level: the
 # mean weighs CUT6's few bad runs. <!-- claim: nonlinear-filters/mean-ranks-cut8-ahead -->
 #
@@ -981,8 +985,9 @@ plt.show()
 # The turns are not what breaks the CKF and the UKF. The dashed lines are the same two filters on the flight
 # flown without its turns, 495 s straight west (400 other runs). With and without the turns their errors first
 # exceed 1.5 times their value at t = 125 s at about 200 s (195-215 s), and then grow past three times it. <!-- claim: nonlinear-filters/straight-curves-depart -->
-# On both flights this is near the aircraft's closest approach to the radar, where its bearing changes fastest
-# (the grey triangles: 3.1 km at t = 240 s, inside the first turn; 10 km at t = 210 s without turns); <!-- claim: nonlinear-filters/closest-approach -->
+# On both flights this is within 45 s of the aircraft's closest approach to the radar, where its bearing changes
+# fastest (the grey triangles: 3.1 km at t = 240 s, 25 s after the first turn ends; 10 km at t = 210 s without
+# turns); <!-- claim: nonlinear-filters/closest-approach -->
 # the timing alone does not make it the cause. Without its turns the CKF still loses 25-50% of the runs and the
 # UKF 15-45%; the CKF diverges in more than half of them and the UKF in more than 40%. <!-- claim: nonlinear-filters/straight-flight-still-lost -->
 # With a turn-rate noise ten times smaller ($L_2 = 10^{-3}$), no sigma-point filter loses or diverges in any of
@@ -996,11 +1001,11 @@ plt.show()
 # under 10%. <!-- claim: nonlinear-filters/sweep-cut8-diverges-least -->
 # Every filter but the EKF has a larger median position error at T = 20 s than at T = 5 s; the EKF loses over 90%
 # of the runs at every interval. <!-- claim: nonlinear-filters/errors-grow-with-interval -->
-# More particles help the particle filter: at T = 20 s, 20 000 particles lose about half of 32 fresh runs (16 runs
+# More particles help the particle filter: at T = 20 s, 20 000 particles lose half to two thirds of 32 fresh runs (16 runs
 # on each of two seeds), where 5000 lose over 85% of the sweep's 200. <!-- claim: nonlinear-filters/more-particles-help -->
 #
 # **Which turn-rate noise should a tracker assume?** The true flight turns at most at 3°/s, while the model's
-# $Q_{44}$ allows 12.8°/s per step. Try it with your own filters: `air_traffic.scenario(5.0, turn_noise=...)`
+# `Q[4, 4]` allows 12.8°/s per step. Try it with your own filters: `air_traffic.scenario(5.0, turn_noise=...)`
 # builds the set-up with another $L_2$, and `air_traffic.scenario(5.0, legs=((495.0, 0.0),))` the flight without
 # turns. How small can $L_2$ be before the filters lag behind the 3°/s turn? This lab makes no claim about the
 # answer.
