@@ -315,9 +315,8 @@ check_initial_cloud(initial_cloud)
 # Compute it in logarithms. When a reading is tens of $\sigma$ from every particle, every exponential underflows
 # to 0, and normalising gives 0/0. Instead, compute
 # $\log \hat w^{(\ell)} = \log w^{(\ell)} - |\hat x^{(\ell)}_1 - b_{j+1}|^2 / 2\sigma^2$, subtract the largest, then
-# exponentiate and normalise. The weights are the same, and nothing underflows. Here $\sigma$ is the radar's
-# `SIGMA` from the set-up cell: `pf_step` has no argument for it. `np.log(w)` warns only if a weight is exactly 0
-# (it then gives `-inf`, which is harmless here); wrap it in `with np.errstate(divide="ignore"):` if that worries you.
+# exponentiate and normalise. The weights are the same, and nothing underflows. Here $\sigma$ is the global
+# `SIGMA`. `np.log(w)` warns only if a weight is exactly 0 (its `-inf` is then harmless).
 
 # %% [markdown]
 # **(c) Resample and perturb.** Draw $N$ indices $k_1, \dots, k_N$ **with replacement**, with probabilities
@@ -335,7 +334,7 @@ check_initial_cloud(initial_cloud)
 #
 # Without the perturbation, the copies of a candidate would stay identical. The handout calls it the *innovation*;
 # we call it the **artificial process noise**, since the model (5) has none: $D$ is a setting of the filter, not a
-# property of the object. (In a Kalman filter, the innovation is the residual $y - Hx$.)
+# property of the object.
 
 # %% [markdown]
 # **(d) Re-weigh.** The perturbation moved each particle away from the candidate it copies, so correct for it,
@@ -434,7 +433,7 @@ check_close(np.std(x_new[2]), INNOVATION_STD[2], "the spread of beta of the copi
             "After resampling, add innovation_std[:, None] * rng.standard_normal((3, N)): standard deviations, not "
             "variances, and one fresh draw per new particle.", rtol=0.1)
 # Visible check 3: a reading 70 sigma below the cloud. The weights must still be finite and normalised.
-x_new, w_new = pf_step(x_c, w_c, 25_000.0, rng)  # "Probabilities contain NaN"? exp() underflowed to 0: use log-weights
+x_new, w_new = pf_step(x_c, w_c, 25_000.0, rng)  # A NaN error here means every exp() underflowed to 0: use log-weights.
 w_new = check_array(w_new, "the weights after a reading 70 sigma from the cloud", (2000,),
                     "exp(-(h - b)^2 / (2 sigma^2)) is 0 for every particle here: work with log-weights and subtract "
                     "the largest before you exponentiate.")
@@ -707,10 +706,8 @@ check_run_particle_filter(run_particle_filter)
 # ## 7. Show and tell, and a yardstick
 #
 # Now the whole half minute with **the handout's setting**: the auxiliary filter of `pf_step`, $N$ = 5000
-# particles, and artificial process noise (100 m, 100 m/s, 5). From here on, "the handout's setting" means exactly
-# this filter, $N$ and noise. The table gives the estimates at the last reading, and two scores of the **whole
-# run**, 0 to 30 s: the RMSE of the weighted mean, and how often the truth lay inside each band. (Section 8 scores
-# many runs over $t \ge$ 20 s only, so its numbers differ from these.)
+# particles, and artificial process noise (100 m, 100 m/s, 5): from here on, "the handout's setting". The report
+# scores this one run over 0 to 30 s: the RMSE of the weighted mean, and how often the truth lay inside each band.
 
 # %% nbgrader={"grade": false, "grade_id": "run_lab", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
@@ -728,10 +725,8 @@ falling_object.print_report(data, history)
 # $$J_j = C^{-1} + \sum_{i=1}^{j} \frac{s_i s_i^T}{\sigma^2}, \qquad \text{yardstick}_j = \sqrt{(J_j^{-1})_{33}}.$$
 #
 # We compute $J_j$ along the true trajectory. The yardstick is then the **posterior standard deviation of $\beta$
-# for the model linearised at the truth**: about the spread that an exact posterior would have here. It is not a
-# floor that no filter can beat at this one truth. (Section 9 compares it with the Van Trees bound, which is a
-# floor for the error averaged over the prior.) `falling_object.beta_linearised_sd` computes it with your
-# `tracking_dynamics`.
+# for the model linearised at the truth**: about the spread that an exact posterior would have here (not a floor
+# that no filter can beat). `falling_object.beta_linearised_sd` computes it with your `tracking_dynamics`.
 
 # %% nbgrader={"grade": false, "grade_id": "crb", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
@@ -753,7 +748,7 @@ for t_j in (0, 10, 15, 20, 25, 30):
 # %% [markdown]
 # In the figure, the bottom row shows each curve minus the truth. In the $\beta$ panels, the dotted curves are the
 # truth $\pm$ 1.645 times the yardstick: as wide as an exact posterior's 90% band. That band would be centred on its
-# own estimate, not on the truth, so compare only the widths.
+# own estimate, so compare only the widths.
 
 # %% nbgrader={"grade": false, "grade_id": "plot_tracking", "locked": true, "schema_version": 3, "solution": false, "task": false}
 require(run_particle_filter, tracking_dynamics)
@@ -766,9 +761,9 @@ plt.show()
 #
 # The weights that step (d) leaves are close to equal: their ESS stays above 0.6 $N$ at every step in every one of
 # 10 runs on fresh readings with the handout's noise and $N$ = 2000. <!-- claim: reentry-pf/ess-after-d-high -->
-# That says nothing about the resampling, which comes *before* (d). The next figure shows, for `pf_step` and for
-# the bootstrap filter (same readings and setting): the ESS of the weights each step resampled with, the number of
-# distinct parents each resampling drew, and the number of particles of $t_0$ that still have descendants.
+# That says nothing about the resampling, which comes *before* (d). The next figure shows, for `pf_step` and the
+# bootstrap filter: the ESS of the weights each step resampled with, the distinct parents each resampling drew, and
+# the particles of $t_0$ that still have descendants (the roots).
 
 # %% [markdown]
 # The dashed lines are the baseline of a filter that learns nothing: *multinomial* resampling of equal weights.
@@ -786,7 +781,7 @@ plt.show()
 
 # %% [markdown]
 # One run is not enough to judge the width of $\beta$'s 90% band. The figure below takes the handout's noise from
-# the study of section 8: 50 simulated half minutes for each of $N$ = 500, 2000 and 5000.
+# a study of 50 simulated half minutes (section 8), for $N$ = 500, 2000 and 5000.
 
 # %% nbgrader={"grade": false, "grade_id": "band_widths", "locked": true, "schema_version": 3, "solution": false, "task": false}
 require(tracking_dynamics)
@@ -796,12 +791,10 @@ ax = falling_object.plot_band_widths(study, handout, data.t, yardstick)
 plt.show()
 
 # %% [markdown]
-# **Why the handout's setting learns little.** Its artificial process noise does not match the model's errors.
-# The filter's only model error is the Forward Euler step, which misses the true trajectory by at most 2 m in $h$
-# and 1 m/s in $v$ per step. <!-- claim: reentry-pf/euler-error-small -->
-# The noise in $v$, 100 m/s per step, is far larger, so the filter can explain the drag's slowing as random kicks
-# to $v$ instead of as $\beta$. Its bands of $v$ are much too wide: in the study of section 8, the truth of
-# $v$ lies inside the 50% band over 90% of the time, <!-- claim: reentry-pf/handout-v-too-wide -->
+# **The noise of the handout's setting.** The filter's only model error is the Forward Euler step, which misses the
+# true trajectory by at most 2 m in $h$ and 1 m/s in $v$ per step. <!-- claim: reentry-pf/euler-error-small -->
+# The noise in $v$, 100 m/s per step, is far larger. Its bands of $v$ are much too wide: in the study, the truth
+# of $v$ lies inside the 50% band over 90% of the time, <!-- claim: reentry-pf/handout-v-too-wide -->
 # and at 30 s the 90% interval reaches below zero (upward motion) in every one of the 50 runs. <!-- claim: reentry-pf/handout-v-upward -->
 
 # %% [markdown]
@@ -858,10 +851,10 @@ plt.show()
 # %% [markdown]
 # ## 8. Tuning
 #
-# Section 7 showed the defects of the handout's setting. **The study** ran each of 14 settings (the filter, $N$ and
-# the artificial process noise) on the same 50 simulated half minutes: the lab's truth, fresh radar noise, fresh
-# filter draws. The table gives, for each setting, the RMSE of the weighted mean of $h$, $v$ and $\beta$, and the
-# fraction of the time the truth lay inside the 50% and the 90% bands (the *coverage*). Both are scored over the
+# **The study** ran each of 14 settings (the filter, $N$ and the artificial process noise) on the same 50 simulated
+# half minutes: the lab's truth, fresh radar noise, fresh filter draws. The table gives, for each setting, the RMSE
+# of the weighted mean of $h$, $v$ and $\beta$, and how often the truth lay inside the 50% and 90% bands (the
+# *coverage*). Both are scored over the
 # last 10 s, $t \ge$ 20 s, when the readings have said something about $\beta$. <!-- claim: reentry-pf/information-arrives-late -->
 # The scores ship in `course/data/falling_object_tuning.csv`.
 
@@ -876,20 +869,20 @@ plt.show()
 # 50): less noise in $h$ and $v$, more in $\beta$, and fewer particles.
 
 # %% [markdown]
-# **Read the noise too.** Each number is a mean over 50 runs, and runs differ, $\beta$ most. With the handout's
+# **Read the noise too.** Each number is a mean over 50 runs, and runs differ, $\beta$ most: with the handout's
 # setting, one run's RMSE of $\beta$ lies between about 150 and 1200 in the study's runs (10th to 90th
 # percentile). <!-- claim: reentry-pf/beta-rmse-spread -->
-# So the table gives the mean RMSE of $\beta$ with $\pm$ two standard errors of that mean (`+-2se`): how precisely
-# 50 runs pin the mean down, not the scatter between runs.
+# So the table gives the mean RMSE of $\beta$ with two standard errors of that mean (`+-2se`): how precisely 50 runs
+# pin the mean down, not the scatter between runs.
 #
-# To compare two settings, look at their difference, not at whether their two ranges overlap (ranges can overlap
-# while the difference is real). Every setting ran on the same readings and the same filter seeds, so the column
-# `diff` takes, run by run, the RMSE of $\beta$ minus the handout's setting's, and gives its mean with its own
-# $\pm$ two standard errors. When that range excludes 0, the study has shown a difference (at about the 95% level).
+# To compare two settings, look at their difference, not at whether their ranges overlap (they can overlap while the
+# difference is real). All settings ran on the same readings and filter seeds, so the column `diff` gives the mean,
+# run by run, of the RMSE of $\beta$ minus the handout's setting's, with its own two standard errors. A range that
+# excludes 0 shows a difference (at about the 95% level).
 #
-# The tuned setting was picked by looking at this table: it is scored on the same runs it was chosen on. A setting
-# chosen as the best of 14 on these runs looks better here than it will on new runs, so a difference of about two
-# standard errors is weak evidence. Fresh runs are the real test.
+# The tuned setting was picked by looking at this table, so it is scored on the runs it was chosen on. A row picked
+# as the best of 14 looks better here than it will on new runs: a difference of about two standard errors is weak
+# evidence.
 
 # %% nbgrader={"grade": false, "grade_id": "tuning_table", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
@@ -906,12 +899,10 @@ axes = falling_object.plot_tuning(study, ideal=ideal)
 plt.show()
 
 # %% [markdown]
-# The tuned setting on the shipped readings. Its report scores one run over the whole half minute, 0 to 30 s; the
-# table scores 50 runs over $t \ge$ 20 s, so compare settings with the table. This run is not typical: its 90% band
-# of $\beta$ at 30 s is a little wider than the handout's setting's on the same readings, <!-- claim: reentry-pf/shipped-tuned-band -->
-# which happens in fewer than a quarter of the study's runs; in the median run it is about 0.6 of it. <!-- claim: reentry-pf/tuned-band-narrower -->
-# (Your own `pf_step` may draw its random numbers in another order: then your run, and its bands, differ.) Copy the two cells below into new cells,
-# change `innovation_std` or $N$, and see what your setting does to the bands and to the gap from the yardstick.
+# The tuned setting on the shipped readings, scored over 0 to 30 s: compare settings with the table. This run is not
+# typical: its 90% band of $\beta$ at 30 s is a little wider than the handout's setting's, <!-- claim: reentry-pf/shipped-tuned-band -->
+# which happens in fewer than a quarter of the study's runs (in the median run it is about 0.6 of it). <!-- claim: reentry-pf/tuned-band-narrower -->
+# To try your own setting, copy the two cells below and change `innovation_std` or $N$.
 
 # %% nbgrader={"grade": false, "grade_id": "run_chosen", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
