@@ -740,8 +740,7 @@ for t_j in (0, 10, 15, 20, 25, 30):
           f"information / prior information {(PRIOR_STD[2] / yardstick[j]) ** 2:5.1f}")
 
 # %% [markdown]
-# The readings are far from useless: by $t$ = 30 s their information about $\beta$ is more than 50 times the
-# prior's. <!-- claim: reentry-pf/yardstick-information -->
+# By $t$ = 30 s the readings' information about $\beta$ is more than 50 times the prior's. <!-- claim: reentry-pf/yardstick-information -->
 # It arrives late: at 10 s the yardstick is still the prior's 1500, at 15 s it is above 80% of it, and it falls
 # fastest between 15 s and 25 s, when the object is low enough for the drag to matter. <!-- claim: reentry-pf/information-arrives-late -->
 
@@ -759,8 +758,8 @@ plt.show()
 # %% [markdown]
 # ### The health of the filter, and the bootstrap filter
 #
-# The weights that step (d) leaves are close to equal: their ESS stays above 0.6 $N$ at every step in every one of
-# 10 runs on fresh readings with the handout's noise and $N$ = 2000. <!-- claim: reentry-pf/ess-after-d-high -->
+# The weights that step (d) leaves are close to equal: their ESS stays above 0.6 $N$ at every step (10 fresh runs,
+# handout's noise, $N$ = 2000). <!-- claim: reentry-pf/ess-after-d-high -->
 # That says nothing about the resampling, which comes *before* (d). The next figure shows, for `pf_step` and the
 # bootstrap filter: the ESS of the weights each step resampled with, the distinct parents each resampling drew, and
 # the particles of $t_0$ that still have descendants (the roots).
@@ -856,7 +855,6 @@ plt.show()
 # of the weighted mean of $h$, $v$ and $\beta$, and how often the truth lay inside the 50% and 90% bands (the
 # *coverage*). Both are scored over the
 # last 10 s, $t \ge$ 20 s, when the readings have said something about $\beta$. <!-- claim: reentry-pf/information-arrives-late -->
-# The scores ship in `course/data/falling_object_tuning.csv`.
 
 # %% [markdown]
 # **How to read it.** The last row is what an exact posterior would score, in the same metric as the other rows:
