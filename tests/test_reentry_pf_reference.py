@@ -645,3 +645,18 @@ def test_tuning_study_has_every_setting_on_every_seed():
     for run in study.runs.values():
         assert run["rmse_h"].shape == (fo.TUNING_SEEDS,) and run["width90_beta"].shape == (fo.TUNING_SEEDS, 31)
         assert np.all((0 <= run["cover50_h"]) & (run["cover50_h"] <= run["cover90_h"]) & (run["cover90_h"] <= 1))
+
+
+def test_tuning_table_pairs_each_setting_with_the_handouts_on_the_same_runs():
+    """Issue 33 (science review): the table's diff column is the run-by-run difference of beta's RMSE from the
+    handout's setting's, with its own two standard errors; the exact posterior's RMSE is in the table's metric
+    (the mean of each run's RMSE), below the root of its mean squared error."""
+    study = fo.load_tuning()
+    diff = study.runs[fo.TUNED_SETTING]["rmse_beta"] - study.runs[fo.HANDOUT_SETTING]["rmse_beta"]
+    two_se = 2 * np.std(diff, ddof=1) / np.sqrt(diff.size)
+    tuned_row = next(line for line in fo.format_tuning_table(study).splitlines() if "the tuned setting" in line)
+    assert f"{np.mean(diff):+.0f}" in tuned_row and f"+-{two_se:.0f}" in tuned_row, tuned_row
+    ideal = fo.ideal_scores(ref.tracking_dynamics, fo.X0_TRUE, fo.time_grid())
+    assert np.all(ideal["rmse"] < ideal["rms"]) and np.all(ideal["rmse"] > 0.8 * ideal["rms"]), ideal
+    again = fo.ideal_scores(ref.tracking_dynamics, fo.X0_TRUE, fo.time_grid())
+    assert np.array_equal(ideal["rmse"], again["rmse"])

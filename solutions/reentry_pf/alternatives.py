@@ -146,6 +146,26 @@ ALTERNATIVES = (
         info["parents"] = k
     return x_new, w_new
 '''),
+    Alternative("pf_step", "systematic", "systematic resampling: one uniform, N evenly spaced points searched in the cumulative weights (the text accepts it)",
+                '''def pf_step(x, w, b_next, rng, *, innovation_std=INNOVATION_STD, info=None):
+    """Steps (a)-(d): cloud x (3, N), weights w (N,), reading b_next [m] -> new (x, w)."""
+    N = x.shape[1]
+    x_hat = x + DT * tracking_dynamics(0.0, x)
+    with np.errstate(divide="ignore"):
+        log_w_hat = np.log(w) - (x_hat[0] - b_next) ** 2 / (2 * SIGMA**2)
+    w_hat = np.exp(log_w_hat - log_w_hat.max())
+    w_hat /= w_hat.sum()
+    cdf = np.cumsum(w_hat)
+    cdf /= cdf[-1]
+    k = np.minimum(np.searchsorted(cdf, (rng.random() + np.arange(N)) / N, side="right"), N - 1)
+    x_new = x_hat[:, k] + np.asarray(innovation_std)[:, None] * rng.standard_normal((3, N))
+    log_w = -((x_new[0] - b_next) ** 2 - (x_hat[0, k] - b_next) ** 2) / (2 * SIGMA**2)
+    w_new = np.exp(log_w - log_w.max())
+    if info is not None:
+        info["ess"] = 1.0 / np.sum(w_hat**2)
+        info["parents"] = k
+    return x_new, w_new / w_new.sum()
+'''),
     Alternative("pf_step", "spawned-streams", "one child generator of rng for the resampling and another for the innovation (rng.spawn)",
                 '''def pf_step(x, w, b_next, rng, *, innovation_std=INNOVATION_STD, info=None):
     """Steps (a)-(d): cloud x (3, N), weights w (N,), reading b_next [m] -> new (x, w)."""
