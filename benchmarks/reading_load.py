@@ -21,9 +21,9 @@ import nbformat
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
 
 from autograder import cells  # noqa: E402
+from autograder.authoring.consistency import GOING_FURTHER  # noqa: E402
 from autograder.labs import Lab, all_labs  # noqa: E402
 
-GOING_FURTHER = re.compile(r"^#+\s*(\d+\.\s*)?Going further", re.MULTILINE)
 CLAIM = re.compile(r"<!-- claim: ")
 
 
