@@ -116,6 +116,8 @@ def build_parser() -> argparse.ArgumentParser:
     build = commands.add_parser("build", help="make a lab's source notebook from its draft (solutions/<module>/draft.py), "
                                 "run it, name each cell that fails, release it and list what it holds")
     build.add_argument("lab", help="the lab's id, e.g. scalar-kf")
+    build.add_argument("--keep-data", action="store_true", help="use the lab's shipped data as they are instead of "
+                       "rebuilding them first (a rebuild takes minutes for some labs); for a change to the draft alone")
     return parser
 
 
@@ -138,7 +140,7 @@ def main(argv: list[str] | None = None) -> int:
         from autograder.labs import Lab
 
         try:
-            return 0 if build_lab(Lab(args.lab)) else 1
+            return 0 if build_lab(Lab(args.lab), args.keep_data) else 1
         except FileNotFoundError as error:
             print(f"build: {error}", file=sys.stderr)
             return 1

@@ -79,6 +79,17 @@ def test_new_writes_a_lab_that_build_turns_into_one_that_passes_the_tests_of_a_l
     assert " passed" in summary and "deselected" in summary and "failed" not in summary, summary
 
 
+def test_build_keep_data_runs_the_notebook_on_the_shipped_data_without_rebuilding_them(course):
+    """`build --keep-data` (for a change to the draft alone) leaves the shipped data file as it is; the
+    plain `build` of the fixture rewrote it."""
+    shipped = course / "course" / "data" / "parcel_data.csv"
+    os.utime(shipped, ns=(10**18, 10**18))
+    built = run(course, "-m", "autograder", "build", WITH_DATA, "--keep-data")
+    assert built.returncode == 0, built.stdout + built.stderr
+    assert shipped.stat().st_mtime_ns == 10**18 and "wrote course/data" not in built.stdout, built.stdout
+    assert f"kept {WITH_DATA}'s shipped data as they are" in built.stdout and "no leaks found" in built.stdout, built.stdout
+
+
 def test_a_lab_fresh_from_new_fails_the_test_of_template_text(course):
     """Every test of a lab passes with the template's story and README row left in (above); this one does not."""
     tested = run(course, "-m", "pytest", "-q", "-p", "no:randomly", "--lab", NEW, "tests/test_template_text.py")
