@@ -31,7 +31,8 @@ RunFilter = Callable[..., tuple[np.ndarray, np.ndarray]]
 
 def model_matrix(dt_min: float = 1.0) -> np.ndarray:
     """The train model's matrix A (2 x 2) for a step of ``dt_min`` minutes."""
-    # x_{t+1} = x_t + (dt/60) v_t,  v_{t+1} = v_t
+    # the noise-free part of x_{t+1} = x_t + h v_{t+1}, v_{t+1} = v_t + z with h = dt/60 hours: x_{t+1} = x_t + h v_t
+    # and v_{t+1} = v_t; the noise Z = (h z, z) of process_noise adds the rest
     return np.array([[1.0, dt_min / MINUTES_PER_HOUR], [0.0, 1.0]])
 
 
@@ -235,12 +236,12 @@ def white_noise_acceleration(q: float, dt_min: float = 1.0) -> np.ndarray:
     """Q (2 x 2) of the continuous white-noise acceleration model, for a step of dt_min minutes.
 
     The acceleration is white noise of spectral density q (mph^2 per hour); over a step of
-    T = dt_min/60 hours the velocity variance grows by q T and the position, which integrates the
-    velocity, by q T^3/3.
+    h = dt_min/60 hours the velocity variance grows by q h and the position, which integrates the
+    velocity, by q h^3/3.
     """
-    T = dt_min / MINUTES_PER_HOUR
-    # Q = q [[T^3/3, T^2/2], [T^2/2, T]]
-    return q * np.array([[T**3 / 3.0, T**2 / 2.0], [T**2 / 2.0, T]])
+    h = dt_min / MINUTES_PER_HOUR
+    # Q = q [[h^3/3, h^2/2], [h^2/2, h]]
+    return q * np.array([[h**3 / 3.0, h**2 / 2.0], [h**2 / 2.0, h]])
 
 
 def print_model_comparison(data: TrainData, estimates: dict[str, np.ndarray]) -> None:

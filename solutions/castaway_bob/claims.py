@@ -377,15 +377,15 @@ def _() -> None:
 
 @claim("castaway-bob/slack-walk-optimum-flat")
 def _() -> None:
-    """The optimum is flat: on the tuning set, the 3 other sets (seeds 1-3) and the scored set, sigma_walk = 12.5 m gives a rank-2 mean RMSE within 0.3 m of 15 m's (-0.06 to +0.27 m measured), lower on at least one set and higher on at least one, while 10 m and 20 m are 1.0-2.1 m worse than 15 m on each (1.16-2.02 m measured)."""
+    """The optimum is flat: on the tuning set, the 3 other sets (seeds 1-3) and the scored set, sigma_walk = 12.5 m gives a rank-2 mean RMSE within 0.3 m of 15 m's (-0.06 to +0.27 m measured), lower on at least one set and higher on at least one, while 10 m is 0.5-2.1 m and 20 m 1.3-2.1 m worse than 15 m on each ("about 0.5 to 2 m" and "about 1.5 to 2 m"; a science review measured 0.53-1.79 m and 1.39-2.02 m over 50 fresh sets)."""
     gaps = []
     for seed in (TUNING_SEED, 1, 2, 3, SCORED_SEED):
         drifts, means, _ = _slack_set(seed)
         between = float(np.mean([ref.track_rmse(ref.run_rank2(d.fixes, sigma_walk=12.5)[0], d.position) for d in drifts]))
         gaps.append(between - means[15.0])
         _between(abs(gaps[-1]), 0.0, 0.3, f"seed {seed}: |12.5 m minus 15 m| in mean RMSE [m]")
-        for step in (10.0, 20.0):
-            _between(means[step] - means[15.0], 1.0, 2.1, f"seed {seed}: {step:g} m minus 15 m in mean RMSE [m]")
+        for step, low in ((10.0, 0.5), (20.0, 1.3)):
+            _between(means[step] - means[15.0], low, 2.1, f"seed {seed}: {step:g} m minus 15 m in mean RMSE [m]")
     assert min(gaps) < 0.0 < max(gaps), f"12.5 m minus 15 m on the five sets: {np.round(gaps, 3)}"
 
 

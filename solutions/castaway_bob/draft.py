@@ -1033,7 +1033,7 @@ print(ocean.format_rounding(rounding))
 # sets of 50 slack-water drifts, and on the 50 drifts of the comparison itself, so tuning on those would have picked
 # the same step. <!-- claim: castaway-bob/slack-walk-step-robust -->
 # The optimum is flat, though. A step of 12.5 m, between two steps of the grid, scores within 0.3 m of 15 m on each of
-# these sets (a little better on some, a little worse on others), while 10 m and 20 m cost about 1 to 2 m. <!-- claim: castaway-bob/slack-walk-optimum-flat -->
+# these sets (better on some, worse on others), while 10 m costs about 0.5 to 2 m and 20 m about 1.5 to 2 m. <!-- claim: castaway-bob/slack-walk-optimum-flat -->
 # To see it yourself, draw the tuning set with `ocean.simulate_drifts(flow.scaled(0.1), np.random.default_rng(7), 50)`
 # and average `track_rmse(run_rank2(d.fixes, sigma_walk=s)[0], d.position)` over its drifts `d` for each step `s`.
 

@@ -284,7 +284,8 @@ def _() -> None:
 def _() -> None:
     """On 50 fresh runs (seeds 1000-1049, outside the study's; readings and filter seeds as the study draws them), the tuned
     setting's mean RMSE of beta over t >= 20 s is 0.6-0.8 of the handout's setting's, and the paired difference is more than
-    2 standard errors from 0."""
+    2 standard errors from 0; a 95% bootstrap interval of the ratio (5000 resamples of the 50 runs) runs from 0.5-0.6 to
+    0.75-0.85 (0.54 to 0.82 measured). A science review found 0.79 (0.71-0.89) over 200 other fresh runs."""
     t = fo.time_grid()
     scored = t >= fo.SCORE_FROM - 1e-9
     rmse = {TUNED_SETTING: [], HANDOUT_SETTING: []}
@@ -297,6 +298,10 @@ def _() -> None:
     diff = tuned - handout
     assert 0.6 < tuned.mean() / handout.mean() < 0.8, (tuned.mean(), handout.mean())
     assert -diff.mean() > 2 * np.std(diff, ddof=1) / np.sqrt(diff.size), (diff.mean(), np.std(diff, ddof=1))
+    # the ratio of the means over resampled sets of the 50 runs (pairs kept together)
+    resampled = np.random.default_rng(0).integers(0, tuned.size, size=(5000, tuned.size))
+    low, high = np.percentile(tuned[resampled].mean(axis=1) / handout[resampled].mean(axis=1), [2.5, 97.5])
+    assert 0.5 <= low <= 0.6 and 0.75 <= high <= 0.85, (low, high)
 
 
 @claim("reentry-pf/ideal-metric")
@@ -387,7 +392,9 @@ def _() -> None:
 
 @claim("reentry-pf/bootstrap-similar")
 def _() -> None:
-    """N = 2000, handout's and tuned noise: bootstrap RMSE of h, v within 10% of the auxiliary's, their coverage within 7 points; beta's gaps within its batch scatter."""
+    """N = 2000, handout's and tuned noise: bootstrap RMSE of h, v within 10% of the auxiliary's, their coverage within 7
+    points; for beta (RMSE, 50% and 90% coverage) the paired difference, bootstrap minus auxiliary run by run on the
+    study's 50 runs, is within two standard errors of 0."""
     for name, aux in (("handout", HANDOUT[2000]), ("chosen", CHOSEN[2000])):
         boot = BOOTSTRAP[name]
         for n in ("h", "v"):
@@ -395,11 +402,10 @@ def _() -> None:
             assert 0.9 < ratio < 1.1, (name, n, ratio)
         for column in (f"cover{p}_{n}" for p in (50, 90) for n in ("h", "v")):
             assert abs(mean(boot, column) - mean(aux, column)) < 0.07, (name, column)
-        # beta: the gap between the two filters' means is smaller than the range of either filter's batch means
+        # beta: the paired difference over the same runs, against its two standard errors
         for column in ("rmse_beta", "cover50_beta", "cover90_beta"):
-            gap = abs(mean(boot, column) - mean(aux, column))
-            scatter = min(np.ptp(batches(boot, column)), np.ptp(batches(aux, column)))
-            assert gap < scatter, (name, column, gap, scatter)
+            diff = study().runs[boot][column] - study().runs[aux][column]
+            assert abs(diff.mean()) < 2 * np.std(diff, ddof=1) / np.sqrt(diff.size), (name, column, diff.mean())
 
 
 @claim("reentry-pf/euler-error-small")

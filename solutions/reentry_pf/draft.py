@@ -25,30 +25,29 @@
 # 1. Write the model, and simulate the truth and the radar readings.
 # 2. Write the handout's particle filter (an *auxiliary particle filter*) one piece at a time.
 # 3. Measure it against a yardstick of how well $\beta$ can be known, and check the health of its resampling.
-# 4. Read a study of many settings, and judge which of its differences are real.
+# 4. If you want more: read a study of many settings, and judge which of its differences are real (not graded).
 #
 # **What is graded, and about how long each part takes**
 #
 # | part | what you write | points | about |
 # |---|---|---|---|
 # | 1. The model | `tracking_dynamics` | 1 | 15 min |
-# | 2. The truth and the radar | `simulate_radar`, Question 1 | 3 | 25 min |
+# | 2. The truth and the radar | `simulate_radar`, Question 1 | 3 | 30 min |
 # | 3. The prior cloud | `initial_cloud` | 1 | 10 min |
-# | 4. One step of the particle filter | `pf_step` | 3 | 45 min |
-# | 5. Weighted credibility intervals | `credibility_interval` | 2 | 20 min |
-# | 6. The filter over half a minute | `run_particle_filter` | 2 | 25 min |
-# | 7. Show and tell, and a yardstick | Question 2 | 2 | 20 min |
-# | 8. Tuning | Question 3 | 2 | 20 min |
-# | **all** | 6 functions, 3 written answers | **16** | **about 3 h** |
+# | 4. One step of the particle filter | `pf_step` | 3 | 60 min |
+# | 5. Weighted credibility intervals | `credibility_interval` | 2 | 25 min |
+# | 6. The filter over half a minute | `run_particle_filter` | 2 | 35 min |
+# | 7. Show and tell, and a yardstick | Question 2 | 2 | 30 min |
+# | **all** | 6 functions, 2 written answers | **14** | **about 3½ h** |
 #
-# Section 9, "Going further", is optional reading: nothing there is graded.
+# Section 8, "Going further", is optional reading: nothing there is graded.
 #
 # **How this notebook works.** Each blank is one function in a cell that says `YOUR CODE HERE`. Below it, a
 # read-only cell runs *visible checks* on cases you can work out by hand; their messages say what to fix. When you
 # are graded, *hidden tests* compare your function with a reference on random inputs, and each function is graded
 # on its own. The test of `pf_step` is statistical: a correct step fails it with probability below one in a million.
 # A graded function must leave the arrays it is given unchanged, and draw every random number from the `rng` it is
-# given, never from `np.random`. You may add cells of your own to try things out: they are not graded. The three
+# given, never from `np.random`. You may add cells of your own to try things out: they are not graded. The two
 # written answers are marked by hand. The grey cells are locked: grading
 # puts back their originals. Before you submit, press **Validate**: it lists each blank that is not written yet or
 # fails its visible checks.
@@ -92,6 +91,7 @@ from course.checks import check_array, check_close, check_pair, check_true, pass
 # $x^{(\ell)}$. Write `tracking_dynamics(t, x)`, the handout's `TrackingDynamics`, so that it takes one state,
 # shape `(3,)`, or a cloud, shape `(3, N)`, and returns $f$ with the same shape. The ODE solver passes the time `t`;
 # the model does not use it. No loop: `h, v, beta = x` unpacks the rows, and NumPy works on all of them at once.
+# For $d\beta/dt$ write `np.zeros_like(beta)`, not `0`: a bare 0 has the shape of one state, not of a cloud.
 
 # %% nbgrader={"grade": false, "grade_id": "load_data", "locked": true, "schema_version": 3, "solution": false, "task": false}
 data = falling_object.load()
@@ -218,7 +218,14 @@ check_simulate_radar(simulate_radar)
 # (`solve_ivp`'s result has it as `.nfev`), or the time the solve takes.
 #
 # To find out, add a cell of your own below this one (cells you add are not graded): solve once with the
-# defaults and once with much tighter tolerances, and compare the altitudes and the `.nfev` of the two.
+# defaults and once with much tighter tolerances, and compare the altitudes and the `.nfev` of the two. For example:
+#
+#     span, x0 = (data.t[0], data.t[-1]), falling_object.X0_TRUE
+#     loose = solve_ivp(tracking_dynamics, span, x0, t_eval=data.t)
+#     tight = solve_ivp(tracking_dynamics, span, x0, t_eval=data.t, rtol=1e-12, atol=1e-10)
+#     print(np.abs(loose.y[0] - tight.y[0]).max(), loose.nfev, tight.nfev)
+#
+# Measure your own tolerances' accuracy the same way, against a solve tighter still.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "tolerance_answer", "locked": false, "points": 1, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -316,7 +323,8 @@ check_initial_cloud(initial_cloud)
 # to 0, and normalising gives 0/0. Instead, compute
 # $\log \hat w^{(\ell)} = \log w^{(\ell)} - |\hat x^{(\ell)}_1 - b_{j+1}|^2 / 2\sigma^2$, subtract the largest, then
 # exponentiate and normalise. The weights are the same, and nothing underflows. Here $\sigma$ is the global
-# `SIGMA`. `np.log(w)` warns only if a weight is exactly 0 (its `-inf` is then harmless).
+# `SIGMA`. `np.log(w)` warns only if a weight is exactly 0: its `-inf` is then harmless, and no graded case has
+# a weight of 0.
 
 # %% [markdown]
 # **(c) Resample and perturb.** Draw $N$ indices $k_1, \dots, k_N$ **with replacement**, with probabilities
@@ -326,7 +334,7 @@ check_initial_cloud(initial_cloud)
 # $$x^{(\ell)}_\text{new} = \hat x^{(k_\ell)} + D^{1/2} w^{(\ell)}, \qquad w^{(\ell)} \sim N(0, I_3).$$
 #
 # $D^{1/2}$ is diagonal with the standard deviations `innovation_std`. Use the keyword argument, not the constant:
-# its default is the handout's `INNOVATION_STD` = (100 m, 100 m/s, 5), and section 8 tries others.
+# its default is the handout's `INNOVATION_STD` = (100 m, 100 m/s, 5), and section 8 (Going further) tries others.
 # `rng.choice(N, size=N, p=w_hat)` draws the indices, `x_hat[:, k]` copies the chosen columns, and
 # `rng.standard_normal((3, N))` draws all the perturbations at once. Systematic resampling (one uniform, then
 # $N$ evenly spaced points in the cumulative weights) also passes the visible checks and the hidden test; section 7
@@ -469,7 +477,19 @@ check_close(info.get("ess", np.nan) / 20_000, np.sqrt(3) / 2 * np.exp(-1 / 6),
 check_close(x_new[0] @ w_new, 59_450.0, "the weighted mean altitude of the new cloud",
             "(b) weighs the propagated candidates x^_1 = x_1 - dt v (not the old altitudes), and (d) divides out the "
             "parent's fitness: w = exp(-(|x_new_1 - b|^2 - |x^_1(k_l) - b|^2) / (2 sigma^2)).", rtol=0.0, atol=30.0)
-# Visible check 6: every draw comes from rng, so two generators of the same seed give the same step.
+# Visible check 6: unequal old weights. Every particle has the same state except beta: 10000 have beta = 20000 and an
+# old weight 0.9/10000 each, 10000 have beta = 30000 and 0.1/10000. (b) makes the fitness weights proportional to the
+# old weights here, so about 90% of the new particles copy a beta = 20000 particle. (d) then re-weighs each new
+# particle by its own perturbation only: the new weighted mean of beta stays near 0.9 * 20000 + 0.1 * 30000 = 21000.
+x_u = np.tile([[20_000.0], [3000.0], [20_000.0]], 20_000)
+x_u[2, 10_000:] = 30_000.0
+w_u = np.concatenate([np.full(10_000, 0.9 / 10_000), np.full(10_000, 0.1 / 10_000)])
+x_new, w_new = pf_step(x_u, w_u, 19_700.0, np.random.default_rng(8))
+check_close(x_new[2] @ w_new, 21_000.0, "the weighted mean beta after old weights of 0.9 and 0.1 for two groups",
+            "(b) multiplies by the old weights w, and the resampling uses them: (d) must not multiply by them again. "
+            "w = exp(-(|x_new_1 - b|^2 - |x^_1(k_l) - b|^2) / (2 sigma^2)), normalised, with no old weight in it.",
+            rtol=0.0, atol=250.0)
+# Visible check 7: every draw comes from rng, so two generators of the same seed give the same step.
 first = pf_step(x_c, w_c, 59_700.0, np.random.default_rng(7))
 again = pf_step(x_c, w_c, 59_700.0, np.random.default_rng(7))
 check_true(all(np.array_equal(a, b) for a, b in zip(first, again)),
@@ -780,7 +800,7 @@ plt.show()
 
 # %% [markdown]
 # One run is not enough to judge the width of $\beta$'s 90% band. The figure below takes the handout's noise from
-# a study of 50 simulated half minutes (section 8), for $N$ = 500, 2000 and 5000.
+# a study of 50 simulated half minutes (section 8, Going further), for $N$ = 500, 2000 and 5000.
 
 # %% nbgrader={"grade": false, "grade_id": "band_widths", "locked": true, "schema_version": 3, "solution": false, "task": false}
 require(tracking_dynamics)
@@ -797,10 +817,12 @@ plt.show()
 # and at 30 s the 90% interval reaches below zero (upward motion) in every one of the 50 runs. <!-- claim: reentry-pf/handout-v-upward -->
 
 # %% [markdown]
-# **Question 2.** Read the $\beta$ panels and the two figures after them. (a) How does the 90% band of $\beta$ of
-# the handout's setting compare with the yardstick at 30 s, and what does the gap mean? (b) What happens to the
-# ancestry of the cloud, and how does the band's width depend on $N$? Explain with steps (c) and (d) and the
-# artificial process noise.
+# **Question 2 (2 points: 1 for (a), 1 for (b); a paragraph each).** Read the $\beta$ panels and the two figures
+# after them. (a) How does the 90% band of $\beta$ of the handout's setting compare with the yardstick at 30 s? Does
+# the gap say that the radar holds little information about $\beta$, or that the filter does not use it, and why?
+# (b) What happens to the ancestry of the cloud (the roots), and how does the band's width depend on $N$? Explain
+# with steps (c) and (d) and the artificial process noise. Quote the numbers you use, from the figures or from the
+# text of this section.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "beta_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -848,7 +870,13 @@ plt.show()
 # ### END SOLUTION
 
 # %% [markdown]
-# ## 8. Tuning
+# ## 8. Going further
+#
+# Nothing in this section is graded. It holds the study of many settings behind section 7, how to judge which of
+# its differences are real, and the checks and ablations behind the main text.
+
+# %% [markdown]
+# ### Tuning: a study of 14 settings
 #
 # **The study** ran each of 14 settings (the filter, $N$ and the artificial process noise) on the same 50 simulated
 # half minutes: the lab's truth, fresh radar noise, fresh filter draws. The table gives, for each setting, the RMSE
@@ -879,15 +907,15 @@ plt.show()
 # excludes 0 shows a difference (at about the 95% level).
 #
 # The tuned setting was picked by looking at this table, so it is scored on the runs it was chosen on. A row picked
-# as the best of 14 looks better here than it will on new runs: a difference of about two standard errors is weak
-# evidence.
+# from 14 by looking at the same runs looks better here than it will on new runs: a difference of about two standard
+# errors is weak evidence.
 
 # %% nbgrader={"grade": false, "grade_id": "tuning_table", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
 # (the kit's tests check that this cell prints the same on every run)
 require(tracking_dynamics)
 study = falling_object.load_tuning()
-# what an exact posterior would score over the same readings (linearised at the truth, expected values)
+# what an exact posterior would score over readings like the study's (linearised at the truth, expected values)
 ideal = falling_object.ideal_scores(tracking_dynamics, X0_TRUE, data.t)
 print(falling_object.format_tuning_table(study, ideal=ideal))
 
@@ -917,60 +945,36 @@ axes = falling_object.plot_tracking(data, tuned, yardstick=yardstick,
 plt.show()
 
 # %% [markdown]
-# **Question 3.** Compare the tuned setting with the handout's setting, using their two rows of the table and the
-# coverage figure. Quote the numbers you use.
-#
-# (a) For each of $h$, $v$ and $\beta$: how much lower is the tuned setting's RMSE? For $\beta$, compare the
-# difference (the `diff` column) with its $\pm$ two standard errors. How strong is the evidence that the tuned
-# setting estimates $\beta$ better, given how it was chosen?
-#
-# (b) Which, if any, of the tuned setting's six bands (50% and 90%, for $h$, $v$ and $\beta$) are over-confident,
-# and which under-confident, judged against the exact posterior's row? Name one change of setting that you would try next,
-# and say which numbers of the table it should move.
-
-# %% [markdown] nbgrader={"grade": true, "grade_id": "tuning_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
-# ### BEGIN SOLUTION
-# **Model answer.** (a) The tuned setting's RMSE of $h$ is 86 m against 188 m, less than half (0.46; from 0.43 to
-# 0.50 in the study's five batches of 10 runs), and of $v$ 14 m/s against 92 m/s, less than a fifth (0.15; from
-# 0.12 to 0.19). <!-- claim: reentry-pf/tuned-rmse-hv -->
+# **What the study shows.** Against the handout's setting, the tuned setting's RMSE of $h$ is 86 m against 188 m,
+# less than half (0.46; from 0.43 to 0.50 in the study's five batches of 10 runs), and of $v$ 14 m/s against 92 m/s,
+# less than a fifth (0.15; from 0.12 to 0.19). <!-- claim: reentry-pf/tuned-rmse-hv -->
 # For $\beta$ it is 508 against 678, about a quarter lower. The paired difference is $-171 \pm 165$: just over two
 # standard errors from 0, so the study shows it, but only weakly. (The two rows' own ranges, $\pm$ 94 and $\pm$ 109,
 # overlap; that is not the test.) Both are above the exact posterior's 289. <!-- claim: reentry-pf/tuned-rmse-beta -->
-# The evidence is weaker still because the tuned setting was chosen on these same runs. New runs settle it: on 50
-# fresh runs the tuned setting's RMSE of $\beta$ is about 0.7 of the handout's setting's, and the paired difference
-# is more than two standard errors from 0. <!-- claim: reentry-pf/tuned-beta-fresh -->
-# (b) None of its bands is over-confident: every band holds the truth at least as often as the exact posterior's.
-# By the rule above, the three 90% bands (96%, 100%, 97%, against the exact posterior's 90% to 91%) and the 50% bands
-# of $v$ (93%) and $\beta$ (68%; from 55% to 76% in the study's batches of 10 runs) are under-confident. The 50% band of
-# $h$ (55%, against 51%) is about right, or slightly wide. <!-- claim: reentry-pf/tuned-coverage -->
-# Next, for example: less noise in $v$ than in $h$, which should bring the 50% coverage of $v$ down towards 51%
-# without making $h$ over-confident. (Too little noise in $h$ does: with (3, 3, 5) and (3, 3, 50) the 90% band of
-# $h$ holds the truth less than 80% of the time.) <!-- claim: reentry-pf/small-noise-overconfident -->
-# Or more particles, or resampling only when the ESS is low, which should lower the RMSE of $\beta$ and narrow its
-# band; or a noise in $\beta$ that shrinks as the readings become informative.
+# The evidence is weaker still because the tuned setting was chosen on these same runs. New runs are the fair test:
+# on 50 fresh runs the tuned setting's RMSE of $\beta$ is about 0.7 of the handout's setting's, and the paired
+# difference is more than two standard errors from 0, so the gain is real. By how much, 50 runs say only roughly: a 95%
+# bootstrap interval of that ratio runs from about 0.55 to 0.8. <!-- claim: reentry-pf/tuned-beta-fresh -->
 #
-# **Rubric (2 points).** 1 point for (a): the RMSEs of $h$ and $v$ read from the two rows (less than half, less
-# than a fifth; ratios or differences both do), and for $\beta$ a conclusion argued from the standard errors of the
-# difference (the `diff` column, or the difference against $2\sqrt{se_1^2 + se_2^2}$). Either conclusion earns the
-# point: "shown, but weakly (about two standard errors)" or "not clearly shown", especially if it notes that the
-# tuned setting was chosen on the same runs. "The two rows' ranges overlap, so there is no difference" alone does
-# not. 1 point for (b): no band over-confident; the 90% bands and the 50% bands of $v$ and $\beta$ under-confident
-# (naming only the two 50% bands also earns it); the 50% band of $h$ about right or slightly wide (either reading);
-# and one concrete next change with the numbers it should move. Any sensible change earns the point if it is tied to
-# the table.
-# ### END SOLUTION
+# None of the tuned setting's bands is over-confident: every band holds the truth at least as often as the exact
+# posterior's. Its three 90% bands (96%, 100%, 97%, against the exact posterior's 90% to 91%) and the 50% bands of
+# $v$ (93%) and $\beta$ (68%; from 55% to 76% in the study's batches of 10 runs) are under-confident. The 50% band of
+# $h$ (55%, against 51%) is about right, or slightly wide. <!-- claim: reentry-pf/tuned-coverage -->
+# Too little noise in $h$ makes it over-confident: with (3, 3, 5) and (3, 3, 50) the 90% band of $h$ holds the
+# truth less than 80% of the time. <!-- claim: reentry-pf/small-noise-overconfident -->
+# What to try next: less noise in $v$ than in $h$, or a noise in $\beta$ that shrinks as the readings become
+# informative. Do not expect more particles to narrow the band of $\beta$: in section 7, fewer particles gave the
+# narrower, over-confident bands. Copy the two cells above and change `innovation_std` or $N$.
 
 # %% [markdown]
-# ## 9. Going further
-#
-# Nothing in this section is graded. It backs up the main text with checks and ablations.
+# ### The yardstick and other checks
 #
 # **The yardstick and the Van Trees bound.** The Van Trees bound averages the readings' information over truths
 # drawn from the prior before it adds the prior's. It is a floor for the RMSE of any estimate of $\beta$, averaged
 # over that prior, but not at one truth. At 20 s and at 30 s it is within 6% of the yardstick of section 7
 # (about 210 against 200 at 30 s). <!-- claim: reentry-pf/yardstick-near-van-trees -->
-# Like the yardstick, it bounds the root of a mean squared error, which is larger than the table's mean of each
-# run's RMSE (for the exact posterior, 323 against 289). <!-- claim: reentry-pf/ideal-metric -->
+# Like the yardstick, it is on the scale of the root of a mean squared error, which is larger than the table's mean
+# of each run's RMSE (for the exact posterior, 323 against 289). <!-- claim: reentry-pf/ideal-metric -->
 # From one prior draw to another, the linearised posterior sd at 30 s ranges from about 190 to 250 (10th to
 # 90th percentile). <!-- claim: reentry-pf/yardstick-across-prior -->
 # Near the lab's truth it barely moves: shifting the true $\beta$ by $\pm$400 or $v_0$ by $\pm$50 m/s changes it at
@@ -1002,7 +1006,8 @@ plt.show()
 # **Bootstrap or auxiliary?** Here the look-ahead buys little: with the handout's noise and with the tuned noise
 # ($N$ = 2000 both), the bootstrap filter's RMSE of $h$ and $v$ is within 10% of the auxiliary filter's, and the
 # coverage of $h$ and $v$ within 7 percentage points. <!-- claim: reentry-pf/bootstrap-similar -->
-# The numbers of $\beta$ differ too, but by less than they scatter from one batch of 10 runs to the next. <!-- claim: reentry-pf/bootstrap-similar -->
+# The numbers of $\beta$ differ too, but every paired difference (bootstrap minus auxiliary, run by run on the same
+# readings) is within two standard errors of 0. <!-- claim: reentry-pf/bootstrap-similar -->
 # The
 # fitness weights of (b) are usually close to equal (with $N$ = 2000, the median of their ESS over a run is above
 # 0.8 $N$ in each of 10 runs): <!-- claim: reentry-pf/fitness-ess-typical -->

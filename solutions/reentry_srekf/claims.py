@@ -434,7 +434,7 @@ def _many_falls() -> starship.MonteCarloRun:
 @claim("reentry-srekf/average-nees-many-falls")
 def _() -> None:
     """Over 2000 fresh falls the NEES averaged over the falls is well above 3 in every window up to 20 s (0-5, 5-10 and
-    10-20 s), about 3.8 over 20-30 s, 3.4 over 30-40 s and 3.1 over 40-50 s; each half of the falls (1000 each) agrees:
+    10-20 s), about 3.7 over 20-30 s, 3.3-3.4 over 30-40 s and 3.1 over 40-50 s; each half of the falls (1000 each) agrees:
     falling from window to window, above 3.3 over 20-30 s and 2.9-3.3 over 40-50 s. And 40 falls cannot tell 3.4 from 3:
     the 50 sets of 40 that the 2000 make spread by 0.3 to 0.8 (sd) in their averages over 20-30, 30-40 and 40-50 s."""
     # Measured (seeds 20000-21999): window averages 5.39 (0-5 s), 13.3 (5-10 s), 5.89 (10-20 s), 3.81 (20-30 s), 3.38
@@ -455,8 +455,8 @@ def _() -> None:
 
     every = averages(falls.nees)
     assert min(every[:3]) >= 4.5, f"the window averages up to 20 s are {np.round(every[:3], 2)}"
-    between(every[3], 3.6, 4.0, "the average over 20-30 s (about 3.8)")
-    between(every[4], 3.25, 3.55, "the average over 30-40 s (about 3.4)")
+    between(every[3], 3.55, 3.9, "the average over 20-30 s (about 3.7)")
+    between(every[4], 3.2, 3.5, "the average over 30-40 s (3.3 to 3.4)")
     between(every[5], 3.0, 3.2, "the average over 40-50 s (about 3.1)")
     for half in (falls.nees[:1000], falls.nees[1000:]):
         late = averages(half)[3:]

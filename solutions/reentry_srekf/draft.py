@@ -793,7 +793,7 @@ for name in ("covariance32", "covariance64", "joseph64", "square_root32", "squar
 # double precision it is not positive definite from about $2 \times 10^{-5}$ m down, after its error has grown
 # steadily as the radar got more precise. There the altitude variance comes out exactly zero, then
 # $-9.3 \times 10^{-10}$ m² at every finer radar: one rounding unit of $P_{hh}$, the $\varepsilon P_{hh}$ error
-# estimated below. That is small in square metres, but negative; and since the exact variance falls as
+# estimated below (code that orders the same operations differently may get exactly 0 instead). That is small in square metres, but negative; and since the exact variance falls as
 # $\sigma_\text{rng}^2/H_h^2$, it is 7 times the exact variance at $10^{-5}$ m and $7 \times 10^{10}$ times at
 # $10^{-10}$ m. <!-- claim: reentry-srekf/covariance-form-breaks -->
 # The square-root form stays positive definite at every precision down to $10^{-10}$ m, within about
@@ -910,8 +910,8 @@ print(f"pooled over all falls and steps: {np.mean(held):.1%} of the NEES values 
 # between 2.7 and 3.7 from 20 s on, inside its band at every step. Other sets of 40 differ here: over the nine
 # other sets the average from 20 to 30 s ranged from 2.3 to 6.0. <!-- claim: reentry-srekf/average-nees-consistent-late -->
 # Forty falls are too few to tell an average of 3.4 from 3, so the late part needs many more falls. Over 2000 fresh
-# falls the averaged NEES, window by window, is well above 3 up to 20 s, about 3.8 from 20 to 30 s, 3.4 from 30 to
-# 40 s and 3.1 from 40 to 50 s. <!-- claim: reentry-srekf/average-nees-many-falls -->
+# falls the averaged NEES, window by window, is well above 3 up to 20 s, about 3.7 from 20 to 30 s, 3.3 to 3.4 from
+# 30 to 40 s and 3.1 from 40 to 50 s (a tenth or two from one batch of 2000 falls to another). <!-- claim: reentry-srekf/average-nees-many-falls -->
 # (The spike at $t = 0$, about 10 in these falls, is the first range update, linearised across the prior's
 # wide altitude, as the text says.) <!-- claim: reentry-srekf/first-update-nees-spike --> So the filter is inconsistent: overconfident
 # (its covariance too small for its errors): strongly during its first 20 s or so, while it is learning $c$ and $v$,
@@ -1064,7 +1064,8 @@ else:
 # ### The spike of the averaged NEES at $t = 0$
 #
 # The spike in the figure of part 9, about 10, rests on a few of the 40 falls. The first range update takes the
-# range's slope at the prior mean, which is about 2200 m (one standard deviation) from the truth. The range is curved enough there to put the
+# range's slope at the prior mean, whose altitude is off the truth by about 2200 m in root-mean-square (the prior's
+# standard deviation of $h$). The range is curved enough there to put the
 # altitude too high by tens to hundreds of metres, against a posterior $\sigma_h$ of about 56 m. So about one first update in seven has a NEES above 9.35, where a consistent update has one in 40,
 # while from $\sigma_h = 1000$ m down the rate is within about half a point of consistent. <!-- claim: reentry-srekf/first-update-nees-spike -->
 
