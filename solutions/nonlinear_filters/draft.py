@@ -837,8 +837,8 @@ air_traffic.print_table(shipped.table, shipped.runs)
 # %% [markdown]
 # **How often does the particle filter lose a run?** Too rarely for 400 runs to tell, so we ran all seven
 # filters on 4000 more runs (40 batches of 100, seeds of their own). The particle filter lost 7 of them, about
-# 0.2%. Most were near misses, 1.1 to 2.1 km off at the end: the tail of its ordinary error late in the flight.
-# One was a catastrophe: a time-RMS position error of 16.8 km, where no other run's time-RMS error was above 1.5 km.
+# 0.2%. Six were near misses, 1.1 to 2.1 km off at the end, with time-RMS errors up to about 1.1 km. One was a
+# catastrophe: a time-RMS position error of 16.8 km, where no other run's time-RMS error was above 1.5 km.
 # One catastrophe in 4000 runs puts the catastrophe rate at most at about 0.14%, one run in 700 (the upper end of
 # its exact 95% interval). <!-- claim: nonlinear-filters/pf-lost-rate --> Seven is a small count, so other seeds
 # can show a few more or fewer lost runs, and lost runs of other kinds.

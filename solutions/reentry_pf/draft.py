@@ -32,13 +32,15 @@
 # | part | what you write | points | about |
 # |---|---|---|---|
 # | 1. The model | `tracking_dynamics` | 1 | 15 min |
-# | 2. The truth and the radar | `simulate_radar`, Question 1 | 3 | 30 min |
+# | 2. The truth and the radar | `simulate_radar`, Question 1 | 3 | 40 min |
 # | 3. The prior cloud | `initial_cloud` | 1 | 10 min |
 # | 4. One step of the particle filter | `pf_step` | 3 | 60 min |
-# | 5. Weighted credibility intervals | `credibility_interval` | 2 | 25 min |
-# | 6. The filter over half a minute | `run_particle_filter` | 2 | 35 min |
-# | 7. Show and tell, and a yardstick | Question 2 | 2 | 30 min |
-# | **all** | 6 functions, 2 written answers | **14** | **about 3½ h** |
+# | 5. Weighted credibility intervals | `credibility_interval` | 2 | 30 min |
+# | 6. The filter over half a minute | `run_particle_filter` | 2 | 40 min |
+# | 7. Show and tell, and a yardstick | Question 2 | 2 | 40 min |
+# | **all** | 6 functions, 2 written answers | **14** | **about 4 h** |
+#
+# Add about 15 minutes to read this introduction.
 #
 # Section 8, "Going further", is optional reading: nothing there is graded.
 #
@@ -214,8 +216,8 @@ check_simulate_radar(simulate_radar)
 
 # %% [markdown]
 # **Question 1.** Which tolerances did you give `solve_ivp`, and why those? Say how accurate the truth is
-# then, compared with the radar noise, and what the tighter tolerances cost: the number of evaluations of $f$
-# (`solve_ivp`'s result has it as `.nfev`), or the time the solve takes.
+# then, compared with the radar noise, and what the tighter tolerances cost in evaluations of $f$ (`solve_ivp`'s
+# result has their number as `.nfev`; no timing is needed).
 #
 # To find out, add a cell of your own below this one (cells you add are not graded): solve once with the
 # defaults and once with much tighter tolerances, and compare the altitudes and the `.nfev` of the two. For example:
@@ -822,7 +824,7 @@ plt.show()
 # the gap say that the radar holds little information about $\beta$, or that the filter does not use it, and why?
 # (b) What happens to the ancestry of the cloud (the roots), and how does the band's width depend on $N$? Explain
 # with steps (c) and (d) and the artificial process noise. Quote the numbers you use, from the figures or from the
-# text of this section.
+# text of this section (section 8 is not needed). Each part's point needs the comparison and a reason for it.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "beta_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -964,7 +966,7 @@ plt.show()
 # truth less than 80% of the time. <!-- claim: reentry-pf/small-noise-overconfident -->
 # What to try next: less noise in $v$ than in $h$, or a noise in $\beta$ that shrinks as the readings become
 # informative. Do not expect more particles to narrow the band of $\beta$: in section 7, fewer particles gave the
-# narrower, over-confident bands. Copy the two cells above and change `innovation_std` or $N$.
+# narrower, over-confident bands. <!-- claim: reentry-pf/fewer-particles-narrower -->
 
 # %% [markdown]
 # ### The yardstick and other checks

@@ -800,7 +800,8 @@ for name in ("covariance32", "covariance64", "joseph64", "square_root32", "squar
 # $10^{-15}$ of the exact variance in double precision and within about $2 \times 10^{-7}$ in single
 # precision, a few roundings of each: <!-- claim: reentry-srekf/square-root-form-holds --> what saves it is the form, not double
 # precision. Joseph's form, also a covariance form, stays positive definite at every precision in double
-# precision too, with an error that grows to about $2 \times 10^{-5}$ at $10^{-10}$ m: <!-- claim: reentry-srekf/joseph-form-holds --> the
+# precision too, with an error that grows to about $2 \times 10^{-5}$ at $10^{-10}$ m (in this code's order of
+# operations; another order can do better): <!-- claim: reentry-srekf/joseph-form-holds --> the
 # failure belongs to the short form's subtraction. That form computes $P_{hh}^+ \approx \sigma_\text{rng}^2/H_h^2$ as
 # the difference of two numbers of size $P_{hh} = 4.84 \times 10^6$ m². Their rounding error is about
 # $\varepsilon P_{hh}$, so the relative error is about $\varepsilon (H_h \sigma_h / \sigma_\text{rng})^2$, which passes 1 near

@@ -21,8 +21,8 @@
 # is better than either on its own: a **Kalman filter**.
 #
 # **What you will do**
-# 1. Derive the Kalman gain by minimising a cost function, and the covariance of the result (four short
-#    written derivations).
+# 1. Derive the Kalman gain by minimising a cost function, and the covariance of the result (three short
+#    written derivations, numbered 1, 2 and 4; the third is worked for you).
 # 2. Write the two forms of the gain, then the filter one piece at a time: the process noise `Q`, the forecast
 #    step, the analysis step, and the loop over one hour of GPS fixes.
 # 3. Run it on an hour of data. Compare it with the raw GPS and with another model of the train's noise, and
@@ -34,15 +34,15 @@
 #
 # | part | what you write | points | about |
 # |---|---|---|---|
-# | 2. The best compromise | derivations 1 and 2 | 4 | 35 min |
+# | 2. The best compromise | derivations 1 and 2 | 4 | 45 min |
 # | 3. The two forms of the gain | `gain_information_form`, `gain_covariance_form` | 2 | 20 min |
 # | 4, 5. The process noise and the forecast | `process_noise`, `predict` | 2 | 15 min |
-# | 6. The analysis step | `kupdate`, derivation 4 | 4 | 40 min |
+# | 6. The analysis step | `kupdate`, derivation 4 | 4 | 45 min |
 # | 7. The filter | `run_filter` | 2 | 15 min |
 # | 8. Tracking the train | one written answer | 2 | 20 min |
 # | 9. Playing with the covariances | one written answer | 2 | 20 min |
-# | 10. Is the filter honest? | `nees`, one written answer | 3 | 25 min |
-# | **all** | 7 functions, 6 written answers | **21** | **about 3¼ h** |
+# | 10. Is the filter honest? | `nees`, one written answer | 3 | 30 min |
+# | **all** | 7 functions, 6 written answers | **21** | **about 3½ h** |
 #
 # Add about 15 minutes to read this introduction and section 1. Written answers (derivations and questions) are
 # marked by hand, the functions by hidden tests. The last section, "Going further", is not graded.
@@ -126,13 +126,14 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 # %% [markdown]
 # **Derivation 1 (2 points).** Show that the minimiser $\vec{x}^a$ of $J$ can be written as
 # $\vec{x}^a = \vec{x}^f + K(\vec{x}^0 - \vec{x}^f)$ with $K = B(R + B)^{-1}$.
-# Write your answer in the cell below. Plain-text algebra such as `inv(B) + H' inv(R) H` is as good as LaTeX: the
+# Write your answer in the cell below. Plain-text algebra such as `inv(inv(B) + inv(R))` is as good as LaTeX: the
 # steps earn the points, not the typesetting.
 #
 # *Hint.* For a symmetric matrix $M$, the gradient of $(\vec{x} - \vec{a})^T M (\vec{x} - \vec{a})$ is
 # $2M(\vec{x} - \vec{a})$. Set the gradient of $J$ to zero. To make $\vec{x}^0 - \vec{x}^f$ appear, add and
 # subtract $R^{-1}\vec{x}^f$. Last, write $(B^{-1} + R^{-1})^{-1} R^{-1}$ as one inverse with the rule
-# $(XY)^{-1} = Y^{-1}X^{-1}$, and take $B^{-1}$ out of the sum inside it as a factor on the right.
+# $(XY)^{-1} = Y^{-1}X^{-1}$ (read $R^{-1}$ as the inverse of $R$: the product is $[R(B^{-1} + R^{-1})]^{-1}$), and
+# take $B^{-1}$ out of the sum inside it as a factor on the right.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "derivation_1", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -178,7 +179,8 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 # gain, $K = B H^T (H B H^T + R)^{-1}$. To see that it equals derivation 2's, expand one product in two ways:
 # $H^T R^{-1}(H B H^T + R) = H^T R^{-1} H B H^T + H^T = (H^T R^{-1} H + B^{-1})\,B H^T$. Multiply on the left by
 # $(B^{-1} + H^T R^{-1} H)^{-1}$ and on the right by $(H B H^T + R)^{-1}$ (both matrices are symmetric positive
-# definite, so both inverses exist): $(B^{-1} + H^T R^{-1} H)^{-1} H^T R^{-1} = B H^T (H B H^T + R)^{-1}$.
+# definite, so both inverses exist): $(B^{-1} + H^T R^{-1} H)^{-1} H^T R^{-1} = B H^T (H B H^T + R)^{-1}$, and
+# $H^T R^{-1} = (R^{-1} H)^T$ as $R$ is symmetric.
 
 # %% [markdown]
 # ## 3. The two forms of the gain, in code
@@ -454,7 +456,7 @@ check_kupdate(kupdate)
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# **Derivation 4: the analysis covariance (2 points).** `kupdate` uses $B^a = B - KHB$. Show that
+# **Derivation 4: the analysis covariance (2 points: 1 for (a), 1 for (b) by either route).** `kupdate` uses $B^a = B - KHB$. Show that
 #
 # $$B^a = (B^{-1} + H^T R^{-1} H)^{-1} = (I - KH)\,B .$$
 #
@@ -635,7 +637,8 @@ print(np.round(gain_covariance_form(B_f, H, R), 4))
 # The filter trusts its model through $Q$ and the GPS through $R$. What if those numbers are wrong? Below,
 # the data always come from the true process, but the filter is told $Q$ (or $R$) multiplied by a
 # factor from 1/100 to 100. Each point is the mean over 20 simulated hours of each hour's RMSE, so it varies
-# from one set of 20 hours to another, and a few bad hours lift it above the typical hour's 0.9 mi of section 8. <!-- claim: train-kf/shipped-hour-typical -->
+# from one set of 20 hours to another. At factor 1, a few bad hours lift it above the typical hour's 0.9 mi of
+# section 8. <!-- claim: train-kf/factor-one-above-typical -->
 #
 # The starting belief $B_0$ is not scaled, so a factor on $R$ also changes how much the filter trusts its start
 # ($R \times c$ acts as $Q/c$ *and* $B_0/c$), <!-- claim: train-kf/r-scaling-equivalence --> which it remembers for much of the hour. <!-- claim: train-kf/vague-start -->
@@ -665,7 +668,7 @@ plt.show()
 
 # %% [markdown]
 # **Question (2 points, 1 per panel).** Describe the figure panel by panel: for the position and for the velocity,
-# where is each curve lowest, and how does its RMSE compare with the GPS's when the filter's $Q$, or its $R$, is too
+# where is each curve lowest (or is it flat?), and how does its RMSE compare with the GPS's when the filter's $Q$, or its $R$, is too
 # small or too large? A correct description of both curves of a panel earns its point. *Not graded, to think
 # about:* the two ways the velocity goes wrong, and why the position curve for $Q$ looks so different from the one
 # for $R$ (the note above).
@@ -718,7 +721,8 @@ plt.show()
 # $Q$ too small lags behind the speed changes with an error well
 # above the GPS's; <!-- claim: train-kf/velocity-q-small --> $Q$ too large follows the fixes, its error approaching
 # the GPS's from below; <!-- claim: train-kf/velocity-q-large --> $R$ mirrors $Q$. <!-- claim: train-kf/velocity-r-mirror --> 1 point: the position panel read correctly: far below the
-# GPS everywhere, <!-- claim: train-kf/position-below-gps --> the $Q$ curve flat, <!-- claim: train-kf/q-scaling-position-flat -->
+# GPS everywhere, <!-- claim: train-kf/position-below-gps --> the $Q$ curve flat (naming its lowest plotted point
+# too is fine, as long as the curve is called flat), <!-- claim: train-kf/q-scaling-position-flat -->
 # the $R$ curve lowest near 1 and rising at both ends. <!-- claim: train-kf/r-scaling-position-u -->
 # Either order of the $R$ curve's two ends is right when it is read correctly from the student's figure: over many
 # sets of 20 hours the small-$R$ end is the higher in 3 to 4 sets in 10. <!-- claim: train-kf/r-scaling-end-order -->
@@ -822,7 +826,7 @@ print(f"minutes whose mean NEES is inside the 95% band [{low:.2f}, {high:.2f}]: 
 # The gains printed in section 8 say how much of an error each fix removes.
 
 # %% [markdown]
-# **Question (2 points).** What do the two panels say: is the filter consistent? Why is the per-hour fraction so much more
+# **Question (2 points, 1 for each part).** What do the two panels say: is the filter consistent? Why is the per-hour fraction so much more
 # spread out for the position than for the velocity?
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "consistency_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
