@@ -68,6 +68,15 @@ def _true_filter() -> tuple[np.ndarray, np.ndarray]:
 
 
 @functools.cache
+def _hour_rmse(model: str) -> np.ndarray:
+    """RMSE over each hour of the pool, shape (N_POOL, 2), of the filter with the true R and B0 and the random walk's Q
+    (``model="walk"``, the true filter) or the CWNA Q (``model="cwna"``, q = 225 x 60 mph^2/h)."""
+    _, _, R, _, _, B0 = _model()
+    estimates = _true_filter()[0] if model == "walk" else _filter(_pool()[0], train.white_noise_acceleration(15.0**2 * 60.0), R, B0)[0]
+    return _rmse(estimates, _pool()[1])
+
+
+@functools.cache
 def _scaling() -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Section 9 repeated: mean RMSE over 20 hours, shape (len(FACTORS), reps, 2), for Q and R scaled; GPS (reps, 2)."""
     _, _, R, Q, _, B0 = _model()
@@ -205,7 +214,7 @@ def _() -> None:
 def _() -> None:
     """Over 20 000 hours the filter's position RMSE has median about 0.9 mi ([0.88, 0.98]), root-mean-square 1.16
     ([1.15, 1.17]), and about one hour in four ([0.2, 0.3]) is as low as the shipped hour's 0.64 mi."""
-    position = _rmse(_true_filter()[0], _pool()[1])[:, 0]
+    position = _hour_rmse("walk")[:, 0]
     shipped = _shipped(_model()[3])[0]
     _between(shipped, 0.63, 0.65, "the shipped hour's position RMSE, mi")
     _between(np.median(position), 0.88, 0.98, "the median position RMSE over hours, mi")
@@ -219,7 +228,7 @@ def _() -> None:
     (about 0.9 mi) in at least 85 of the 100 repetitions (a review saw 93.5% of 200 sets of fresh hours): a few bad
     hours lift it."""
     scaled_Q, _, _ = _scaling()
-    median_hour = np.median(_rmse(_true_filter()[0], _pool()[1])[:, 0])
+    median_hour = np.median(_hour_rmse("walk")[:, 0])
     rate_at_least(scaled_Q[ONE, :, 0] > median_hour, 0.85, "the point at factor 1 above the median hour's position RMSE")
 
 
@@ -227,7 +236,7 @@ def _() -> None:
 def _() -> None:
     """Median over 20 000 hours of filter RMSE / GPS RMSE: about 0.1 for position ([0.07, 0.13]), 0.85 for velocity ([0.8, 0.9])."""
     y, truth = _pool()
-    ratio = _rmse(_true_filter()[0], truth) / _rmse(y, truth)
+    ratio = _hour_rmse("walk") / _rmse(y, truth)
     _between(np.median(ratio[:, 0]), 0.07, 0.13, "the median position RMSE ratio")
     _between(np.median(ratio[:, 1]), 0.80, 0.90, "the median velocity RMSE ratio")
 
@@ -313,11 +322,10 @@ def _() -> None:
     The shipped CSV keeps six decimals. Under CWNA with q = 225 x 60 mph^2/h, x_{t+1} - x_t - h v_{t+1} has a
     standard deviation of about 0.14 mi ([0.13, 0.15], from its Q)."""
     h = 1.0 / 60.0
-    tolerances = [(train.load().truth, 5e-6), *((truth, 1e-9) for truth in _pool()[1])]
-    for k, (truth, tolerance) in enumerate(tolerances):
+    for what, truth, tolerance in (("the shipped hour", train.load().truth, 5e-6), ("the pool", _pool()[1], 1e-9)):
         # x_{t+1} = x_t + h v_{t+1}: the random walk carries each minute's new speed for the whole minute
-        gap = np.abs(truth[1:, 0] - truth[:-1, 0] - h * truth[1:, 1]).max()
-        assert gap < tolerance, f"hour {k} breaks x_(t+1) = x_t + h v_(t+1) by {gap:.2e} mi"
+        gap = np.abs(truth[..., 1:, 0] - truth[..., :-1, 0] - h * truth[..., 1:, 1]).max()
+        assert gap < tolerance, f"{what} breaks x_(t+1) = x_t + h v_(t+1) by up to {gap:.2e} mi"
     g = np.array([1.0, -h])
     # Var(Z_x - h Z_v) under CWNA: g^T Q g = q h^3 / 3
     _between(np.sqrt(g @ train.white_noise_acceleration(15.0**2 * 60.0) @ g), 0.13, 0.15,
@@ -327,10 +335,7 @@ def _() -> None:
 @claim("train-kf/noise-models-over-hours")
 def _() -> None:
     """Over 20 000 hours the random walk has the smaller position RMSE in 60% to 70% of them; mean velocity RMSEs agree within 1%."""
-    _, _, R, _, _, B0 = _model()
-    y, truth = _pool()
-    walk = _rmse(_true_filter()[0], truth)
-    wna = _rmse(_filter(y, train.white_noise_acceleration(15.0**2 * 60.0), R, B0)[0], truth)
+    walk, wna = _hour_rmse("walk"), _hour_rmse("cwna")
     fraction = np.mean(walk[:, 0] < wna[:, 0])
     _between(fraction, 0.60, 0.70, "the fraction of hours where the random walk has the smaller position error")
     _between(wna[:, 1].mean() / walk[:, 1].mean(), 0.99, 1.01, "the ratio of the mean velocity RMSEs")
@@ -341,11 +346,7 @@ def _() -> None:
     """Over 20 000 hours, CWNA minus random-walk position RMSE: mean 0.11 mi ([0.09, 0.12]), sd 0.31 ([0.28, 0.34]),
     5% and 95% points -0.39 and +0.65 (each within 0.05); averaged over 40 hours it is positive in about 49 sets of
     50 (500 sets, [0.96, 0.99])."""
-    _, _, R, _, _, B0 = _model()
-    y, truth = _pool()
-    walk = _rmse(_true_filter()[0], truth)[:, 0]
-    wna = _rmse(_filter(y, train.white_noise_acceleration(15.0**2 * 60.0), R, B0)[0], truth)[:, 0]
-    gap = wna - walk
+    gap = _hour_rmse("cwna")[:, 0] - _hour_rmse("walk")[:, 0]
     _between(gap.mean(), 0.09, 0.12, "the mean gap, mi")
     _between(gap.std(), 0.28, 0.34, "the standard deviation of the gap from hour to hour, mi")
     low, high = np.percentile(gap, [5, 95])
