@@ -557,9 +557,9 @@ _MEANINGS: list[tuple[str, str, str]] = [
      "one the equation names, square and well conditioned (a sign error or a missing term can break it)."),
     # M, not A: in train-kf and castaway-bob, A is the name of the model's transition matrix
     ("ValueError", r"^solve\w*:.*core dimension", "np.linalg.solve(M, b) got shapes that do not fit: it needs a "
-     "square M, (m, m), and a b with m rows, (m,) or (m, k). Check your transposes. With NumPy 2 a stack of vectors, "
-     "shape (T, m), is read as one matrix, not as T vectors: solve with b[..., None] and take [..., 0] of "
-     "the result."),
+     "square M, (m, m), and a b with m rows, (m,) or (m, k). Check your transposes. (Only if b is a stack of "
+     "vectors, shape (T, m): NumPy 2 reads it as one matrix, not as T vectors; solve with b[..., None] and take "
+     "[..., 0] of the result.)"),
     ("ValueError", "matmul", "Two arrays in a matrix product (@) have shapes that do not fit. Check the "
      "transposes, the order of the factors, and whether a vector should have shape (n,) or (n, 1)."),
     ("ValueError", "broadcast", "Two arrays have shapes that cannot be combined element by element. Compare "

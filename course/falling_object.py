@@ -470,6 +470,44 @@ class FilterHistory:
         return [name for name in HISTORY_FIELDS if not np.all(np.isfinite(getattr(self, name)))]
 
 
+class ResamplingHealth:
+    """Follows the resampling of one particle-filter run and records its health in a FilterHistory.
+
+    Make one per run, ``health = ResamplingHealth(N)``, and call ``health.record(history, j, info)`` once at
+    every reading time t_j, j = 0..T, after the step to t_j (at t_0 there is no step, and ``info`` is not
+    read). It fills ``history.ess_resample[j]`` with ``info["ess"]``, ``history.parents[j]`` with the
+    number of distinct indices in ``info["parents"]``, and ``history.roots[j]`` with the number of
+    particles of t_0 that still have descendants. At t_0 all three are N.
+    """
+
+    def __init__(self, n_particles: int) -> None:
+        # root[l]: the particle of t_0 that particle l descends from
+        self.root = np.arange(n_particles)
+
+    def record(self, history: FilterHistory, j: int, info: Mapping | None = None) -> None:
+        """Record the resampling of the step to t_j (j > 0) in ``history``, or N three times at j = 0."""
+        if j == 0:
+            history.ess_resample[0] = history.parents[0] = history.roots[0] = self.root.size
+            return
+        if not isinstance(info, Mapping) or "parents" not in info or "ess" not in info:
+            raise ValueError(
+                f"health.record(history, {j}, info) needs the dict that the step to t_{j} filled: pass the same dict "
+                "to the step as info=info, and call record after the step. The step stores info['ess'] and "
+                "info['parents'] in it."
+            )
+        parents = np.asarray(info["parents"])
+        if parents.shape != self.root.shape:
+            raise ValueError(
+                f"info['parents'] has shape {parents.shape}; the step should store one parent index per particle, "
+                f"shape {self.root.shape}."
+            )
+        # particle l's new parent is k_l, and its root is that parent's root
+        self.root = self.root[parents]
+        history.ess_resample[j] = info["ess"]
+        history.parents[j] = np.unique(parents).size
+        history.roots[j] = np.unique(self.root).size
+
+
 def history_is_per_variable(name: str) -> bool:
     """Whether a FilterHistory field has one row per state variable, (3, T + 1), or is (T + 1,)."""
     return name in ("mean", "median", "lo50", "hi50", "lo90", "hi90")
@@ -510,7 +548,7 @@ def check_history(history: object, n_times: int, n_particles: int) -> None:
     if np.any(np.diff(history.roots) > 0):
         raise AssertionError(
             "history.roots grows somewhere: a particle of t_0 that has lost all its descendants cannot get them back. "
-            "Follow root = root[info['parents']] after every step."
+            "Call health.record(history, j, info) exactly once at every t_j, after the step to t_j."
         )
 
 

@@ -257,16 +257,16 @@ ALTERNATIVES = (
         history.ess[j] = 1 / (w @ w)
     return history
 '''),
-    Alternative("run_particle_filter", "fresh-info", "a fresh info dict for each step, the first time step recorded before the loop, len(set(...)) counts",
+    Alternative("run_particle_filter", "fresh-info", "a fresh info dict for each step, the first time step recorded before the loop, the given ResamplingHealth",
                 '''def run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD):
     """A particle filter over the readings b (T + 1,) with N particles; returns a FilterHistory."""
     if step is None:
         step = pf_step
     h = FilterHistory.empty(len(b), N)
     x, w = initial_cloud(b[0], N, rng)
-    ancestor = np.arange(N)
+    health = ResamplingHealth(N)
 
-    def record(j, ess_resample, parents):
+    def record(j, info):
         h.mean[:, j] = np.sum(x * w, axis=1)
         for i in range(3):
             lo, hi = credibility_interval(x[i], w, [0, 50, 90])
@@ -274,16 +274,13 @@ ALTERNATIVES = (
             h.lo50[i, j], h.hi50[i, j] = lo[1], hi[1]
             h.lo90[i, j], h.hi90[i, j] = lo[2], hi[2]
         h.ess[j] = 1.0 / np.sum(w**2)
-        h.ess_resample[j] = ess_resample
-        h.parents[j] = parents
-        h.roots[j] = len(set(ancestor.tolist()))
+        health.record(h, j, info)
 
-    record(0, N, N)
+    record(0, None)
     for j in range(1, len(b)):
         info = {}
         x, w = step(x, w, b[j], rng, innovation_std=innovation_std, info=info)
-        ancestor = ancestor[info["parents"]]
-        record(j, info["ess"], len(set(np.asarray(info["parents"]).tolist())))
+        record(j, info)
     return h
 '''),
     Alternative("run_particle_filter", "lists-then-arrays", "the summaries gathered in lists, one row per time, and copied into the history at the end",

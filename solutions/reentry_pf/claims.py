@@ -16,6 +16,7 @@ from __future__ import annotations
 import functools
 
 import numpy as np
+from scipy.integrate import solve_ivp
 
 from autograder.authoring.claims import claim, rate_at_least
 from course import falling_object as fo
@@ -406,6 +407,20 @@ def _() -> None:
         for column in ("rmse_beta", "cover50_beta", "cover90_beta"):
             diff = study().runs[boot][column] - study().runs[aux][column]
             assert abs(diff.mean()) < 2 * np.std(diff, ddof=1) / np.sqrt(diff.size), (name, column, diff.mean())
+
+
+@claim("reentry-pf/solver-tolerances")
+def _() -> None:
+    """Section 2: with rtol=1e-10, atol=1e-8 the truth's altitude is right to about 0.01 mm (against DOP853 at
+    rtol=1e-13), with the defaults about 20 m off; about 650 evaluations of f against 75."""
+    t = fo.time_grid()
+    span = (t[0], t[-1])
+    exact = solve_ivp(ref.tracking_dynamics, span, fo.X0_TRUE, method="DOP853", t_eval=t, rtol=1e-13, atol=1e-12).y[0]
+    default = solve_ivp(ref.tracking_dynamics, span, fo.X0_TRUE, t_eval=t)
+    tight = solve_ivp(ref.tracking_dynamics, span, fo.X0_TRUE, t_eval=t, rtol=1e-10, atol=1e-8)
+    default_error, tight_error = np.abs(default.y[0] - exact).max(), np.abs(tight.y[0] - exact).max()
+    assert 10.0 < default_error < 30.0 and 2e-6 < tight_error < 3e-5, (default_error, tight_error)
+    assert 550 < tight.nfev < 750 and 60 < default.nfev < 90, (tight.nfev, default.nfev)
 
 
 @claim("reentry-pf/euler-error-small")

@@ -32,13 +32,13 @@
 # | part | what you write | points | about |
 # |---|---|---|---|
 # | 1. The model | `tracking_dynamics` | 1 | 15 min |
-# | 2. The truth and the radar | `simulate_radar`, Question 1 | 3 | 40 min |
+# | 2. The truth and the radar | `simulate_radar` | 2 | 25 min |
 # | 3. The prior cloud | `initial_cloud` | 1 | 10 min |
-# | 4. One step of the particle filter | `pf_step` | 3 | 60 min |
+# | 4. One step of the particle filter | `pf_step` | 3 | 65 min |
 # | 5. Weighted credibility intervals | `credibility_interval` | 2 | 30 min |
-# | 6. The filter over half a minute | `run_particle_filter` | 2 | 40 min |
-# | 7. Show and tell, and a yardstick | Question 2 | 2 | 40 min |
-# | **all** | 6 functions, 2 written answers | **14** | **about 4 h** |
+# | 6. The filter over half a minute | `run_particle_filter` | 2 | 25 min |
+# | 7. Show and tell, and a yardstick | the question on $\beta$ | 2 | 30 min |
+# | **all** | 6 functions, 1 written answer | **13** | **about 3 h 20 min** |
 #
 # Add about 15 minutes to read this introduction.
 #
@@ -49,9 +49,8 @@
 # are graded, *hidden tests* compare your function with a reference on random inputs, and each function is graded
 # on its own. The test of `pf_step` is statistical: a correct step fails it with probability below one in a million.
 # A graded function must leave the arrays it is given unchanged, and draw every random number from the `rng` it is
-# given, never from `np.random`. You may add cells of your own to try things out: they are not graded. The two
-# written answers are marked by hand. The grey cells are locked: grading
-# puts back their originals. Before you submit, press **Validate**: it lists each blank that is not written yet or
+# given, never from `np.random`. You may add cells of your own to try things out: they are not graded. The
+# written answer is marked by hand. The grey cells are locked: grading puts back their originals. Before you submit, press **Validate**: it lists each blank that is not written yet or
 # fails its visible checks.
 #
 # *Credit.* This lab follows the Day 5 exercise of the course "Bayesian Scientific Computing" by Daniela
@@ -72,7 +71,7 @@ from scipy.integrate import solve_ivp
 
 from course import falling_object
 from course.falling_object import (BETA_INIT, CHOSEN_STD, DT, ETA, GAMMA, INNOVATION_STD, PRIOR_STD, SIGMA, V_INIT,
-                                   X0_TRUE, FilterHistory, G, check_history)
+                                   X0_TRUE, FilterHistory, G, ResamplingHealth, check_history)
 from course.checks import check_array, check_close, check_pair, check_true, passed, require, validate
 
 # %% [markdown]
@@ -154,10 +153,13 @@ check_tracking_dynamics(tracking_dynamics)
 # from `x0` at `t[0]` to `t[-1]`, then draws `e = rng.standard_normal(len(t))` **in one call** from the `rng` you
 # are given, and returns `(x_true, b)`.
 #
-# Every result is measured against the truth, so it must be far more accurate than the radar: choose
-# `solve_ivp`'s tolerances `rtol` and `atol` so that the altitude is right to well under a metre. (Compare the
-# default `rtol=1e-3` with a much tighter solve.) The shipped `data` came from this computation, from
-# $x_0 = [61000\ \mathrm{m}, 3048\ \mathrm{m/s}, 19161]$; the visible checks compare your truth with it.
+# Every result is measured against the truth, so it must be far more accurate than the radar. Pass
+# `rtol=1e-10, atol=1e-8` to `solve_ivp`: the altitude is then right to about 0.01 mm, where the default
+# `rtol=1e-3` is about 20 m off (below the radar's 500 m, but visible when we compare a filter with the truth). The
+# price is about 650 evaluations of $f$ instead of 75. <!-- claim: reentry-pf/solver-tolerances -->
+# (To see it yourself, in a cell of your own: solve with the defaults and with much tighter tolerances, then compare
+# the altitudes `.y[0]` and the numbers of evaluations `.nfev`.) The shipped `data` came from this computation,
+# from $x_0 = [61000\ \mathrm{m}, 3048\ \mathrm{m/s}, 19161]$; the visible checks compare your truth with it.
 
 # %% nbgrader={"grade": false, "grade_id": "simulate_radar", "locked": false, "schema_version": 3, "solution": true, "task": false}
 def simulate_radar(x0, t, sigma, rng):
@@ -215,50 +217,20 @@ check_simulate_radar(simulate_radar)
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# **Question 1.** Which tolerances did you give `solve_ivp`, and why those? Say how accurate the truth is
-# then, compared with the radar noise, and what the tighter tolerances cost in evaluations of $f$ (`solve_ivp`'s
-# result has their number as `.nfev`; no timing is needed).
-#
-# To find out, add a cell of your own below this one (cells you add are not graded): solve once with the
-# defaults and once with much tighter tolerances, and compare the altitudes and the `.nfev` of the two. For example:
-#
-#     span, x0 = (data.t[0], data.t[-1]), falling_object.X0_TRUE
-#     loose = solve_ivp(tracking_dynamics, span, x0, t_eval=data.t)
-#     tight = solve_ivp(tracking_dynamics, span, x0, t_eval=data.t, rtol=1e-12, atol=1e-10)
-#     print(np.abs(loose.y[0] - tight.y[0]).max(), loose.nfev, tight.nfev)
-#
-# Measure your own tolerances' accuracy the same way, against a solve tighter still.
-
-# %% [markdown] nbgrader={"grade": true, "grade_id": "tolerance_answer", "locked": false, "points": 1, "schema_version": 3, "solution": true, "task": false}
-# ### BEGIN SOLUTION
-# **Model answer.** `rtol=1e-10, atol=1e-8`. RK45 controls the local error to about `atol + rtol * |x|`; with
-# $|h| \le 61000$ m and $|v| \le 3100$ m/s that keeps the truth within about $10^{-5}$ m and $10^{-5}$ m/s of
-# the exact solution (checked against a DOP853 solve at `rtol=1e-13`). That is eight orders of magnitude
-# below the radar's $\sigma$ = 500 m, so the truth is exact for every comparison in the lab, and the result
-# does not depend on the solver's step-size heuristics. The default `rtol=1e-3` is off by about 20 m in $h$ and
-# 6 m/s in $v$: still below $\sigma$, but visible when we compare the filter with the truth. The cost is about
-# 650 evaluations of $f$ instead of 75, a few milliseconds. `atol` only matters for components near zero (here
-# none; $\beta$ is constant).
-#
-# **Rubric (1 point).** Tolerances tighter than the defaults (`rtol` of $10^{-6}$ or smaller) with a reason
-# that compares the solver's error with the 500 m radar noise or with the accuracy the comparisons need.
-# ### END SOLUTION
-
-# %% [markdown]
 # ## 3. The prior cloud
 #
 # The filter starts from a cloud of $N$ particles drawn around a first guess: the first reading for the
 # altitude, and $v_\text{init}$ = `V_INIT` = 3000 m/s and $\beta_\text{init}$ = `BETA_INIT` = 20000 for the rest,
 #
-# $$x^{(\ell)} = \begin{bmatrix} b_0 \\ v_\text{init} \\ \beta_\text{init} \end{bmatrix} + C^{1/2} w^{(\ell)},
-#   \qquad w^{(\ell)} \sim N(0, I_3), \qquad \ell = 1, \dots, N,$$
+# $$x^{(\ell)} = \begin{bmatrix} b_0 \\ v_\text{init} \\ \beta_\text{init} \end{bmatrix} + C^{1/2} z^{(\ell)},
+#   \qquad z^{(\ell)} \sim N(0, I_3), \qquad \ell = 1, \dots, N,$$
 #
 # where $C^{1/2}$ is diagonal with the prior standard deviations `PRIOR_STD` = (500 m, 200 m/s, 1500). Every
-# particle gets the weight $1/N$. (The handout uses the letter $w$ for both the random draws and the
-# weights; they are different things.)
+# particle gets the weight $1/N$. (The handout writes $w$ for both the random draws and the weights; we write
+# $z$ for the draws, and keep $w$ for the weights.)
 #
-# Write `initial_cloud(b0, N, rng)`: draw all the $w^{(\ell)}$ as `rng.standard_normal((3, N))` **in one call**
-# (column $\ell$ is $w^{(\ell)}$) and return the cloud, shape `(3, N)`, and the weights, shape `(N,)`.
+# Write `initial_cloud(b0, N, rng)`: draw all the $z^{(\ell)}$ as `rng.standard_normal((3, N))` **in one call**
+# (column $\ell$ is $z^{(\ell)}$) and return the cloud, shape `(3, N)`, and the weights, shape `(N,)`.
 
 # %% nbgrader={"grade": false, "grade_id": "initial_cloud", "locked": false, "schema_version": 3, "solution": true, "task": false}
 def initial_cloud(b0, N, rng):
@@ -333,7 +305,7 @@ check_initial_cloud(initial_cloud)
 # $\hat w$ (multinomial resampling: fit candidates are copied several times, unfit ones die out). Then give each
 # copy its own random perturbation:
 #
-# $$x^{(\ell)}_\text{new} = \hat x^{(k_\ell)} + D^{1/2} w^{(\ell)}, \qquad w^{(\ell)} \sim N(0, I_3).$$
+# $$x^{(\ell)}_\text{new} = \hat x^{(k_\ell)} + D^{1/2} z^{(\ell)}, \qquad z^{(\ell)} \sim N(0, I_3).$$
 #
 # $D^{1/2}$ is diagonal with the standard deviations `innovation_std`. Use the keyword argument, not the constant:
 # its default is the handout's `INNOVATION_STD` = (100 m, 100 m/s, 5), and section 8 (Going further) tries others.
@@ -352,6 +324,9 @@ check_initial_cloud(initial_cloud)
 #
 # $$w^{(\ell)} = \exp\Big(-\frac{1}{2\sigma^2}\Big(\big|(x^{(\ell)}_\text{new})_1 - b_{j+1}\big|^2
 #   - \big|\hat x^{(k_\ell)}_1 - b_{j+1}\big|^2\Big)\Big).$$
+#
+# Unlike (b), (d) has no factor of the old weights $w^{(\ell)}$: the resampling in (c) has already used them, and every
+# copy starts again with an equal share.
 #
 # > **Reading of the handout.** In (d) the handout writes $x_1^{(k_\ell)}$ for the second altitude. It means the
 # > *propagated parent candidate* $\hat x^{(k_\ell)}_1$ from (a), before the perturbation. (In (c) its index range
@@ -610,11 +585,11 @@ check_credibility_interval(credibility_interval)
 # `run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD)` starts from
 # `initial_cloud(b[0], N, rng)` at $t_0$, then for $j = 1, \dots, T$ takes one filter step with the reading `b[j]`.
 # The step is `pf_step` unless another one is given (write `step = pf_step if step is None else step`); call it as
-# `step(x, w, b[j], rng, innovation_std=innovation_std, info=info)` with one dict `info`, so that it reports on
-# its resampling. At every $t_j$, including $t_0$, record in a `FilterHistory` (from `course.falling_object`;
-# `FilterHistory.empty(len(b), N)` makes one full of NaN for you to fill). Its fields `mean`, `median`, `lo50`,
-# `hi50`, `lo90` and `hi90` have shape `(3, T + 1)`, rows $h$, $v$, $\beta$; `ess`, `ess_resample`, `parents` and
-# `roots` have shape `(T + 1,)`. Fill, at each $j$:
+# `step(x, w, b[j], rng, innovation_std=innovation_std, info=info)` with one dict `info = {}`, made before the loop,
+# so that it reports on its resampling. At every $t_j$, including $t_0$, record in a `FilterHistory` (from
+# `course.falling_object`; `FilterHistory.empty(len(b), N)` makes one full of NaN for you to fill). Its fields
+# `mean`, `median`, `lo50`, `hi50`, `lo90` and `hi90` have shape `(3, T + 1)`, rows $h$, $v$, $\beta$; `ess`,
+# `ess_resample`, `parents` and `roots` have shape `(T + 1,)`. Fill, at each $j$:
 #
 # * `mean[:, j]`: the **weighted** mean $\sum_\ell w^{(\ell)} x^{(\ell)}$ of $h$, $v$ and $\beta$;
 # * `median[:, j]`, `lo50[:, j]`, `hi50[:, j]`, `lo90[:, j]`, `hi90[:, j]`: the weighted median and the weighted
@@ -622,11 +597,11 @@ check_credibility_interval(credibility_interval)
 #   np.array([0, 50, 90]))`: `lo` and `hi` have 3 entries, for the median (`lo[0]` = `hi[0]`), 50% and 90%;
 # * `ess[j]`: the effective sample size $1 / \sum_\ell (w^{(\ell)})^2$ of the weights the step returned, which is
 #   $N$ for equal weights and 1 when one particle has all the weight;
-# * the health of the resampling: `ess_resample[j] = info["ess"]`; `parents[j]`, the number of distinct indices
-#   in `info["parents"]` (`np.unique(...).size`); and `roots[j]`, the number of particles of $t_0$ that still have
-#   descendants. For the last, keep an array `root` with `root[l]` the particle of $t_0$ that particle `l`
-#   descends from: `np.arange(N)` at $t_0$, then `root = root[info["parents"]]` after each step. At $t_0$ nothing
-#   has been resampled, and all three are $N$.
+# * the health of the resampling, `ess_resample`, `parents` and `roots`: the given `ResamplingHealth` keeps the
+#   books. Make one before the loop, `health = ResamplingHealth(N)`, and call `health.record(history, j, info)` once
+#   at every $t_j$, after the step. It stores `info["ess"]`, the number of distinct indices in `info["parents"]`,
+#   and the number of particles of $t_0$ that still have descendants (section 7 plots all three). At $t_0$ nothing
+#   has been resampled, and it records $N$ for all three.
 #
 # Return the history. A loop over the readings is fine; there is still no loop over the particles.
 
@@ -636,16 +611,14 @@ def run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD):
     ### BEGIN SOLUTION
     step = pf_step if step is None else step
     history = FilterHistory.empty(len(b), N)
+    health = ResamplingHealth(N)
     # the prior cloud at t_0 is centred on the first reading, h_init = b_0
     x, w = initial_cloud(b[0], N, rng)
-    # root(l): the particle of t_0 that particle l descends from
-    root = np.arange(N)
-    info: dict = {"ess": float(N), "parents": root}
+    info: dict = {}
     for j in range(len(b)):
         if j > 0:
             # one step from t_{j-1} to t_j, with the reading b_j
             x, w = step(x, w, b[j], rng, innovation_std=innovation_std, info=info)
-            root = root[info["parents"]]
         # weighted mean sum_l w(l) x(l)
         history.mean[:, j] = x @ w
         for i in range(3):
@@ -655,9 +628,7 @@ def run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD):
             history.lo90[i, j], history.hi90[i, j] = lo[2], hi[2]
         # ESS = 1 / sum_l w(l)^2
         history.ess[j] = 1.0 / np.sum(w**2)
-        history.ess_resample[j] = info["ess"]
-        history.parents[j] = np.unique(info["parents"]).size
-        history.roots[j] = np.unique(root).size
+        health.record(history, j, info)
     return history
     ### END SOLUTION
 
@@ -670,7 +641,8 @@ check_history(short, n_times=21, n_particles=500)
 # prior cloud, drawn first from the generator you were given.
 check_close(short.ess[0], 500.0, "the effective sample size at t_0", "ESS = 1 / sum w^2, which is N for equal weights.")
 check_close([short.ess_resample[0], short.parents[0], short.roots[0]], [500.0, 500.0, 500.0],
-            "ess_resample, parents and roots at t_0", "Before the first step nothing is resampled: all three are N.")
+            "ess_resample, parents and roots at t_0",
+            "Before the first step nothing is resampled: call health.record(history, 0, info) at t_0, which records N.")
 x_first, _ = initial_cloud(data.b[0], 500, np.random.default_rng(3))
 check_close(short.mean[:, 0], x_first.mean(axis=1), "the mean at t_0",
             "At t_0 record the prior cloud from initial_cloud(b[0], N, rng), before any step.")
@@ -701,15 +673,15 @@ boot = run_particle_filter(data.b[:6], 500, np.random.default_rng(4), step=parti
                            dynamics=tracking_dynamics), innovation_std=CHOSEN_STD)
 check_close(boot.ess_resample[1:], boot.ess[:-1], "ess_resample of a bootstrap run against its ess one step earlier",
             "Call the step you are given (step = pf_step only when step is None) with innovation_std=innovation_std and "
-            "info=info, and record info['ess'].")
+            "info=info, then health.record(history, j, info).")
 # A run you can follow by hand, N = 3, with a step that moves nothing and resamples with the parents [0, 0, 1], then
 # [2, 2, 1]. Particle l's new parent is parents[l], whose root is root[parents[l]]: the roots become [0, 0, 1] (2 of
-# them), then [1, 1, 0] (still 2).
+# them), then [1, 1, 0] (still 2). ResamplingHealth counts them if it sees each step's info once, after the step.
 scripted_step = falling_object.scripted_step([np.array([0, 0, 1]), np.array([2, 2, 1])])
 hand = run_particle_filter(data.b[:3], 3, np.random.default_rng(5), step=scripted_step)
 check_close(hand.roots, [3.0, 2.0, 2.0], "history.roots of a run with the parents [0, 0, 1], then [2, 2, 1]",
-            "Particle l's new parent is parents[l], and its root is that parent's root: root = root[info['parents']], "
-            "not info['parents'][root].")
+            "Call health.record(history, j, info) once at every t_j, after the step to t_j, with the dict you passed to "
+            "the step as info=info.")
 passed("run_particle_filter")
 
 # %% nbgrader={"grade": true, "grade_id": "test_run_particle_filter", "locked": true, "points": 2, "schema_version": 3, "solution": false, "task": false}
@@ -819,12 +791,13 @@ plt.show()
 # and at 30 s the 90% interval reaches below zero (upward motion) in every one of the 50 runs. <!-- claim: reentry-pf/handout-v-upward -->
 
 # %% [markdown]
-# **Question 2 (2 points: 1 for (a), 1 for (b); a paragraph each).** Read the $\beta$ panels and the two figures
+# **Question (2 points: 1 for (a), 1 for (b); a short paragraph each).** Read the $\beta$ panels and the figures
 # after them. (a) How does the 90% band of $\beta$ of the handout's setting compare with the yardstick at 30 s? Does
-# the gap say that the radar holds little information about $\beta$, or that the filter does not use it, and why?
-# (b) What happens to the ancestry of the cloud (the roots), and how does the band's width depend on $N$? Explain
-# with steps (c) and (d) and the artificial process noise. Quote the numbers you use, from the figures or from the
-# text of this section (section 8 is not needed). Each part's point needs the comparison and a reason for it.
+# the gap say that the radar holds little information about $\beta$, or that the filter does not use it? Give one
+# reason. (b) What happens to the ancestry of the cloud (the roots) over the half minute, and what does that do to
+# the band of $\beta$? Explain with the resampling of step (c). Quote the numbers you use, from the figures or from
+# the text of this section (section 8 is not needed; a cell of your own may print values from `history`). Each
+# part's point needs the comparison and a reason for it; (a) and (b) may give different sides of the same story.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "beta_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -860,11 +833,13 @@ plt.show()
 # lose less diversity per step.
 #
 # **Rubric (2 points).** 1 point for (a): the band is several times wider than the yardstick (or still close to
-# the prior's width at large $N$), and this means the filter loses information that the readings hold (the large
-# noise in $v$, the resampling), not that the radar says little about $\beta$. 1 point for (b): the ancestry
-# collapses to a few particles of $t_0$, about as fast as resampling equal weights at every step would (the dashed
-# baselines), so the band's width depends on $N$ and on the run (smaller $N$ gives narrower, over-confident bands),
-# and the ESS after (d) does not show it. A student whose `pf_step` resamples systematically sees more distinct
+# the prior's width at large $N$), and this means the filter loses information that the readings hold, not that the
+# radar says little about $\beta$, with one reason: the large noise in $v$ (the filter can explain the drag's
+# slowing as random kicks), or the resampling. 1 point for (b): the ancestry collapses to a few particles of $t_0$
+# (tens out of 5000), about as fast as resampling equal weights at every step would (the dashed baselines), so all
+# the $\beta$ values descend from a few and the band says more about that ancestry than about the readings. Saying
+# that the width then depends on $N$ and on the run (smaller $N$ gives narrower, over-confident bands), or that the
+# ESS after (d) does not show the collapse, is welcome but not required. A student whose `pf_step` resamples systematically sees more distinct
 # parents and roots than the dashed lines: full marks for (b) if they say so, say that systematic resampling loses less
 # diversity per step, and say what still limits the band (the noise in $v$, the small noise in $\beta$). A student who blames the weights instead of the resampling at every step,
 # but reads the figures correctly otherwise, loses no points. Naming a remedy (systematic or residual resampling,
@@ -981,7 +956,7 @@ plt.show()
 # 90th percentile). <!-- claim: reentry-pf/yardstick-across-prior -->
 # Near the lab's truth it barely moves: shifting the true $\beta$ by $\pm$400 or $v_0$ by $\pm$50 m/s changes it at
 # 30 s by less than 3%. <!-- claim: reentry-pf/yardstick-insensitive -->
-# So the lesson of Question 2 stands with either curve: in the median run, the band of the handout's setting is
+# So the lesson of section 7's question stands with either curve: in the median run, the band of the handout's setting is
 # about 6 times as wide (and with the handout's noise and $N$ = 2000, about 5 times). <!-- claim: reentry-pf/handout-band-far-from-yardstick -->
 
 # %% [markdown]

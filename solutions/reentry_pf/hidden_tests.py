@@ -241,9 +241,10 @@ RUN_HINTS = {
     "lo90": "the 90% intervals from credibility_interval(x[i], w, 90)",
     "hi90": "the 90% intervals from credibility_interval(x[i], w, 90)",
     "ess": "the effective sample size 1 / sum_l w_l^2 of the weights the step returned, at every t_j",
-    "ess_resample": "info['ess'] from the step (N at t_0)",
-    "parents": "the number of distinct indices in info['parents'] (N at t_0)",
-    "roots": "the number of distinct particles of t_0 with descendants: root = root[info['parents']] after each step",
+    "ess_resample": "info['ess'] from the step (N at t_0): health.record(history, j, info) after each step",
+    "parents": "the number of distinct indices in info['parents'] (N at t_0): health.record(history, j, info) after each step",
+    "roots": "the number of distinct particles of t_0 with descendants: one ResamplingHealth for the run, "
+             "health.record(history, j, info) once after each step",
 }
 
 

@@ -107,12 +107,16 @@ MISTAKES = (
     Mistake("run_particle_filter", "stale-reading", "step j assimilates b_{j-1}: the readings one step late",
             "x, w = step(x, w, b[j], rng", "x, w = step(x, w, b[j - 1], rng",
             hint="Your run_particle_filter behaves as if step j assimilated the previous reading b_{j-1}: the readings arrive one step late."),
-    Mistake("run_particle_filter", "roots-are-parents", "roots counted as the latest parents, without following the ancestry back to t_0",
-            'root = root[info["parents"]]', 'root = info["parents"]',
-            hint="Your run_particle_filter behaves as if the roots were the latest parents: follow each particle's ancestry back to t_0."),
-    Mistake("run_particle_filter", "roots-composed-backwards", "root = parents[root]: the ancestry composed in the wrong order",
-            'root = root[info["parents"]]', 'root = info["parents"][root]',
-            hint="Your run_particle_filter behaves as if it composed the ancestry the wrong way round, parents[root]: particle l's new parent is parents[l], whose root is root[parents[l]]."),
+    # Issue 33: the resampling's books are kept by the given ResamplingHealth; made afresh at every step, it counts
+    # the latest parents as the roots.
+    Mistake("run_particle_filter", "health-made-every-step", "a new ResamplingHealth at every t_j: the roots counted as the latest parents",
+            "        health.record(history, j, info)", "        ResamplingHealth(N).record(history, j, info)",
+            hint="Your run_particle_filter behaves as if the roots were the latest parents: make one ResamplingHealth before "
+                 "the loop, so that it follows each particle's ancestry back to t_0."),
+    Mistake("run_particle_filter", "health-before-step", "health.record called before the step to t_j, with the dict of no step yet",
+            "        if j > 0:\n", "        health.record(history, j, info)\n        if j > 0:\n", raises=ValueError,
+            hint="Your run_particle_filter behaves as if it recorded the resampling before the step: call "
+                 "health.record(history, j, info) after the step to t_j."),
     Mistake("run_particle_filter", "ignores-step", "the step argument ignored: always the auxiliary pf_step",
             "step = pf_step if step is None else step", "step = pf_step",
             hint="Your run_particle_filter behaves as if it ignored the step argument and always used pf_step."),

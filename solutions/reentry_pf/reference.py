@@ -30,6 +30,7 @@ from course.falling_object import (
     V_INIT,
     FilterHistory,
     G,
+    ResamplingHealth,
 )
 
 DATA_SEED = 20191205
@@ -172,16 +173,14 @@ def run_particle_filter(
     """
     step = pf_step if step is None else step
     history = FilterHistory.empty(len(b), N)
+    health = ResamplingHealth(N)
     # the prior cloud at t_0 is centred on the first reading, h_init = b_0
     x, w = initial_cloud(b[0], N, rng)
-    # root(l): the particle of t_0 that particle l descends from
-    root = np.arange(N)
-    info: dict = {"ess": float(N), "parents": root}
+    info: dict = {}
     for j in range(len(b)):
         if j > 0:
             # one step from t_{j-1} to t_j, with the reading b_j
             x, w = step(x, w, b[j], rng, innovation_std=innovation_std, info=info)
-            root = root[info["parents"]]
         # weighted mean sum_l w(l) x(l)
         history.mean[:, j] = x @ w
         for i in range(3):
@@ -191,9 +190,7 @@ def run_particle_filter(
             history.lo90[i, j], history.hi90[i, j] = lo[2], hi[2]
         # ESS = 1 / sum_l w(l)^2
         history.ess[j] = 1.0 / np.sum(w**2)
-        history.ess_resample[j] = info["ess"]
-        history.parents[j] = np.unique(info["parents"]).size
-        history.roots[j] = np.unique(root).size
+        health.record(history, j, info)
     return history
 
 

@@ -21,8 +21,8 @@
 # is better than either on its own: a **Kalman filter**.
 #
 # **What you will do**
-# 1. Derive the Kalman gain by minimising a cost function, and the covariance of the result (three short
-#    written derivations, numbered 1, 2 and 4; the third is worked for you).
+# 1. Derive the Kalman gain by minimising a cost function, and the covariance of the result (two short written
+#    derivations, 1 and 4(a); derivations 2 and 3 and part (b) of 4 are worked for you).
 # 2. Write the two forms of the gain, then the filter one piece at a time: the process noise `Q`, the forecast
 #    step, the analysis step, and the loop over one hour of GPS fixes.
 # 3. Run it on an hour of data. Compare it with the raw GPS and with another model of the train's noise, and
@@ -34,15 +34,15 @@
 #
 # | part | what you write | points | about |
 # |---|---|---|---|
-# | 2. The best compromise | derivations 1 and 2 | 4 | 45 min |
+# | 2. The best compromise | derivation 1 | 2 | 25 min |
 # | 3. The two forms of the gain | `gain_information_form`, `gain_covariance_form` | 2 | 20 min |
 # | 4, 5. The process noise and the forecast | `process_noise`, `predict` | 2 | 15 min |
-# | 6. The analysis step | `kupdate`, derivation 4 | 4 | 45 min |
+# | 6. The analysis step | `kupdate`, derivation 4(a) | 3 | 30 min |
 # | 7. The filter | `run_filter` | 2 | 15 min |
 # | 8. Tracking the train | one written answer | 2 | 20 min |
 # | 9. Playing with the covariances | one written answer | 2 | 20 min |
 # | 10. Is the filter honest? | `nees`, one written answer | 3 | 30 min |
-# | **all** | 7 functions, 6 written answers | **21** | **about 3½ h** |
+# | **all** | 7 functions, 5 written answers | **18** | **about 3 h** |
 #
 # Add about 15 minutes to read this introduction and section 1. Written answers (derivations and questions) are
 # marked by hand, the functions by hidden tests. The last section, "Going further", is not graded.
@@ -59,7 +59,7 @@
 # module distributed on HUBzero with `KalmanTrain.zip` (MATLAB). The copy we worked from names no author
 # or year. The text, code and data here are our own, and so are any errors. Where the handout has a typo,
 # a one-line *Handout correction* says so where the equation comes, and we use the corrected form. You do
-# not need the handout; section 11 explains each correction.
+# not need the handout, and you may skip these boxes; section 11 explains each correction.
 
 # %% nbgrader={"grade": false, "grade_id": "setup", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # Set-up: run this cell first.
@@ -133,7 +133,8 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 # $2M(\vec{x} - \vec{a})$. Set the gradient of $J$ to zero. To make $\vec{x}^0 - \vec{x}^f$ appear, add and
 # subtract $R^{-1}\vec{x}^f$. Last, write $(B^{-1} + R^{-1})^{-1} R^{-1}$ as one inverse with the rule
 # $(XY)^{-1} = Y^{-1}X^{-1}$ (read $R^{-1}$ as the inverse of $R$: the product is $[R(B^{-1} + R^{-1})]^{-1}$), and
-# take $B^{-1}$ out of the sum inside it as a factor on the right.
+# take $B^{-1}$ out of the sum inside it as a factor on the right (write $I = BB^{-1}$). $J$ is a convex quadratic,
+# so its stationary point is its minimum: you need not prove that.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "derivation_1", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -156,26 +157,18 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 #
 # $$J(\vec{x}) = (\vec{x} - \vec{x}^f)^T B^{-1} (\vec{x} - \vec{x}^f) + (H\vec{x} - \vec{y}^0)^T R^{-1} (H\vec{x} - \vec{y}^0).$$
 #
-# **Derivation 2 (2 points).** Show that its minimiser is $\vec{x}^a = \vec{x}^f + K(\vec{y}^0 - H\vec{x}^f)$ with
-# $K = (B^{-1} + H^T R^{-1} H)^{-1} (R^{-1} H)^T$. *Hint.* Follow the steps of derivation 1; the chain rule
-# through $H$ puts $H^T$ in front of the gradient of the second term. This time add and subtract
-# $H^T R^{-1} H \vec{x}^f$, and use that $R$ is symmetric: $H^T R^{-1} = (R^{-1} H)^T$.
-
-# %% [markdown] nbgrader={"grade": true, "grade_id": "derivation_2", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
-# ### BEGIN SOLUTION
-# **Model answer.** Setting the gradient to zero:
-# $2B^{-1}(\vec{x} - \vec{x}^f) + 2H^T R^{-1}(H\vec{x} - \vec{y}^0) = 0$,
-# so $(B^{-1} + H^T R^{-1} H)\vec{x}^a = B^{-1}\vec{x}^f + H^T R^{-1}\vec{y}^0 = (B^{-1} + H^T R^{-1} H)\vec{x}^f + H^T R^{-1}(\vec{y}^0 - H\vec{x}^f)$.
-# Therefore $\vec{x}^a = \vec{x}^f + (B^{-1} + H^T R^{-1} H)^{-1} H^T R^{-1} (\vec{y}^0 - H\vec{x}^f)$, and
-# $H^T R^{-1} = (R^{-1} H)^T$ because $R$ is symmetric.
-#
-# **Rubric (2 points).** 1 point: the gradient of the observation term, $2H^T R^{-1}(H\vec{x} - \vec{y}^0)$
-# (the chain rule through $H$). 1 point: collecting terms into the form $\vec{x}^f + K(\vec{y}^0 - H\vec{x}^f)$
-# and using the symmetry of $R$.
-# ### END SOLUTION
+# **Derivation 2 (worked for you, not graded).** Its minimiser is $\vec{x}^a = \vec{x}^f + K(\vec{y}^0 - H\vec{x}^f)$
+# with $K = (B^{-1} + H^T R^{-1} H)^{-1} (R^{-1} H)^T$. The steps are those of derivation 1, with $H$ in the second
+# term. By the chain rule through $H$, the gradient of the second term is $2H^T R^{-1}(H\vec{x} - \vec{y}^0)$, so
+# the minimiser solves
+# $(B^{-1} + H^T R^{-1} H)\vec{x}^a = B^{-1}\vec{x}^f + H^T R^{-1}\vec{y}^0$. Adding and subtracting
+# $H^T R^{-1} H \vec{x}^f$ on the right gives $(B^{-1} + H^T R^{-1} H)\vec{x}^f + H^T R^{-1}(\vec{y}^0 - H\vec{x}^f)$,
+# hence $\vec{x}^a = \vec{x}^f + (B^{-1} + H^T R^{-1} H)^{-1} H^T R^{-1} (\vec{y}^0 - H\vec{x}^f)$. Last,
+# $H^T R^{-1} = (R^{-1} H)^T$ because $R$ is symmetric. With $H = I$ this is derivation 1's gain before its last
+# rearrangement.
 
 # %% [markdown]
-# **The two forms of the gain agree** (worked for you, not graded). Section 3 uses a second form of the same
+# **Derivation 3: the two forms of the gain agree** (worked for you, not graded). Section 3 uses a second form of the same
 # gain, $K = B H^T (H B H^T + R)^{-1}$. To see that it equals derivation 2's, expand one product in two ways:
 # $H^T R^{-1}(H B H^T + R) = H^T R^{-1} H B H^T + H^T = (H^T R^{-1} H + B^{-1})\,B H^T$. Multiply on the left by
 # $(B^{-1} + H^T R^{-1} H)^{-1}$ and on the right by $(H B H^T + R)^{-1}$ (both matrices are symmetric positive
@@ -456,7 +449,7 @@ check_kupdate(kupdate)
 ### END HIDDEN TESTS
 
 # %% [markdown]
-# **Derivation 4: the analysis covariance (2 points: 1 for (a), 1 for (b) by either route).** `kupdate` uses $B^a = B - KHB$. Show that
+# **Derivation 4: the analysis covariance (1 point, for (a)).** `kupdate` uses $B^a = B - KHB$. Show that
 #
 # $$B^a = (B^{-1} + H^T R^{-1} H)^{-1} = (I - KH)\,B .$$
 #
@@ -465,31 +458,24 @@ check_kupdate(kupdate)
 # (a) Show that $(I - KH)B = P$. *Hint.* Put in $K = P H^T R^{-1}$, then take $P$ out on the left as a common
 # factor: $B = P P^{-1} B$.
 #
-# (b) Explain why $P$ is the covariance of the analysis error. Take either route.
-# *Route 1.* With Gaussian errors, $J$ is $-2\log$ of the posterior density of $\vec{x}$, up to a constant. Expand
-# $J$ around its minimiser $\vec{x}^a$: for a quadratic the expansion stops at second order, and the first-order
-# term vanishes. Compare what is left with the exponent of a Gaussian density.
-# *Route 2.* Assume that the forecast error $\vec{x}^f - \vec{x}$ (covariance $B$) and the observation error
-# $\vec{y}^0 - H\vec{x}$ (covariance $R$) have mean zero and are independent. Write the analysis error as
-# $\vec{x}^a - \vec{x} = (I - KH)(\vec{x}^f - \vec{x}) + K(\vec{y}^0 - H\vec{x})$. Take its covariance with $\mathrm{Cov}(M\vec{e}) = M\,\mathrm{Cov}(\vec{e})\,M^T$, then
-# simplify with (a), $I - KH = P B^{-1}$.
+# (b) *Worked for you, not graded:* why $P$ is the covariance of the analysis error. Assume that the forecast error
+# $\vec{x}^f - \vec{x}$ (covariance $B$) and the observation error $\vec{y}^0 - H\vec{x}$ (covariance $R$) have mean
+# zero and are independent. The analysis error is
+# $\vec{x}^a - \vec{x} = (I - KH)(\vec{x}^f - \vec{x}) + K(\vec{y}^0 - H\vec{x})$, and $\mathrm{Cov}(M\vec{e}) =
+# M\,\mathrm{Cov}(\vec{e})\,M^T$ gives its covariance $(I - KH)B(I - KH)^T + KRK^T$ (the *Joseph form*). By (a),
+# $I - KH = PB^{-1}$, and $K = PH^TR^{-1}$, so it is
+# $PB^{-1}BB^{-1}P + PH^TR^{-1}RR^{-1}HP = P(B^{-1} + H^TR^{-1}H)P = P$. (Another route: with Gaussian errors, $J$
+# is $-2\log$ of the posterior density up to a constant, and its Hessian $2P^{-1}$ says that the posterior is
+# Gaussian with covariance $P$.)
 
-# %% [markdown] nbgrader={"grade": true, "grade_id": "derivation_4", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
+# %% [markdown] nbgrader={"grade": true, "grade_id": "derivation_4", "locked": false, "points": 1, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
 # **Model answer.** (a) Write $P = (B^{-1} + H^T R^{-1} H)^{-1}$, so that $K = P H^T R^{-1}$. Then
 # $(I - KH)B = B - P H^T R^{-1} H B = P\left[(B^{-1} + H^T R^{-1} H)B - H^T R^{-1} H B\right] = P\,[I] = P$.
 #
-# (b) With independent Gaussian errors $\vec{x}^f - \vec{x} \sim N(0, B)$ and
-# $\vec{y}^0 - H\vec{x} \sim N(0, R)$, the posterior density of $\vec{x}$ is proportional to $\exp(-J/2)$. $J$ is
-# quadratic with Hessian $\nabla^2 J = 2(B^{-1} + H^T R^{-1} H)$, so
-# $J(\vec{x}) = J(\vec{x}^a) + (\vec{x} - \vec{x}^a)^T (B^{-1} + H^T R^{-1} H)(\vec{x} - \vec{x}^a)$: a Gaussian with
-# mean $\vec{x}^a$ and covariance $(B^{-1} + H^T R^{-1} H)^{-1}$. (Second route: $\vec{x}^a - \vec{x} = (I - KH)(\vec{x}^f - \vec{x}) + K(\vec{y}^0 - H\vec{x})$,
-# whose covariance is $(I - KH)B(I - KH)^T + KRK^T$, the Joseph form. With $I - KH = PB^{-1}$ and $K = PH^TR^{-1}$
-# it is $PB^{-1}BB^{-1}P + PH^TR^{-1}RR^{-1}HP = P(B^{-1} + H^TR^{-1}H)P = P$.)
-#
-# **Rubric (2 points).** 1 point: (a) the algebra from $K$ of derivation 2 to $(I - KH)B = P$ (the Woodbury
-# identity stated and applied correctly also earns it). 1 point: (b) by either route, the precision
-# $B^{-1} + H^T R^{-1} H$ read off the Hessian of $J$, or the error covariance written out and simplified.
+# **Rubric (1 point).** The algebra from $K$ of derivation 2 to $(I - KH)B = P$, with the common factor $P$
+# taken out on the left (the Woodbury identity stated and applied correctly also earns it). Nothing is needed for
+# (b), which the text works.
 # ### END SOLUTION
 
 # %% [markdown]
@@ -593,7 +579,8 @@ print(np.round(gain_covariance_form(B_f, H, R), 4))
 
 # %% [markdown]
 # **Question (2 points).** Why does the filter improve the position so much more than the velocity, compared with the GPS
-# alone? Use the model and the printed gain.
+# alone? Use the model and the printed gain. A paragraph is enough: 1 point for why the position is so good, 1 point for
+# why the velocity is not much better than a fix.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "position_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -664,7 +651,8 @@ plt.show()
 #   So each velocity fix also tells the filter the distance covered in its minute, whatever the factor.
 #
 # So a factor on $Q$ changes how far the fixes move the estimate along $\vec{g}$, never the model's link between the
-# new position, the old one and the new speed. Use this to explain the position curve for $Q$.
+# new position, the old one and the new speed. This explains the position curve for $Q$; the question below does not
+# grade the explanation.
 
 # %% [markdown]
 # **Question (2 points, 1 per panel).** Describe the figure panel by panel: for the position and for the velocity,
