@@ -402,6 +402,30 @@ def ideal_scores(
 
 
 # =============================================================================================
+# Weighted credibility intervals
+# =============================================================================================
+def credibility_interval(samples: Vector, weights: Vector, p: float | Vector) -> tuple[Vector, Vector]:
+    """The central p% credibility interval [lo, hi] of weighted samples, p in percent.
+
+    samples (N,) and weights (N,) (non-negative, not all zero, not necessarily normalised) describe one
+    variable of the cloud; p is a number or an array of numbers in [0, 100], and lo, hi have its shape.
+    The interval runs between the weighted quantiles of orders (1 - p/100)/2 and (1 + p/100)/2, where
+    the quantile of order a is the smallest sample whose cumulative weight, in sorted order, reaches a.
+    p = 0 gives the weighted median twice.
+    """
+    order = np.argsort(samples)
+    s = samples[order]
+    # F_i = sum of the weights of the i smallest samples, normalised so that F_N = 1
+    cdf = np.cumsum(weights[order])
+    cdf = cdf / cdf[-1]
+    # orders of the lower and upper quantiles: (1 -+ p/100) / 2
+    a_lo, a_hi = 0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200
+    # q(a) = s_i with the smallest i such that F_i >= a (clamped to the last sample)
+    last = s.shape[0] - 1
+    return s[np.minimum(np.searchsorted(cdf, a_lo), last)], s[np.minimum(np.searchsorted(cdf, a_hi), last)]
+
+
+# =============================================================================================
 # The filter's history
 # =============================================================================================
 HISTORY_FIELDS: tuple[str, ...] = ("mean", "median", "lo50", "hi50", "lo90", "hi90", "ess", "ess_resample", "parents", "roots")
@@ -470,39 +494,69 @@ class FilterHistory:
         return [name for name in HISTORY_FIELDS if not np.all(np.isfinite(getattr(self, name)))]
 
 
+class HelperMisused(ValueError):
+    """A given helper was called in a way that cannot give the right numbers; the message says how to call it."""
+
+
+class RecordedOutOfOrder(HelperMisused):
+    """ResamplingHealth.record was not called once at every t_j, in order (made afresh inside the loop, twice, ...)."""
+
+
+class InfoNotFilled(HelperMisused):
+    """ResamplingHealth.record got a dict that the step to t_j did not fill (called before the step, or another dict)."""
+
+
 class ResamplingHealth:
     """Follows the resampling of one particle-filter run and records its health in a FilterHistory.
 
-    Make one per run, ``health = ResamplingHealth(N)``, and call ``health.record(history, j, info)`` once at
-    every reading time t_j, j = 0..T, after the step to t_j (at t_0 there is no step, and ``info`` is not
-    read). It fills ``history.ess_resample[j]`` with ``info["ess"]``, ``history.parents[j]`` with the
-    number of distinct indices in ``info["parents"]``, and ``history.roots[j]`` with the number of
-    particles of t_0 that still have descendants. At t_0 all three are N.
+    Make one per run, before the loop, ``health = ResamplingHealth(N)``, and call ``health.record(history, j,
+    info)`` once at every reading time t_j, in order, after the step to t_j (at t_0 there is no step, and
+    ``info`` is not read; you may also fill t_0 yourself and start at j = 1). It fills
+    ``history.ess_resample[j]`` with ``info["ess"]``, ``history.parents[j]`` with the number of distinct
+    indices in ``info["parents"]``, and ``history.roots[j]`` with the number of particles of t_0 that still
+    have descendants in the cloud at t_j. At t_0 all three are N. A call that cannot give the right numbers (twice for one t_j,
+    a time skipped, a dict that the step did not fill, the wrong N) raises HelperMisused, saying why.
     """
 
     def __init__(self, n_particles: int) -> None:
         # root[l]: the particle of t_0 that particle l descends from
         self.root = np.arange(n_particles)
+        self.last_j: int | None = None
 
     def record(self, history: FilterHistory, j: int, info: Mapping | None = None) -> None:
         """Record the resampling of the step to t_j (j > 0) in ``history``, or N three times at j = 0."""
+        n = self.root.size
+        if self.last_j is not None and j == self.last_j:
+            raise RecordedOutOfOrder(f"health.record(history, {j}, info) was called twice for t_{j}: call it once at every "
+                                "t_j, after the step to t_j.")
         if j == 0:
-            history.ess_resample[0] = history.parents[0] = history.roots[0] = self.root.size
+            if self.last_j is not None:
+                raise RecordedOutOfOrder("health.record(history, 0, ...) came after later times: make one "
+                                    "ResamplingHealth(N) per run, before the loop, and record t_0 first.")
+            history.ess_resample[0] = history.parents[0] = history.roots[0] = n
+            self.last_j = 0
             return
+        if (self.last_j is None and j > 1) or (self.last_j is not None and j != self.last_j + 1):
+            seen = "nothing yet" if self.last_j is None else f"t_{self.last_j} last"
+            raise RecordedOutOfOrder(
+                f"health.record(history, {j}, info) on a ResamplingHealth that has recorded {seen}: make one "
+                "ResamplingHealth(N) before the loop (not inside it), and call record once at every t_j, in order."
+            )
         if not isinstance(info, Mapping) or "parents" not in info or "ess" not in info:
-            raise ValueError(
-                f"health.record(history, {j}, info) needs the dict that the step to t_{j} filled: pass the same dict "
-                "to the step as info=info, and call record after the step. The step stores info['ess'] and "
-                "info['parents'] in it."
+            raise InfoNotFilled(
+                f"health.record(history, {j}, info) got a dict without info['ess'] and info['parents']: pass this same "
+                f"dict to the step as info=info (not a new one), and call record after the step to t_{j}."
             )
         parents = np.asarray(info["parents"])
-        if parents.shape != self.root.shape:
-            raise ValueError(
-                f"info['parents'] has shape {parents.shape}; the step should store one parent index per particle, "
-                f"shape {self.root.shape}."
+        if parents.shape != (n,):
+            raise HelperMisused(
+                f"info['parents'] has shape {parents.shape}, but this ResamplingHealth was made for {n} particles: "
+                "make it with the run's N, ResamplingHealth(N). (If N is right, the step should store one parent "
+                "index per particle.)"
             )
         # particle l's new parent is k_l, and its root is that parent's root
         self.root = self.root[parents]
+        self.last_j = j
         history.ess_resample[j] = info["ess"]
         history.parents[j] = np.unique(parents).size
         history.roots[j] = np.unique(self.root).size
@@ -529,7 +583,10 @@ def check_history(history: object, n_times: int, n_particles: int) -> None:
             raise AssertionError(f"history.{name} should have shape {shape}, one column per reading; it has {value.shape}.")
         if not np.all(np.isfinite(value)):
             missing = np.flatnonzero(~np.all(np.isfinite(value.reshape(-1, n_times)), axis=0))
-            raise AssertionError(f"history.{name} is not filled in at the times j = {missing[:8].tolist()}: fill it at every t_j.")
+            at_start = " (at t_0, call health.record(history, 0, info) too)" if (
+                name in ("ess_resample", "parents", "roots") and missing[0] == 0) else ""
+            raise AssertionError(f"history.{name} is not filled in at the times j = {missing[:8].tolist()}: fill it at "
+                                 f"every t_j{at_start}.")
     order = (history.lo90, history.lo50, history.median, history.hi50, history.hi90)
     labels = ("lo90", "lo50", "median", "hi50", "hi90")
     for k in range(4):
@@ -609,6 +666,19 @@ def format_report(data: RadarData, history: FilterHistory) -> str:
 def print_report(data: RadarData, history: FilterHistory) -> None:
     """Print ``format_report``."""
     print(format_report(data, history))
+
+
+def print_beta_band(data: RadarData, history: FilterHistory, yardstick: Vector, every: float = 5.0) -> None:
+    """Print, every ``every`` seconds, the width of the run's 90% band of beta, the width of an exact
+    posterior's 90% band (2 x 1.645 x the yardstick), the prior's (2 x 1.645 x 1500), the ratio of the
+    run's band to the yardstick's, and the run's roots (particles of t_0 with descendants)."""
+    _require_complete(history, data.t.shape[0])
+    print("   t   90% band of beta:  this run   yardstick's   prior's   run / yardstick   roots")
+    for t_j in np.arange(0.0, data.t[-1] - data.t[0] + 1e-9, every):
+        j = int(round(t_j / DT))
+        band, ideal = history.hi90[2, j] - history.lo90[2, j], 2 * Z90 * yardstick[j]
+        print(f"{t_j:4.0f} s {band:22.0f} {ideal:13.0f} {2 * Z90 * PRIOR_STD[2]:9.0f} {band / ideal:17.1f} "
+              f"{history.roots[j]:7.0f}")
 
 
 def plot_tracking(data: RadarData, history: FilterHistory, title: str = "", yardstick: Vector | None = None) -> NDArray[np.object_]:

@@ -308,7 +308,8 @@ VISIBLY_FAILED = {
                           "bootstrap_pf_step/noise-before-f", "unscented_points/centre-weight-one-over-n-plus-kappa",
                           "ekf_update/angle-index-hard-coded", "ekf_update/wraps-every-component",
                           "bootstrap_pf_step/noise-L-untransposed"),
-    "reentry-pf": ("run_particle_filter/health-made-every-step", "run_particle_filter/drops-innovation-std"),
+    "reentry-pf": ("run_particle_filter/health-made-every-step", "run_particle_filter/drops-innovation-std",
+                   "run_particle_filter/ess-from-info"),
     "reentry-srekf": ("sqrt_time_update/noise-transposed", "sqrt_measurement_update/noise-transposed",
                       "sqrt_measurement_update/noise-variance"),
 }
@@ -325,7 +326,8 @@ passed them, as every u they gave had one entry, until the fairness review of th
 castaway-bob's run_rank4/global-sigma-gps passed them until the fairness review of castaway-bob's checks (helper-42)
 found that no case of run_rank4 gave another sigma_gps (case (g) now does); its sigma_F ones until the second round
 of that review found the same of sigma_F (case (h)). reentry-pf's run_particle_filter/drops-innovation-std passed them
-until a student trial's follow-up added a run with innovation_std = (1, 1, 1) and a look at the width of v's band."""
+until a student trial's follow-up added a run with innovation_std = (1, 1, 1) and a look at the width of v's band;
+its ess-from-info until the fairness review of issue 33's ResamplingHealth added the ESS at t_1."""
 
 VISIBLE_MESSAGES = {
     "train-kf": {"nees/root": ("take no square root", None),
@@ -375,11 +377,9 @@ VISIBLE_MESSAGES = {
     },
     "reentry-pf": {
         # the fairness review of the messages: the means of the copies of particle 0 were checked before their spread,
-        # which an innovation of the wrong size, or one draw for all, moves as well; and p as a fraction was told to
-        # carry the weights along (a case with equal weights now comes first)
+        # which an innovation of the wrong size, or one draw for all, moves as well
         "pf_step/variance-innovation": ("standard deviations, not variances", "Propagate before you resample"),
         "pf_step/innovation-shared": ("its own draw of the innovation", "old weights w"),
-        "credibility_interval/percent-as-fraction": ("p is in percent", "Carry the weights along"),
         # a student trial: a loop that dropped innovation_std passed every visible check (a case with a small noise now
         # looks at the spread of v)
         "run_particle_filter/drops-innovation-std": ("innovation_std=innovation_std", None),

@@ -58,7 +58,7 @@ ALTERNATIVES = (
     return [out.y, out.y[0] + e * sigma]
 '''),
     # initial_cloud
-    Alternative("initial_cloud", "diag-matrix", "C^(1/2) w as np.diag(PRIOR_STD) @ w, and weights np.ones(N) / N",
+    Alternative("initial_cloud", "diag-matrix", "C^(1/2) z as np.diag(PRIOR_STD) @ z, and weights np.ones(N) / N",
                 '''def initial_cloud(b0, N, rng):
     """Prior cloud x (3, N) around [b0, V_INIT, BETA_INIT] and equal weights w (N,)."""
     w_draws = rng.standard_normal((3, N))
@@ -184,51 +184,6 @@ ALTERNATIVES = (
         info["ess"] = 1.0 / np.sum(w_hat**2)
         info["parents"] = k
     return x_new, w_new / w_new.sum()
-'''),
-    # credibility_interval
-    Alternative("credibility_interval", "normalised-first", "the weights normalised before they are accumulated (the last cumulative weight can round below 1)",
-                '''def credibility_interval(samples, weights, p):
-    """The central p% interval (lo, hi) of weighted samples (N,); p a number or an array, in percent."""
-    order = np.argsort(samples)
-    s = samples[order]
-    F = np.cumsum(weights[order] / np.sum(weights))
-    a_lo = (1 - np.asarray(p) / 100) / 2
-    a_hi = (1 + np.asarray(p) / 100) / 2
-    i_lo = np.clip(np.searchsorted(F, a_lo), 0, len(s) - 1)
-    i_hi = np.clip(np.searchsorted(F, a_hi), 0, len(s) - 1)
-    return s[i_lo], s[i_hi]
-'''),
-    Alternative("credibility_interval", "divided-by-sum", "accumulated, then divided by the weights' sum; p made an array and the results reshaped",
-                '''def credibility_interval(samples, weights, p):
-    """The central p% interval (lo, hi) of weighted samples (N,); p a number or an array, in percent."""
-    p_arr = np.atleast_1d(np.asarray(p, dtype=float))
-    idx = np.argsort(samples)
-    sorted_samples = samples[idx]
-    F = np.cumsum(weights[idx]) / weights.sum()
-    lo = sorted_samples[np.minimum(np.searchsorted(F, 0.5 - p_arr / 200), samples.size - 1)]
-    hi = sorted_samples[np.minimum(np.searchsorted(F, 0.5 + p_arr / 200), samples.size - 1)]
-    return lo.reshape(np.shape(p)), hi.reshape(np.shape(p))
-'''),
-    Alternative("credibility_interval", "loops", "a loop over the orders and one over the sorted samples until the running weight reaches the order; floats for a number p",
-                '''def credibility_interval(samples, weights, p):
-    """The central p% interval (lo, hi) of weighted samples (N,); p a number or an array, in percent."""
-    order = np.argsort(samples)
-    s = samples[order]
-    w = weights[order] / np.sum(weights)
-
-    def quantile(a):
-        total = 0.0
-        for i in range(len(s)):
-            total += w[i]
-            if total >= a:
-                return s[i]
-        return s[-1]
-
-    if np.ndim(p) == 0:
-        return float(quantile((1 - p / 100) / 2)), float(quantile((1 + p / 100) / 2))
-    lo = np.array([quantile((1 - q / 100) / 2) for q in np.ravel(p)]).reshape(np.shape(p))
-    hi = np.array([quantile((1 + q / 100) / 2) for q in np.ravel(p)]).reshape(np.shape(p))
-    return lo, hi
 '''),
     # run_particle_filter
     Alternative("run_particle_filter", "separate-calls", "np.average for the mean, 1 / (w @ w) for the ESS, one credibility_interval call per p, step or pf_step",

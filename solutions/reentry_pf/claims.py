@@ -149,6 +149,19 @@ def _() -> None:
         assert 5.5 <= medians[5000] < 7 and 4.5 <= medians[2000] < 6, medians
 
 
+@claim("reentry-pf/handout-band-narrow-early")
+def _() -> None:
+    """The handout's setting (N = 5000): from 1 s to 13 s, before the readings hold information about beta, its 90% band
+    is narrower than the yardstick's in about half the study's runs or more (at least 40% at every second)."""
+    widths = study().runs[HANDOUT_SETTING]["width90_beta"]
+    every = fo.WIDTH_EVERY
+    ideal = 2 * fo.Z90 * crb()[::every][: widths.shape[1]]
+    narrower = np.mean(widths < ideal, axis=0)[1:14]
+    assert narrower.min() >= 0.4 and np.median(narrower) >= 0.5, narrower
+    # the yardstick is still the prior's there: the narrowing is not information
+    assert crb()[13 * round(1 / fo.DT)] > 0.95 * fo.PRIOR_STD[2], crb()[13 * round(1 / fo.DT)]
+
+
 @claim("reentry-pf/ess-after-d-high")
 def _() -> None:
     """The ESS after step (d) stays above 0.6 N at every step, in every one of 10 fresh runs (N = 2000)."""
@@ -411,15 +424,15 @@ def _() -> None:
 
 @claim("reentry-pf/solver-tolerances")
 def _() -> None:
-    """Section 2: with rtol=1e-10, atol=1e-8 the truth's altitude is right to about 0.01 mm (against DOP853 at
-    rtol=1e-13), with the defaults about 20 m off; about 650 evaluations of f against 75."""
+    """Section 2, from the lab's start: with rtol=1e-10, atol=1e-8 the truth's altitude is right to under 0.01 mm
+    (against DOP853 at rtol=1e-13), with the defaults about 20 m off; about 650 evaluations of f against 75."""
     t = fo.time_grid()
     span = (t[0], t[-1])
     exact = solve_ivp(ref.tracking_dynamics, span, fo.X0_TRUE, method="DOP853", t_eval=t, rtol=1e-13, atol=1e-12).y[0]
     default = solve_ivp(ref.tracking_dynamics, span, fo.X0_TRUE, t_eval=t)
     tight = solve_ivp(ref.tracking_dynamics, span, fo.X0_TRUE, t_eval=t, rtol=1e-10, atol=1e-8)
     default_error, tight_error = np.abs(default.y[0] - exact).max(), np.abs(tight.y[0] - exact).max()
-    assert 10.0 < default_error < 30.0 and 2e-6 < tight_error < 3e-5, (default_error, tight_error)
+    assert 15.0 < default_error < 22.0 and 1e-6 < tight_error < 1e-5, (default_error, tight_error)
     assert 550 < tight.nfev < 750 and 60 < default.nfev < 90, (tight.nfev, default.nfev)
 
 

@@ -32,15 +32,14 @@
 # | part | what you write | points | about |
 # |---|---|---|---|
 # | 1. The model | `tracking_dynamics` | 1 | 15 min |
-# | 2. The truth and the radar | `simulate_radar` | 2 | 25 min |
+# | 2. The truth and the radar | `simulate_radar` | 2 | 20 min |
 # | 3. The prior cloud | `initial_cloud` | 1 | 10 min |
-# | 4. One step of the particle filter | `pf_step` | 3 | 65 min |
-# | 5. Weighted credibility intervals | `credibility_interval` | 2 | 30 min |
+# | 4. One step of the particle filter | `pf_step` | 3 | 70 min |
 # | 6. The filter over half a minute | `run_particle_filter` | 2 | 25 min |
-# | 7. Show and tell, and a yardstick | the question on $\beta$ | 2 | 30 min |
-# | **all** | 6 functions, 1 written answer | **13** | **about 3 h 20 min** |
+# | 7. Show and tell, and a yardstick | the question on $\beta$ | 2 | 35 min |
+# | **all** | 5 functions, 1 written answer | **11** | **about 3 h** |
 #
-# Add about 15 minutes to read this introduction.
+# Add about 15 minutes to read this introduction, and 5 for section 5, which has no blank.
 #
 # Section 8, "Going further", is optional reading: nothing there is graded.
 #
@@ -71,7 +70,8 @@ from scipy.integrate import solve_ivp
 
 from course import falling_object
 from course.falling_object import (BETA_INIT, CHOSEN_STD, DT, ETA, GAMMA, INNOVATION_STD, PRIOR_STD, SIGMA, V_INIT,
-                                   X0_TRUE, FilterHistory, G, ResamplingHealth, check_history)
+                                   X0_TRUE, FilterHistory, G, ResamplingHealth, check_history,
+                                   credibility_interval)
 from course.checks import check_array, check_close, check_pair, check_true, passed, require, validate
 
 # %% [markdown]
@@ -154,9 +154,9 @@ check_tracking_dynamics(tracking_dynamics)
 # are given, and returns `(x_true, b)`.
 #
 # Every result is measured against the truth, so it must be far more accurate than the radar. Pass
-# `rtol=1e-10, atol=1e-8` to `solve_ivp`: the altitude is then right to about 0.01 mm, where the default
-# `rtol=1e-3` is about 20 m off (below the radar's 500 m, but visible when we compare a filter with the truth). The
-# price is about 650 evaluations of $f$ instead of 75. <!-- claim: reentry-pf/solver-tolerances -->
+# `rtol=1e-10, atol=1e-8` to `solve_ivp`: from the lab's start the altitude is then right to under 0.01 mm, where
+# the default `rtol=1e-3` is about 20 m off. That is far below the radar's 500 m, but the visible checks compare your
+# truth with the shipped one to 1 m. The price is about 650 evaluations of $f$ instead of 75. <!-- claim: reentry-pf/solver-tolerances -->
 # (To see it yourself, in a cell of your own: solve with the defaults and with much tighter tolerances, then compare
 # the altitudes `.y[0]` and the numbers of evaluations `.nfev`.) The shipped `data` came from this computation,
 # from $x_0 = [61000\ \mathrm{m}, 3048\ \mathrm{m/s}, 19161]$; the visible checks compare your truth with it.
@@ -237,7 +237,7 @@ def initial_cloud(b0, N, rng):
     """Prior cloud x (3, N) around [b0, V_INIT, BETA_INIT] and equal weights w (N,)."""
     ### BEGIN SOLUTION
     mean = np.array([b0, V_INIT, BETA_INIT])
-    # x^(l) = [h_init, v_init, beta_init] + C^(1/2) w^(l),  w^(l) ~ N(0, I_3),  C^(1/2) = diag(PRIOR_STD)
+    # x^(l) = [h_init, v_init, beta_init] + C^(1/2) z^(l),  z^(l) ~ N(0, I_3),  C^(1/2) = diag(PRIOR_STD)
     x = mean[:, None] + PRIOR_STD[:, None] * rng.standard_normal((3, N))
     # w^(l) = 1 / N
     w = np.full(N, 1.0 / N)
@@ -325,8 +325,8 @@ check_initial_cloud(initial_cloud)
 # $$w^{(\ell)} = \exp\Big(-\frac{1}{2\sigma^2}\Big(\big|(x^{(\ell)}_\text{new})_1 - b_{j+1}\big|^2
 #   - \big|\hat x^{(k_\ell)}_1 - b_{j+1}\big|^2\Big)\Big).$$
 #
-# Unlike (b), (d) has no factor of the old weights $w^{(\ell)}$: the resampling in (c) has already used them, and every
-# copy starts again with an equal share.
+# Unlike (b), (d) has no factor of the parent's old weight $w^{(k_\ell)}$: the resampling in (c) has already used the
+# old weights, and every copy starts again with an equal share.
 #
 # > **Reading of the handout.** In (d) the handout writes $x_1^{(k_\ell)}$ for the second altitude. It means the
 # > *propagated parent candidate* $\hat x^{(k_\ell)}_1$ from (a), before the perturbation. (In (c) its index range
@@ -362,7 +362,7 @@ def pf_step(x, w, b_next, rng, *, innovation_std=INNOVATION_STD, info=None):
     cdf = np.cumsum(w_hat)
     cdf /= cdf[-1]
     k = np.searchsorted(cdf, np.sort(rng.random(N)), side="right")
-    # x_new(l) = x^(k_l) + D^(1/2) w(l),  w(l) ~ N(0, I_3),  D^(1/2) = diag(innovation_std)
+    # x_new(l) = x^(k_l) + D^(1/2) z(l),  z(l) ~ N(0, I_3),  D^(1/2) = diag(innovation_std)
     x_new = x_hat[:, k] + np.asarray(innovation_std)[:, None] * rng.standard_normal((3, N))
     # (d) log w(l) = -(|x_new_1(l) - b_{j+1}|^2 - |x^_1(k_l) - b_{j+1}|^2) / (2 sigma^2),
     #     with x^_1(k_l) the propagated parent before the innovation
@@ -506,78 +506,19 @@ check_pf_step(pf_step)
 # > every particle once, which is right only when the weights are equal: after resampling, but not after step (d),
 # > which leaves unequal weights. With weights, throw away the same *weight* at each end.
 #
-# Write `credibility_interval(samples, weights, p)` for one variable's values `samples` (N,), their weights (N,),
-# non-negative and not necessarily normalised, and $p$ in percent, a number or an array of numbers; return
-# `(lo, hi)` with the shape of `p`. `order = np.argsort(samples)` sorts, `weights[order]` carries the weights
-# along, and `np.searchsorted(F, a)` finds the first $i$ with $F_i \ge a$ for a whole array of orders $a$ at once
-# (clamp the index to $N - 1$).
+# `falling_object.credibility_interval(samples, weights, p)` computes this for you (it is imported by the set-up
+# cell as `credibility_interval`). It takes one variable's values `samples` (N,), their weights (N,), non-negative
+# and not necessarily normalised, and $p$ in percent, a number or an array of numbers; it returns `(lo, hi)` with
+# the shape of `p`. Its few lines, in `course/falling_object.py`, are worth reading: `np.argsort` sorts,
+# `weights[order]` carries the weights along, and `np.searchsorted(F, a)` finds the first $i$ with $F_i \ge a$ for
+# a whole array of orders $a$ at once. The cell below tries it on a case you can follow by hand.
 
-# %% nbgrader={"grade": false, "grade_id": "credibility_interval", "locked": false, "schema_version": 3, "solution": true, "task": false}
-def credibility_interval(samples, weights, p):
-    """The central p% interval (lo, hi) of weighted samples (N,); p a number or an array, in percent."""
-    ### BEGIN SOLUTION
-    order = np.argsort(samples)
-    s = samples[order]
-    # F_i = sum of the weights of the i smallest samples, normalised so that F_N = 1
-    cdf = np.cumsum(weights[order])
-    cdf /= cdf[-1]
-    # orders of the lower and upper quantiles: (1 -+ p/100) / 2
-    a_lo, a_hi = 0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200
-    # q(a) = s_i with the smallest i such that F_i >= a (clamped to the last sample)
-    last = s.shape[0] - 1
-    return s[np.minimum(np.searchsorted(cdf, a_lo), last)], s[np.minimum(np.searchsorted(cdf, a_hi), last)]
-    ### END SOLUTION
-
-# %% nbgrader={"grade": false, "grade_id": "check_credibility_interval", "locked": true, "schema_version": 3, "solution": false, "task": false}
-require(credibility_interval)
-# Visible checks. The samples 4, 1, 3, 2 sort to 1, 2, 3, 4. With equal weights the cumulative weights are 0.25, 0.5,
-# 0.75, 1, so the median (order 0.5) is 2.
-samples = np.array([4.0, 1.0, 3.0, 2.0])
-interval = check_pair(credibility_interval(samples, np.ones(4), 0), "credibility_interval", "lo", "hi")
-# lo and hi have the shape of p: one value per probability in p. So a number p gives two numbers, not arrays.
-for value, which in zip(interval, ("lo", "hi")):
-    check_array(value, f"{which} for the number p = 0", (),
-                "lo and hi have the shape of p, one value per probability in p: a number p gives a number, and an "
-                "array of 3 probabilities gives arrays of 3. Keep p's shape (np.asarray(p) does; np.atleast_1d(p) "
-                "or np.array([p]) adds an axis).")
-check_close(interval, [2.0, 2.0], "the weighted median (p = 0) of 4, 1, 3, 2 with equal weights",
-            "Sort, accumulate the weights in sorted order, normalise by the total, and take the first sample whose "
-            "cumulative weight reaches the order 0.5.")
-# The 50% interval of the same equal weights: its orders are (1 - 50/100) / 2 = 0.25 and (1 + 50/100) / 2 = 0.75, reached
-# first by 1 and by 3.
-check_close(credibility_interval(samples, np.ones(4), 50), [1.0, 3.0], "the 50% interval of 4, 1, 3, 2 with equal weights",
-            "p is in percent: the orders are (1 - p/100) / 2 and (1 + p/100) / 2, so 0.25 and 0.75 for p = 50.")
-# Weights 0.1, 0.1, 0.7, 0.1 on the samples 4, 1, 3, 2: in sorted order 1, 2, 3, 4 they are 0.1, 0.1, 0.7, 0.1 and
-# accumulate to 0.1, 0.2, 0.9, 1. The 50% interval (orders 0.25 and 0.75) is [3, 3]; the 90% interval (0.05, 0.95) is [1, 4].
-weights = np.array([0.1, 0.1, 0.7, 0.1])
-check_close(credibility_interval(samples, weights, 50), [3.0, 3.0], "the 50% interval of 4, 1, 3, 2 weighted 0.1, 0.1, 0.7, 0.1",
-            "Carry the weights along when you sort: weights[order] with order = np.argsort(samples).")
-check_close(credibility_interval(samples, weights, 90), [1.0, 4.0], "the 90% interval of the same weighted samples",
-            "The orders are (1 - p/100) / 2 and (1 + p/100) / 2, with p in percent.")
-# p may be an array: one interval per entry, in one call. Unnormalised weights give the same answer.
-lo, hi = check_pair(credibility_interval(samples, 10 * weights, np.array([0.0, 50.0, 90.0])), "credibility_interval",
-                    "lo", "hi")
-for value, which in ((lo, "lo"), (hi, "hi")):
-    check_array(value, f"{which} for p = [0, 50, 90]", (3,),
-                "lo and hi have the shape of p, one value per probability in p: here 3 of each.")
-check_close(np.stack([lo, hi]), [[3.0, 3.0, 1.0], [3.0, 3.0, 4.0]], "the intervals for p = [0, 50, 90] with weights x 10",
-            "Normalise the cumulative weights by their total, and let np.searchsorted find all the orders at once.")
-# Each weight belongs to its sample: with all the weight on the sample 3, listed first, every quantile is 3.
-check_close(credibility_interval(np.array([3.0, 1.0, 2.0]), np.array([1.0, 0.0, 0.0]), 50), [3.0, 3.0],
-            "the 50% interval of 3, 1, 2 weighted 1, 0, 0",
-            "Sort the weights with their samples: weights[order], with order = np.argsort(samples).")
-passed("credibility_interval")
-
-# %% nbgrader={"grade": true, "grade_id": "test_credibility_interval", "locked": true, "points": 2, "schema_version": 3, "solution": false, "task": false}
-# Hidden tests of credibility_interval (2 points): random samples with N from 1 to 5000, random weights (some
-# zero, some heavy, not normalised), and p as a number or an array.
-# Validate (and this cell) first checks that credibility_interval passes its visible checks; the points come only
-# from the hidden tests, which use the reference for every other blank.
-validate(credibility_interval)
-### BEGIN HIDDEN TESTS
-from solutions.reentry_pf.hidden_tests import check_credibility_interval
-check_credibility_interval(credibility_interval)
-### END HIDDEN TESTS
+# %% nbgrader={"grade": false, "grade_id": "credibility_example", "locked": true, "schema_version": 3, "solution": false, "task": false}
+# The samples 4, 1, 3, 2 with the weights 0.1, 0.1, 0.7, 0.1: in sorted order 1, 2, 3, 4 the weights are 0.1, 0.1,
+# 0.7, 0.1 and accumulate to 0.1, 0.2, 0.9, 1. The median (order 0.5) is 3, the 50% interval (orders 0.25 and 0.75)
+# is [3, 3], and the 90% interval (orders 0.05 and 0.95) is [1, 4].
+lo, hi = credibility_interval(np.array([4.0, 1.0, 3.0, 2.0]), np.array([0.1, 0.1, 0.7, 0.1]), np.array([0, 50, 90]))
+print("p = 0, 50, 90:  lo =", lo, " hi =", hi)
 
 # %% [markdown]
 # ## 6. The filter over half a minute of readings
@@ -633,7 +574,7 @@ def run_particle_filter(b, N, rng, *, step=None, innovation_std=INNOVATION_STD):
     ### END SOLUTION
 
 # %% nbgrader={"grade": false, "grade_id": "check_run_particle_filter", "locked": true, "schema_version": 3, "solution": false, "task": false}
-require(run_particle_filter, initial_cloud, pf_step, credibility_interval)
+require(run_particle_filter, initial_cloud, pf_step)
 # Visible checks on the first 21 readings (2 s) with N = 500.
 short = run_particle_filter(data.b[:21], 500, np.random.default_rng(3))
 check_history(short, n_times=21, n_particles=500)
@@ -657,6 +598,9 @@ x_first, w_first = initial_cloud(data.b[0], 500, rng)
 x_one, w_one = pf_step(x_first, w_first, data.b[1], rng)
 check_close(short.mean[:, 1], x_one @ w_one, "the mean at t_1",
             "Step j uses the reading b[j]; record the weighted mean sum_l w_l x_l (x @ w), not the plain mean.")
+check_close(short.ess[1], 1.0 / np.sum(w_one**2), "the ESS at t_1",
+            "history.ess[j] is 1 / sum w^2 of the weights the step returned: not info['ess'] (the fitness weights that "
+            "the step resampled with), and not the weights before the step.")
 # The keyword innovation_std reaches the step. The prior's 90% band of v is 2 x 1.645 x 200 = 658 m/s wide. With the
 # handout's noise, 100 m/s in every step, it is about 1200 m/s wide at t = 2 s; with a noise of 1 m/s per step it
 # stays under 700 m/s.
@@ -686,7 +630,7 @@ passed("run_particle_filter")
 
 # %% nbgrader={"grade": true, "grade_id": "test_run_particle_filter", "locked": true, "points": 2, "schema_version": 3, "solution": false, "task": false}
 # Hidden tests of run_particle_filter (2 points): random readings of 1 to 25 times, N = 50 to 1000, another
-# innovation_std, and the bootstrap step, with the reference initial_cloud, pf_step and credibility_interval, so
+# innovation_std, and the bootstrap step, with the reference initial_cloud and pf_step, so
 # that only your loop, summaries and diagnostics are graded.
 # Validate (and this cell) first checks that run_particle_filter passes its visible checks; the points come only
 # from the hidden tests, which use the reference for every other blank.
@@ -706,7 +650,7 @@ check_run_particle_filter(run_particle_filter)
 # %% nbgrader={"grade": false, "grade_id": "run_lab", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
 # (the kit's tests check that this cell prints the same on every run)
-require(run_particle_filter, initial_cloud, pf_step, credibility_interval)
+require(run_particle_filter, initial_cloud, pf_step)
 # the handout's setting: the auxiliary particle filter, N = 5000, artificial process noise (100 m, 100 m/s, 5)
 history = run_particle_filter(data.b, falling_object.N_PARTICLES, np.random.default_rng(falling_object.RUN_SEED))
 falling_object.print_report(data, history)
@@ -791,21 +735,29 @@ plt.show()
 # and at 30 s the 90% interval reaches below zero (upward motion) in every one of the 50 runs. <!-- claim: reentry-pf/handout-v-upward -->
 
 # %% [markdown]
+# The numbers of your own run, for the question: the width of its 90% band of $\beta$ against an exact posterior's
+# (2 $\times$ 1.645 $\times$ the yardstick) and the prior's, and its roots.
+
+# %% nbgrader={"grade": false, "grade_id": "beta_numbers", "locked": true, "schema_version": 3, "solution": false, "task": false}
+require(run_particle_filter, tracking_dynamics)
+falling_object.print_beta_band(data, history, yardstick)
+
+# %% [markdown]
 # **Question (2 points: 1 for (a), 1 for (b); a short paragraph each).** Read the $\beta$ panels and the figures
-# after them. (a) How does the 90% band of $\beta$ of the handout's setting compare with the yardstick at 30 s? Does
-# the gap say that the radar holds little information about $\beta$, or that the filter does not use it? Give one
-# reason. (b) What happens to the ancestry of the cloud (the roots) over the half minute, and what does that do to
-# the band of $\beta$? Explain with the resampling of step (c). Quote the numbers you use, from the figures or from
-# the text of this section (section 8 is not needed; a cell of your own may print values from `history`). Each
-# part's point needs the comparison and a reason for it; (a) and (b) may give different sides of the same story.
+# after them, and the table above. (a) How does the 90% band of $\beta$ of your run compare with the yardstick's at
+# 30 s? Does the gap say that the radar holds little information about $\beta$, or that the filter does not use it?
+# How do you know? (b) What happens to the ancestry of the cloud (the roots) over the half minute, and what does
+# that do to the band of $\beta$? Explain with the resampling of step (c). Quote the numbers you use, from the table,
+# the figures or the text of this section (section 8 is not needed). Each part's point needs the comparison and a
+# reason for it.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "beta_question", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
 # **Model answer.** (a) The readings carry a lot of information about $\beta$: the yardstick falls from the prior's
 # 1500 to about 200 by 30 s, <!-- claim: reentry-pf/yardstick-information --> most of it after 15 s, when the drag
 # becomes strong. <!-- claim: reentry-pf/information-arrives-late --> The handout's setting does not use it.
-# Its 90% band at 30 s is over 1.5 times the yardstick's width in every one of the 50 study runs, and 4 to 8 times
-# in the median run with the handout's noise: about 6 times with $N$ = 5000 and 5 times with $N$ = 2000. <!-- claim: reentry-pf/handout-band-far-from-yardstick -->
+# Its 90% band at 30 s is over 1.5 times the yardstick's width in every one of the 50 study runs, and in the median
+# run with the handout's noise about 6 times with $N$ = 5000 and 5 times with $N$ = 2000. <!-- claim: reentry-pf/handout-band-far-from-yardstick -->
 # With $N$ = 5000 the median band at 30 s is still about 85% of the prior's 90% band (4935; from 77% to 98% in the
 # study's batches of 10 runs), <!-- claim: reentry-pf/handout-band-near-prior -->
 # so the filter has learnt little about $\beta$. The gap means the filter throws information away, not that the
@@ -815,10 +767,12 @@ plt.show()
 # the 63% ($1 - 1/e$) that multinomial resampling keeps even when all weights are equal: <!-- claim: reentry-pf/parents-fraction -->
 # most of the loss is the resampling's own randomness, not the weights.
 # The losses compound. With equal weights, 300 resamplings leave about $2N/(n+2)$ = 33 of 5000 roots by chance alone, <!-- claim: reentry-pf/equal-weights-drift -->
-# and the handout's setting keeps fewer than 30 in every study run,
+# and the handout's setting keeps fewer than 30, below that baseline, in every study run,
 # more than a third of that baseline in the median run. <!-- claim: reentry-pf/roots-collapse --> All the $\beta$
 # values in the cloud then descend from those few, spread only by the artificial noise of 5 per step, so with
-# $N$ = 500 and 2000 the band says more about the ancestry than about the readings. With $N$ = 5000 the noise in $v$
+# $N$ = 500 and 2000 the band says more about the ancestry than about the readings. Even with $N$ = 5000 the band
+# narrows by chance before the readings hold any information about $\beta$: from 1 s to 13 s it is narrower than the
+# yardstick's in about half the study's runs or more. <!-- claim: reentry-pf/handout-band-narrow-early --> With $N$ = 5000 the noise in $v$
 # matters more: a `pf_step` that resamples systematically keeps several times more roots, yet its band of $\beta$ at
 # 30 s is still close to the prior's. <!-- claim: reentry-pf/systematic-still-wide --> With the handout's noise the median width at 30 s is much smaller
 # with $N$ = 500 (about 1600) than with 2000 or 5000 (about 3550 and 4190), in every batch of 10 study runs too.
@@ -832,14 +786,16 @@ plt.show()
 # would skip most steps. Systematic or residual resampling, which draw each parent close to $N w_l$ times, would also
 # lose less diversity per step.
 #
-# **Rubric (2 points).** 1 point for (a): the band is several times wider than the yardstick (or still close to
-# the prior's width at large $N$), and this means the filter loses information that the readings hold, not that the
-# radar says little about $\beta$, with one reason: the large noise in $v$ (the filter can explain the drag's
-# slowing as random kicks), or the resampling. 1 point for (b): the ancestry collapses to a few particles of $t_0$
-# (tens out of 5000), about as fast as resampling equal weights at every step would (the dashed baselines), so all
-# the $\beta$ values descend from a few and the band says more about that ancestry than about the readings. Saying
-# that the width then depends on $N$ and on the run (smaller $N$ gives narrower, over-confident bands), or that the
-# ESS after (d) does not show the collapse, is welcome but not required. A student whose `pf_step` resamples systematically sees more distinct
+# **Rubric (2 points).** 1 point for (a): the band is several times wider than the yardstick's at 30 s (from the
+# student's run or the study's), and the readings do hold the information (the yardstick falls to about 200, more
+# than 50 times the prior's information), so it is the filter that does not use it. Naming a cause (the large noise
+# in $v$, which lets the filter explain the drag's slowing as random kicks, or the resampling) is welcome but not
+# required. 1 point for (b): the roots fall to a few tens of the 5000 (near or below the dashed baseline): every
+# resampling copies some particles and drops others, so by 30 s all the $\beta$ values descend from a few particles
+# of $t_0$, spread only by the small noise in $\beta$, and the band says more about that ancestry than about the
+# readings. Either way the student's run shows it earns the point: a band that stays near the prior's width, or one
+# that narrows early, before the readings say anything about $\beta$. Saying that smaller $N$ gives narrower,
+# over-confident bands, or that the ESS after (d) does not show the collapse, is welcome but not required. A student whose `pf_step` resamples systematically sees more distinct
 # parents and roots than the dashed lines: full marks for (b) if they say so, say that systematic resampling loses less
 # diversity per step, and say what still limits the band (the noise in $v$, the small noise in $\beta$). A student who blames the weights instead of the resampling at every step,
 # but reads the figures correctly otherwise, loses no points. Naming a remedy (systematic or residual resampling,
@@ -910,7 +866,7 @@ plt.show()
 # %% nbgrader={"grade": false, "grade_id": "run_chosen", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
 # (the kit's tests check that this cell prints the same on every run)
-require(run_particle_filter, initial_cloud, pf_step, credibility_interval, tracking_dynamics)
+require(run_particle_filter, initial_cloud, pf_step, tracking_dynamics)
 # the tuned setting on the shipped readings: N = 2000, noise (10, 10, 50) (copy this cell to try your own)
 tuned = run_particle_filter(data.b, 2000, np.random.default_rng(falling_object.RUN_SEED), innovation_std=CHOSEN_STD)
 falling_object.print_report(data, tuned)

@@ -2,13 +2,12 @@
 ``solutions.reentry_pf.reference``, with every other blank bound to the reference. run_particle_filter is
 also run with another innovation_std and with the given bootstrap step.
 
-The deterministic blanks (tracking_dynamics, simulate_radar, initial_cloud, credibility_interval,
-run_particle_filter) are compared with the reference on random inputs of several sizes. Every case, and
-the seed of every generator a student's function is given, is drawn from ``cases.rng(stream)``, a
+The deterministic blanks (tracking_dynamics, simulate_radar, initial_cloud, run_particle_filter) are
+compared with the reference on random inputs of several sizes. Every case, and the seed of every generator a student's function is given, is drawn from ``cases.rng(stream)``, a
 stream of the submission seed (each check's stream is its old fixed seed), so that no two submissions
 see the same cases. Each case is labelled with the properties that set it apart
-(autograder/hidden_tests/case_kinds.py): one state or a cloud, one reading or several, zero weights, a scalar
-or an array of p, the step and innovation_std of a run.
+(autograder/hidden_tests/case_kinds.py): one state or a cloud, one reading or several, the step and
+innovation_std of a run.
 ``pf_step`` is stochastic, so its test is statistical (the second half of this module): weights
 normalised and following step (d), the diagnostics it reports in ``info`` (exact), resampling
 following the fitness weights (chi-square), the spread and centre of the artificial process noise
@@ -137,50 +136,12 @@ def check_initial_cloud(func: Callable) -> None:
                         show_expected=False)
 
 
-def credibility_cases() -> list[tuple[np.ndarray, np.ndarray, float | np.ndarray]]:
-    """(samples, weights, p) of the hidden test: N from 1 to 5000, weights from flat to a few heavy
-    ones, some exactly zero, and p single numbers or arrays, with p = 0 (the median) and p = 100
-    (orders 0 and 1, where zero weights at the ends make several samples reach the order at once), each
-    as a single number and within an array, and arrays without them."""
-    rng = cases.rng(4005)
-    found = []
-    for N, concentration in ((1, 1.0), (2, 1.0), (7, 0.3), (50, 1.0), (300, 0.05), (2000, 1.0), (5000, 5.0)):
-        samples = rng.normal(rng.uniform(-1e4, 1e4), rng.uniform(1.0, 1e3), N)
-        weights = rng.dirichlet(np.full(N, concentration)) if N > 1 else np.ones(1)
-        if N >= 50:
-            weights[rng.choice(N, N // 5, replace=False)] = 0.0  # particles with no weight left
-        weights = weights * rng.uniform(0.5, 2.0)  # not normalised: the function normalises
-        for p in (90.0, 50.0, float(rng.uniform(1.0, 99.0)), np.array([0.0, 50.0, 90.0]), np.array([100.0, 5.0]),
-                  0.0, 100.0, np.array([95.0, 25.0])):
-            found.append((samples, weights, p))
-    # eight equal weights: the cumulative weights land exactly on the orders 1/4, 1/2 and 3/4, where the
-    # text's F_i >= a and F_i > a part; every correct answer computes them exactly (acceptable_quantiles)
-    samples = rng.normal(0.0, 1e3, 8)
-    for p in (0.0, 50.0, np.array([0.0, 50.0])):
-        found.append((samples, np.full(8, 2.0), p))
-    return found
-
-
 def _exact(weights: np.ndarray, orders: np.ndarray) -> bool:
     """Whether every correct way of computing the cumulative weights and the orders is exact here:
     integer weights whose total is a power of two, and orders that are multiples of 1/1024."""
     total = float(np.sum(weights))
     return bool(np.all(weights == np.round(weights)) and total > 0 and total == 2.0 ** np.round(np.log2(total))
                 and total < 2.0**40 and np.all(np.mod(np.asarray(orders) * 1024, 1.0) == 0.0))
-
-
-def _credibility_kinds(samples: np.ndarray, weights: np.ndarray, p: float | np.ndarray) -> dict[str, str]:
-    """How a case's message names a credibility case: one sample, or several with or without zero weights;
-    p a number or an array; p = 0 or 100 among the p (orders 1/2, 0 and 1), or every p strictly between."""
-    N = samples.shape[0]
-    extreme = bool(np.any((np.asarray(p) == 0.0) | (np.asarray(p) == 100.0)))
-    return {
-        "samples": ("one sample" if N == 1 else "several samples with some zero weights" if np.any(weights == 0.0)
-                    else "equal weights (cumulative weights exactly on the orders)" if np.all(weights == weights[0])
-                    else "several samples without zero weights"),
-        "p": "an array of p" if np.ndim(p) else "a scalar p",
-        "order": "a p of 0 or 100" if extreme else "no p of 0 or 100",
-    }
 
 
 def acceptable_quantiles(samples: np.ndarray, weights: np.ndarray, orders: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
@@ -209,28 +170,6 @@ def acceptable_quantiles(samples: np.ndarray, weights: np.ndarray, orders: np.nd
     first = np.minimum(np.searchsorted(F, orders - tolerance), last)
     final = np.minimum(np.searchsorted(F, orders + tolerance), last)
     return s[first], s[final]
-
-
-@diagnosed
-def check_credibility_interval(func: Callable) -> None:
-    func = isolate(func, ref, BLANKS)
-    for samples, weights, p in credibility_cases():
-        N = samples.shape[0]
-        shape = np.shape(p)
-        label = f"credibility_interval(samples, weights, {np.round(p, 2).tolist()}) for {N} weighted samples"
-        with case(**_credibility_kinds(samples, weights, p)):
-            lo, hi = check_pair(func(samples.copy(), weights.copy(), np.copy(p) if shape else p), label, "lo", "hi")
-            got = np.stack([check_array(lo, f"lo of {label}", shape, "lo and hi have the shape of p."),
-                            check_array(hi, f"hi of {label}", shape, "lo and hi have the shape of p.")])
-            orders = np.stack([0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200])
-            smallest, largest = acceptable_quantiles(samples, weights, orders)
-            if not (np.all(np.isin(got, samples)) and np.all((smallest <= got) & (got <= largest))):
-                raise AssertionError(
-                    f"{label} is not right. Sort the samples and carry their weights along (weights[order]); the "
-                    "quantile of order a is the first sorted sample whose normalised cumulative weight reaches a; the "
-                    "orders are (1 -+ p/100) / 2. (Where rounding decides which sample reaches an order first, every "
-                    "sample it could pick is accepted.)"
-                )
 
 
 RUN_HINTS = {
@@ -290,9 +229,9 @@ QUANTILE_FIELDS = {"median": (0, 0), "lo50": (0, 1), "hi50": (1, 1), "lo90": (0,
 def _run_with_quantile_ranges(b: np.ndarray, N: int, rng: np.random.Generator,
                               options: dict) -> tuple[FilterHistory, dict[str, np.ndarray], dict[str, np.ndarray]]:
     """The reference run, and for each quantile field of its history the smallest and the largest value
-    that a correct credibility_interval may give there (acceptable_quantiles): a student's run may use
-    their own credibility_interval (one call per p is not the reference's call, so the grader leaves it
-    to theirs), which may break a tie within rounding otherwise."""
+    that a correct weighted quantile may give there (acceptable_quantiles): a student's run may compute
+    the quantiles its own way rather than with the given credibility_interval (issue 33 made it given
+    code; it was a blank), which may break a tie within rounding otherwise."""
     ranges: list[tuple[np.ndarray, np.ndarray]] = []
 
     def recording(samples, weights, p):
@@ -629,7 +568,7 @@ def check_innovation(pf_step: PfStep, innovation_std: np.ndarray | None = None) 
     if distinct < N:
         raise AssertionError(
             f"Only {distinct} of the {N} new particles are different: some are exact copies. Add a fresh "
-            "innovation D^(1/2) w to each particle after resampling, not before."
+            "innovation D^(1/2) z to each particle after resampling, not before."
         )
     z = (x_new - case.x_hat[:, _parent_family(case, x_new)]) / std[:, None]
     lower, upper, z_max = innovation_bounds(N - 1)
@@ -640,7 +579,7 @@ def check_innovation(pf_step: PfStep, innovation_std: np.ndarray | None = None) 
             spread = math.sqrt(scatter / (N - 1)) * std[i]
             raise AssertionError(
                 f"The innovation in {name} has standard deviation about {spread:.4g}; it should be "
-                f"{std[i]:g} (the innovation is D^(1/2) w with D^(1/2) = diag(innovation_std), here diag({stds}), "
+                f"{std[i]:g} (the innovation is D^(1/2) z with D^(1/2) = diag(innovation_std), here diag({stds}), "
                 "w ~ N(0, I_3), one fresh draw per new particle; use the keyword argument innovation_std)."
             )
         centre = float(np.sum(z[i]) / np.sqrt(N))

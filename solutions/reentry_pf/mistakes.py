@@ -2,6 +2,7 @@
 
 from autograder.catalogues.mistakes import Mistake
 from autograder.hidden_tests.isolate import CallRuleBroken
+from course.falling_object import InfoNotFilled, RecordedOutOfOrder
 
 MISTAKES = (
     # tracking_dynamics
@@ -69,7 +70,7 @@ MISTAKES = (
     Mistake("pf_step", "no-log-weights", "exp(log w^) without subtracting the largest: underflows to 0/0 for a distant reading",
             "w_hat = np.exp(log_w_hat - np.max(log_w_hat))", "w_hat = np.exp(log_w_hat)",
             hint="Your pf_step behaves as if it exponentiated the log-weights without subtracting the largest first, which underflows for a distant reading."),
-    Mistake("pf_step", "variance-innovation", "the innovation D w instead of D^(1/2) w",
+    Mistake("pf_step", "variance-innovation", "the innovation D z instead of D^(1/2) z",
             "np.asarray(innovation_std)[:, None] * rng", "np.asarray(innovation_std)[:, None] ** 2 * rng",
             hint="Your pf_step behaves as if the innovation were scaled by the variances instead of the standard deviations innovation_std."),
     Mistake("pf_step", "ignores-innovation-std", "the handout's INNOVATION_STD used whatever innovation_std the caller passes",
@@ -78,28 +79,6 @@ MISTAKES = (
     Mistake("pf_step", "ess-of-old-weights", "info['ess'] from the old weights w, not the fitness weights the resampling uses",
             'info["ess"] = 1.0 / np.sum(w_hat**2)', 'info["ess"] = 1.0 / np.sum(w**2)',
             hint="Your pf_step behaves as if info['ess'] came from the old weights w instead of the fitness weights that the resampling uses."),
-    # credibility_interval
-    Mistake("credibility_interval", "strictly-above", "takes the first sample whose cumulative weight exceeds the order strictly",
-            "return s[np.minimum(np.searchsorted(cdf, a_lo), last)], s[np.minimum(np.searchsorted(cdf, a_hi), last)]",
-            "return (s[np.minimum(np.searchsorted(cdf, a_lo, side='right'), last)],\n"
-            "            s[np.minimum(np.searchsorted(cdf, a_hi, side='right'), last)])",
-            hint="Your credibility_interval behaves as if it took the first sorted sample whose cumulative weight "
-                 "exceeds the order (F_i > a, searchsorted's side='right'): the quantile of order a is the first whose "
-                 "cumulative weight reaches it, F_i >= a, which differs where a cumulative weight is exactly a."),
-    Mistake("credibility_interval", "weights-not-sorted", "the samples sorted but their weights left in the old order",
-            "cdf = np.cumsum(weights[order])", "cdf = np.cumsum(weights)",
-            hint="Your credibility_interval behaves as if the samples were sorted but their weights left in the old order."),
-    Mistake("credibility_interval", "unweighted", "the handout's rule for equal weights: every sample counted once, whatever its weight",
-            "cdf = np.cumsum(weights[order])", "cdf = np.cumsum(np.ones_like(s))",
-            hint="Your credibility_interval behaves as if every sample counted once, whatever its weight."),
-    Mistake("credibility_interval", "percent-as-fraction", "p taken as a fraction: the tails (1 -+ p)/2 instead of (1 -+ p/100)/2",
-            "a_lo, a_hi = 0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200",
-            "a_lo, a_hi = 0.5 - np.asarray(p) / 2, 0.5 + np.asarray(p) / 2",
-            hint="Your credibility_interval behaves as if p were a fraction: it is a percentage, so the tails are (1 -+ p/100)/2."),
-    Mistake("credibility_interval", "one-tailed", "the quantiles of orders 1 - p/100 and p/100: the tails not split in two",
-            "a_lo, a_hi = 0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200",
-            "a_lo, a_hi = 1 - np.asarray(p) / 100, np.asarray(p) / 100",
-            hint="Your credibility_interval behaves as if it took the quantiles of orders 1 - p/100 and p/100: split the tails in two."),
     # run_particle_filter
     Mistake("run_particle_filter", "unweighted-mean", "the plain mean of the particles instead of the weighted mean",
             "history.mean[:, j] = x @ w", "history.mean[:, j] = np.mean(x, axis=1)",
@@ -107,16 +86,20 @@ MISTAKES = (
     Mistake("run_particle_filter", "stale-reading", "step j assimilates b_{j-1}: the readings one step late",
             "x, w = step(x, w, b[j], rng", "x, w = step(x, w, b[j - 1], rng",
             hint="Your run_particle_filter behaves as if step j assimilated the previous reading b_{j-1}: the readings arrive one step late."),
-    # Issue 33: the resampling's books are kept by the given ResamplingHealth; made afresh at every step, it counts
-    # the latest parents as the roots.
+    # Issue 33: the resampling's books are kept by the given ResamplingHealth. Made afresh at every step it would count
+    # the latest parents as the roots; it refuses, and it refuses a dict that no step filled. A fairness review: a call
+    # before the step, a step called without info=info and a new dict given to the step all read an unfilled dict, so
+    # the one catalogued entry for them names both fixes.
     Mistake("run_particle_filter", "health-made-every-step", "a new ResamplingHealth at every t_j: the roots counted as the latest parents",
             "        health.record(history, j, info)", "        ResamplingHealth(N).record(history, j, info)",
-            hint="Your run_particle_filter behaves as if the roots were the latest parents: make one ResamplingHealth before "
+            raises=RecordedOutOfOrder,
+            hint="Your run_particle_filter behaves as if it made a new ResamplingHealth at every step: make one before "
                  "the loop, so that it follows each particle's ancestry back to t_0."),
-    Mistake("run_particle_filter", "health-before-step", "health.record called before the step to t_j, with the dict of no step yet",
-            "        if j > 0:\n", "        health.record(history, j, info)\n        if j > 0:\n", raises=ValueError,
-            hint="Your run_particle_filter behaves as if it recorded the resampling before the step: call "
-                 "health.record(history, j, info) after the step to t_j."),
+    Mistake("run_particle_filter", "health-reads-unfilled-dict", "the step called without info=info (or health.record called before the step): health.record reads a dict that no step filled",
+            "x, w = step(x, w, b[j], rng, innovation_std=innovation_std, info=info)",
+            "x, w = step(x, w, b[j], rng, innovation_std=innovation_std)", raises=InfoNotFilled,
+            hint="Your run_particle_filter behaves as if health.record read a dict that no step had filled: pass the "
+                 "same dict to the step as info=info, and call health.record(history, j, info) after the step to t_j."),
     Mistake("run_particle_filter", "ignores-step", "the step argument ignored: always the auxiliary pf_step",
             "step = pf_step if step is None else step", "step = pf_step",
             hint="Your run_particle_filter behaves as if it ignored the step argument and always used pf_step."),
@@ -125,6 +108,11 @@ MISTAKES = (
             "x, w = step(x, w, b[j], rng, innovation_std=innovation_std, info=info)", "x, w = step(x, w, b[j], rng, info=info)",
             hint="Your run_particle_filter behaves as if it did not pass innovation_std on to the step, so every run used the "
                  "step's default, the handout's noise: call step(..., innovation_std=innovation_std, info=info)."),
+    # A fairness review: history.ess taken from the step's info (the fitness weights) passed every visible check.
+    Mistake("run_particle_filter", "ess-from-info", "history.ess from info['ess'], the ESS of the fitness weights, not of the weights the step returned",
+            "history.ess[j] = 1.0 / np.sum(w**2)", 'history.ess[j] = info.get("ess", float(N))',
+            hint="Your run_particle_filter behaves as if history.ess were info['ess'], the ESS of the weights the step "
+                 "resampled with: record 1 / sum w^2 of the weights the step returned."),
     Mistake("run_particle_filter", "ess-of-sum", "ESS as 1 / (sum w)^2, which is always 1",
             "1.0 / np.sum(w**2)", "1.0 / np.sum(w) ** 2",
             hint="Your run_particle_filter behaves as if the ESS were 1 / (sum w)^2, which is always 1: square each weight before summing."),

@@ -1,8 +1,6 @@
 """Mutants of reentry-pf's reference that compute the same answer (autograder/authoring/mutants.py):
 each id with the reason a reviewer can check. Every other mutant must fail its blank's hidden test."""
 
-_NEVER_CLAMPED = ("the clamp never acts: the cumulative weights end at exactly 1 (divided by their last entry) and "
-                  "every order is at most 1, so searchsorted never returns N")
 _D_IN_RANGE = ("for readings up to tens of sigma from the cloud, the text's far case, the exponent of (d) stays far "
                "inside exp's range, so the shift by the largest log-weight cancels in the normalisation; the text "
                "asks for the shift in (b), and (d) exponentiated as written is a correct answer (the alternative "
@@ -22,8 +20,4 @@ EQUIVALENT: dict[tuple[str, str], str] = {
                                    "have the law the text asks for",
     ("pf_step", "operator@41:19"): _D_IN_RANGE,
     ("pf_step", "drop-term@41:19/right"): _D_IN_RANGE,
-    ("credibility_interval", "operator@17:11"): _NEVER_CLAMPED,
-    ("credibility_interval", "drop-term@17:11/right"): _NEVER_CLAMPED,
-    ("credibility_interval", "index@17:11/minus-one"): "s is 1-D: s.shape[-1] is s.shape[0]",
-    ("credibility_interval", "constant@17:24/zero"): _NEVER_CLAMPED,
 }

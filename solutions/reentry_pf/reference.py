@@ -31,6 +31,7 @@ from course.falling_object import (
     FilterHistory,
     G,
     ResamplingHealth,
+    credibility_interval,
 )
 
 DATA_SEED = 20191205
@@ -77,7 +78,7 @@ def simulate_radar(
 def initial_cloud(b0: float, N: int, rng: np.random.Generator) -> tuple[np.ndarray, np.ndarray]:
     """The prior particle cloud x (3, N) around [b0, v_init, beta_init], and equal weights w (N,)."""
     mean = np.array([b0, V_INIT, BETA_INIT])
-    # x^(l) = [h_init, v_init, beta_init] + C^(1/2) w^(l),  w^(l) ~ N(0, I_3),  C^(1/2) = diag(PRIOR_STD)
+    # x^(l) = [h_init, v_init, beta_init] + C^(1/2) z^(l),  z^(l) ~ N(0, I_3),  C^(1/2) = diag(PRIOR_STD)
     x = mean[:, None] + PRIOR_STD[:, None] * rng.standard_normal((3, N))
     # w^(l) = 1 / N
     w = np.full(N, 1.0 / N)
@@ -119,7 +120,7 @@ def pf_step(
     cdf = np.cumsum(w_hat)
     cdf /= cdf[-1]
     k = np.searchsorted(cdf, np.sort(rng.random(N)), side="right")
-    # x_new(l) = x^(k_l) + D^(1/2) w(l),  w(l) ~ N(0, I_3),  D^(1/2) = diag(innovation_std)
+    # x_new(l) = x^(k_l) + D^(1/2) z(l),  z(l) ~ N(0, I_3),  D^(1/2) = diag(innovation_std)
     x_new = x_hat[:, k] + np.asarray(innovation_std)[:, None] * rng.standard_normal((3, N))
     # (d) log w(l) = -(|x_new_1(l) - b_{j+1}|^2 - |x^_1(k_l) - b_{j+1}|^2) / (2 sigma^2),
     #     with x^_1(k_l) the propagated parent before the innovation
@@ -131,27 +132,6 @@ def pf_step(
         info["ess"] = 1.0 / np.sum(w_hat**2)
         info["parents"] = k
     return x_new, w_new / np.sum(w_new)
-
-
-def credibility_interval(samples: np.ndarray, weights: np.ndarray, p: float | np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """The central p% credibility interval [lo, hi] of weighted samples, p in percent.
-
-    samples (N,) and weights (N,) (non-negative, not all zero) describe one variable of the
-    cloud; p is a number or an array of numbers in [0, 100], and lo, hi have its shape. The
-    interval runs between the weighted quantiles of orders (1 - p/100)/2 and (1 + p/100)/2,
-    where the quantile of order a is the smallest sample whose cumulative weight, in sorted
-    order, reaches a. p = 0 gives the weighted median twice.
-    """
-    order = np.argsort(samples)
-    s = samples[order]
-    # F_i = sum of the weights of the i smallest samples, normalised so that F_N = 1
-    cdf = np.cumsum(weights[order])
-    cdf /= cdf[-1]
-    # orders of the lower and upper quantiles: (1 -+ p/100) / 2
-    a_lo, a_hi = 0.5 - np.asarray(p) / 200, 0.5 + np.asarray(p) / 200
-    # q(a) = s_i with the smallest i such that F_i >= a (clamped to the last sample)
-    last = s.shape[0] - 1
-    return s[np.minimum(np.searchsorted(cdf, a_lo), last)], s[np.minimum(np.searchsorted(cdf, a_hi), last)]
 
 
 def run_particle_filter(

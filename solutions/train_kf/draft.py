@@ -133,8 +133,8 @@ print("belief at minute 0: x0 =", x0, " B0 = diag", np.diag(B0))
 # $2M(\vec{x} - \vec{a})$. Set the gradient of $J$ to zero. To make $\vec{x}^0 - \vec{x}^f$ appear, add and
 # subtract $R^{-1}\vec{x}^f$. Last, write $(B^{-1} + R^{-1})^{-1} R^{-1}$ as one inverse with the rule
 # $(XY)^{-1} = Y^{-1}X^{-1}$ (read $R^{-1}$ as the inverse of $R$: the product is $[R(B^{-1} + R^{-1})]^{-1}$), and
-# take $B^{-1}$ out of the sum inside it as a factor on the right (write $I = BB^{-1}$). $J$ is a convex quadratic,
-# so its stationary point is its minimum: you need not prove that.
+# take $B^{-1}$ out of the sum inside it as a factor on the right (write $I = BB^{-1}$). $J$ is a strictly convex
+# quadratic, so its one stationary point is its minimum: you need not prove that.
 
 # %% [markdown] nbgrader={"grade": true, "grade_id": "derivation_1", "locked": false, "points": 2, "schema_version": 3, "solution": true, "task": false}
 # ### BEGIN SOLUTION
@@ -463,8 +463,8 @@ check_kupdate(kupdate)
 # zero and are independent. The analysis error is
 # $\vec{x}^a - \vec{x} = (I - KH)(\vec{x}^f - \vec{x}) + K(\vec{y}^0 - H\vec{x})$, and $\mathrm{Cov}(M\vec{e}) =
 # M\,\mathrm{Cov}(\vec{e})\,M^T$ gives its covariance $(I - KH)B(I - KH)^T + KRK^T$ (the *Joseph form*). By (a),
-# $I - KH = PB^{-1}$, and $K = PH^TR^{-1}$, so it is
-# $PB^{-1}BB^{-1}P + PH^TR^{-1}RR^{-1}HP = P(B^{-1} + H^TR^{-1}H)P = P$. (Another route: with Gaussian errors, $J$
+# $I - KH = PB^{-1}$, and $K = PH^TR^{-1}$; as $B$, $R$ and $P$ are symmetric, $(I - KH)^T = B^{-1}P$ and
+# $K^T = R^{-1}HP$, so it is $PB^{-1}BB^{-1}P + PH^TR^{-1}RR^{-1}HP = P(B^{-1} + H^TR^{-1}H)P = P$. (Another route: with Gaussian errors, $J$
 # is $-2\log$ of the posterior density up to a constant, and its Hessian $2P^{-1}$ says that the posterior is
 # Gaussian with covariance $P$.)
 
@@ -473,9 +473,10 @@ check_kupdate(kupdate)
 # **Model answer.** (a) Write $P = (B^{-1} + H^T R^{-1} H)^{-1}$, so that $K = P H^T R^{-1}$. Then
 # $(I - KH)B = B - P H^T R^{-1} H B = P\left[(B^{-1} + H^T R^{-1} H)B - H^T R^{-1} H B\right] = P\,[I] = P$.
 #
-# **Rubric (1 point).** The algebra from $K$ of derivation 2 to $(I - KH)B = P$, with the common factor $P$
-# taken out on the left (the Woodbury identity stated and applied correctly also earns it). Nothing is needed for
-# (b), which the text works.
+# **Rubric (1 point).** Any correct derivation of $(I - KH)B = P$, from either form of $K$: factoring $P$ out on the
+# left (the hint), the Woodbury identity (the matrix inversion lemma) applied to derivation 3's $K$, or checking that
+# $P^{-1}(I - KH)B = I$ or $(I - KH)BP^{-1} = I$. Citing (b)'s Joseph-form
+# computation does not earn it, as (b) uses (a). Nothing is needed for (b), which the text works.
 # ### END SOLUTION
 
 # %% [markdown]
