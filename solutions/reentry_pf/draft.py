@@ -35,9 +35,9 @@
 # | 2. The truth and the radar | `simulate_radar` | 2 | 20 min |
 # | 3. The prior cloud | `initial_cloud` | 1 | 10 min |
 # | 4. One step of the particle filter | `pf_step` | 3 | 70 min |
-# | 6. The filter over half a minute | `run_particle_filter` | 2 | 25 min |
-# | 7. Show and tell, and a yardstick | the question on $\beta$ | 2 | 35 min |
-# | **all** | 5 functions, 1 written answer | **11** | **about 3 h** |
+# | 6. The filter over half a minute | `run_particle_filter` | 2 | 30 min |
+# | 7. Show and tell, and a yardstick | the question on $\beta$ | 2 | 45 min |
+# | **all** | 5 functions, 1 written answer | **11** | **about 3 h 10 min** |
 #
 # Add about 15 minutes to read this introduction, and 5 for section 5, which has no blank.
 #
@@ -454,6 +454,17 @@ check_close(info.get("ess", np.nan) / 20_000, np.sqrt(3) / 2 * np.exp(-1 / 6),
 check_close(x_new[0] @ w_new, 59_450.0, "the weighted mean altitude of the new cloud",
             "(b) weighs the propagated candidates x^_1 = x_1 - dt v (not the old altitudes), and (d) divides out the "
             "parent's fitness: w = exp(-(|x_new_1 - b|^2 - |x^_1(k_l) - b|^2) / (2 sigma^2)).", rtol=0.0, atol=30.0)
+# The weights of (d), exactly: from the new cloud, the parents k_l the step reported in info and the propagated
+# candidates x^ = x + dt f(x), each new weight is exp(-(|x_new_1 - b|^2 - |x^_1(k_l) - b|^2) / (2 sigma^2)), normalised.
+# (A student trial: a (d) with the wrong sign, or no (d), moved the mean above by only about 5 m.)
+x_hat_e = x_e + DT * tracking_dynamics(0.0, x_e)
+k_e = np.asarray(info.get("parents", np.zeros(20_000, dtype=int)))
+log_d = -((x_new[0] - 59_200.0) ** 2 - (x_hat_e[0, k_e] - 59_200.0) ** 2) / (2 * SIGMA**2)
+check_close(w_new, np.exp(log_d - log_d.max()) / np.sum(np.exp(log_d - log_d.max())), "the weights of step (d)",
+            "(d) weighs each new particle by its own misfit minus its parent candidate's: w = exp(-(|x_new_1 - b|^2 - "
+            "|x^_1(k_l) - b|^2) / (2 sigma^2)), normalised, with x^ the propagated candidates of (a) and k_l the parents "
+            "you drew (info['parents']); a minus sign in front, and no old weight.", rtol=1e-6, atol=1e-15,
+            show_expected=False)
 # Visible check 6: unequal old weights. Every particle has the same state except beta: 10000 have beta = 20000 and an
 # old weight 0.9/10000 each, 10000 have beta = 30000 and 0.1/10000. (b) makes the fitness weights proportional to the
 # old weights here, so about 90% of the new particles copy a beta = 20000 particle. (d) then re-weighs each new
@@ -662,14 +673,14 @@ falling_object.print_report(data, history)
 #
 # $$J_j = C^{-1} + \sum_{i=1}^{j} \frac{s_i s_i^T}{\sigma^2}, \qquad \text{yardstick}_j = \sqrt{(J_j^{-1})_{33}}.$$
 #
-# We compute $J_j$ along the true trajectory. The yardstick is then the **posterior standard deviation of $\beta$
+# We compute $J_j$ along the true trajectory; it uses the model and the noise level $\sigma$, not the values of the
+# readings. The yardstick is then the **posterior standard deviation of $\beta$
 # for the model linearised at the truth**: about the spread that an exact posterior would have here (not a floor
 # that no filter can beat). `falling_object.beta_linearised_sd` computes it with your `tracking_dynamics`.
 
 # %% nbgrader={"grade": false, "grade_id": "crb", "locked": true, "schema_version": 3, "solution": false, "task": false}
 # NBVAL_CHECK_OUTPUT
 # (the kit's tests check that this cell prints the same on every run)
-# (The cell's name "crb" is older than the word "yardstick": the yardstick is not a Cramer-Rao bound.)
 require(tracking_dynamics)
 yardstick = falling_object.beta_linearised_sd(tracking_dynamics, X0_TRUE, data.t)
 for t_j in (0, 10, 15, 20, 25, 30):
@@ -746,8 +757,10 @@ falling_object.print_beta_band(data, history, yardstick)
 # **Question (2 points: 1 for (a), 1 for (b); a short paragraph each).** Read the $\beta$ panels and the figures
 # after them, and the table above. (a) How does the 90% band of $\beta$ of your run compare with the yardstick's at
 # 30 s? Does the gap say that the radar holds little information about $\beta$, or that the filter does not use it?
-# How do you know? (b) What happens to the ancestry of the cloud (the roots) over the half minute, and what does
-# that do to the band of $\beta$? Explain with the resampling of step (c). Quote the numbers you use, from the table,
+# How do you know? (The numbers are the evidence; a mechanism is welcome but not required.) (b) What happens to the
+# ancestry of the cloud (the roots) over the half minute, and what does that do to the band of $\beta$? Explain with
+# the resampling of step (c). (Each particle keeps about the $\beta$ of its root, as the noise in $\beta$ is small: a
+# band that stays near the prior's width and one that narrows too early are both possible.) Quote the numbers you use, from the table,
 # the figures or the text of this section (section 8 is not needed). Each part's point needs the comparison and a
 # reason for it.
 

@@ -67,6 +67,16 @@ MISTAKES = (
     Mistake("pf_step", "old-weights-twice", "(d) multiplied by the parents' old weights w[k]: the old weights counted twice",
             "w_new = np.exp(log_w - np.max(log_w))", "w_new = w[k] * np.exp(log_w - np.max(log_w))",
             hint="Your pf_step behaves as if (d) multiplied by the old weights again: (b) and the resampling used them already."),
+    # A student trial (issue 33): a (d) with the wrong sign, or no (d) at all, passed every visible check (the
+    # weighted mean of check 5 moves by about 5 m); an exact check of (d)'s weights now fails both.
+    Mistake("pf_step", "d-sign-flipped", "(d) without its minus sign: particles that the perturbation moved away from the reading gain weight",
+            "log_w = -((x_new[0] - b_next) ** 2", "log_w = ((x_new[0] - b_next) ** 2",
+            hint="Your pf_step behaves as if the exponent of (d) had lost its minus sign: a particle that moved away "
+                 "from the reading should lose weight."),
+    Mistake("pf_step", "no-reweigh", "step (d) left out: equal weights after resampling",
+            "w_new = np.exp(log_w - np.max(log_w))", "w_new = np.ones(N)",
+            hint="Your pf_step behaves as if it left out step (d) and returned equal weights: the perturbation moved "
+                 "each particle away from its candidate, and (d) corrects for it."),
     Mistake("pf_step", "no-log-weights", "exp(log w^) without subtracting the largest: underflows to 0/0 for a distant reading",
             "w_hat = np.exp(log_w_hat - np.max(log_w_hat))", "w_hat = np.exp(log_w_hat)",
             hint="Your pf_step behaves as if it exponentiated the log-weights without subtracting the largest first, which underflows for a distant reading."),
