@@ -600,7 +600,8 @@ def check_history(history: object, n_times: int, n_particles: int) -> None:
         if np.any(value < 1 - 1e-9) or np.any(value > n_particles * (1 + 1e-9)):
             raise AssertionError(
                 f"history.{name} should lie between 1 and N = {n_particles}; it ranges from {np.min(value):.3g} to "
-                f"{np.max(value):.3g}. ESS = 1 / sum_l w_l^2 with normalised weights; parents and roots count distinct indices."
+                f"{np.max(value):.3g}. ESS = 1 / sum_l w_l^2 with normalised weights; parents and roots count distinct indices. "
+                "(If that is what you record, check that initial_cloud and the step return weights that sum to 1.)"
             )
     if np.any(np.diff(history.roots) > 0):
         raise AssertionError(

@@ -199,7 +199,7 @@ def check_run_particle_filter(func: Callable) -> None:
         t = DT * np.arange(n_times)
         b = rng.uniform(55_000.0, 65_000.0) - rng.uniform(2_500.0, 3_500.0) * t + SIGMA * rng.standard_normal(n_times)
         seed = int(rng.integers(2**63))
-        label = f"{n_times} random readings, N = {N}" + "".join(f", {key}={'bootstrap_step' if key == 'step' else value}"
+        label = f"{n_times} random reading{'s' if n_times != 1 else ''}, N = {N}" + "".join(f", {key}={'bootstrap_step' if key == 'step' else value}"
                                                                  for key, value in options.items())
         with case(readings="a single reading" if n_times == 1 else "several readings",
                   step="the bootstrap step" if "step" in options else "pf_step",
@@ -567,8 +567,9 @@ def check_innovation(pf_step: PfStep, innovation_std: np.ndarray | None = None) 
     distinct = np.unique(x_new, axis=1).shape[1]
     if distinct < N:
         raise AssertionError(
-            f"Only {distinct} of the {N} new particles are different: some are exact copies. Add a fresh "
-            "innovation D^(1/2) z to each particle after resampling, not before."
+            f"Only {distinct} of the {N} new particles are different: some are exact copies. After resampling, give "
+            "each new particle its own draw of the innovation D^(1/2) z: one fresh draw per particle, "
+            "rng.standard_normal((3, N)), not one for all and not before resampling."
         )
     z = (x_new - case.x_hat[:, _parent_family(case, x_new)]) / std[:, None]
     lower, upper, z_max = innovation_bounds(N - 1)
@@ -580,7 +581,7 @@ def check_innovation(pf_step: PfStep, innovation_std: np.ndarray | None = None) 
             raise AssertionError(
                 f"The innovation in {name} has standard deviation about {spread:.4g}; it should be "
                 f"{std[i]:g} (the innovation is D^(1/2) z with D^(1/2) = diag(innovation_std), here diag({stds}), "
-                "w ~ N(0, I_3), one fresh draw per new particle; use the keyword argument innovation_std)."
+                "z ~ N(0, I_3), one fresh draw per new particle; use the keyword argument innovation_std)."
             )
         centre = float(np.sum(z[i]) / np.sqrt(N))
         if abs(centre) > z_max:
