@@ -26,7 +26,7 @@
 # uncertain turn rate. The particle filter uses thousands of random points instead.
 #
 # **What you will do**
-# 1. Derive the Kalman update twice: by Bayes' rule, and as the minimum-variance linear estimator.
+# 1. Derive the Kalman update as the minimum-variance linear estimator (its derivation by Bayes' rule is worked).
 # 2. Build three point sets (cubature, unscented, CUT4) and measure how many moments each gets right.
 # 3. Write one filter for every point set, an EKF update and a bootstrap particle filter step.
 # 4. Compare all seven filters on the aircraft: a few runs live, and 400 runs computed for you.
@@ -35,11 +35,11 @@
 #
 # | part | what you write | points | about |
 # |---|---|---|---|
-# | 1. The Kalman update, twice | two derivations | 6 | 45 min |
+# | 1. The Kalman update, twice | derivation 2 (derivation 1 is worked) | 3 | 30 min |
 # | 2, 3. Point sets and their moments | `cubature_points`, `unscented_points`, `cut4_points`, `moment_error`, Question 1 | 8 | 50 min |
 # | 5–7. The filters | `sigma_point_predict`, `sigma_point_update`, `ekf_update`, `bootstrap_pf_step` | 10 | 1 h 10 min |
 # | 8. Seven filters on the turning aircraft | Question 2 (three parts, a point each) | 3 | 45 min |
-# | **all** | 8 functions, 4 written answers | **27** | **about 3½ h** |
+# | **all** | 8 functions, 3 written answers | **24** | **about 3 h 15 min** |
 #
 # Section 4 (the aircraft and the radar) has nothing to write: read it before section 5. Section 9,
 # "Going further", is optional and not graded.
@@ -85,16 +85,10 @@ from course.checks import check_array, check_close, check_pair, check_symmetric,
 # Gaussian, with $\hat x^- = F \hat x_{k|k}$ and $P^- = F P_{k|k} F^T + Q$. The lecture then reaches the same
 # measurement update by two routes.
 #
-# **Derivation 1 (Bayes' rule).** Show that the posterior
+# **Derivation 1 (Bayes' rule; worked for you, not graded).** The posterior
 # $p(x \mid Y_{k+1}) \propto N(y; Hx, R)\, N(x; \hat x^-, P^-)$ is Gaussian with mean
 # $\hat x^+ = \hat x^- + K(y - H\hat x^-)$ and covariance $P^+ = P^- - K H P^-$, where
-# $K = P^- H^T (H P^- H^T + R)^{-1}$. Collect the exponent as a quadratic in $x$, complete the square, and use
-# the matrix inversion lemma.
-# (Section 9 lists two slips of the lecture's version of this derivation.)
-
-# %% [markdown] nbgrader={"grade": true, "grade_id": "derivation_bayes", "locked": false, "points": 3, "schema_version": 3, "solution": true, "task": false}
-# ### BEGIN SOLUTION
-# **Model answer.** Up to terms without $x$, minus twice the log of the product is
+# $K = P^- H^T (H P^- H^T + R)^{-1}$. Up to terms without $x$, minus twice the log of the product is
 # $(y - Hx)^T R^{-1} (y - Hx) + (x - \hat x^-)^T (P^-)^{-1} (x - \hat x^-) = x^T A x - 2 b^T x + \text{const}$ with
 # $A = (P^-)^{-1} + H^T R^{-1} H$ and $b = H^T R^{-1} y + (P^-)^{-1} \hat x^-$. Completing the square,
 # $x^T A x - 2b^T x = (x - A^{-1}b)^T A (x - A^{-1} b) - b^T A^{-1} b$, so the posterior is Gaussian with
@@ -103,11 +97,7 @@ from course.checks import check_array, check_close, check_pair, check_symmetric,
 # $A^{-1} b = (P^- - K H P^-)(H^T R^{-1} y + (P^-)^{-1}\hat x^-) = \hat x^- - K H \hat x^- + (P^- H^T - K H P^- H^T) R^{-1} y$,
 # and $P^- H^T - K H P^- H^T = K (H P^- H^T + R) - K H P^- H^T = K R$, so the last term is $K y$:
 # $\hat x^+ = \hat x^- + K (y - H \hat x^-)$.
-#
-# **Rubric (3 points).** 1 point: the exponent as a quadratic in $x$ with the right $A$ and $b$. 1 point:
-# completing the square, so that the covariance is $A^{-1}$ and the mean $A^{-1} b$. 1 point: the inversion lemma
-# and the algebra to the gain form of the mean (any correct route, such as checking $A (P^- - KHP^-) = I$, earns it).
-# ### END SOLUTION
+# (Section 9 lists two slips of the lecture's version of this derivation.)
 
 # %% [markdown]
 # **Derivation 2 (minimum variance).** Now assume nothing about Gaussians. Look for an estimate of the form
