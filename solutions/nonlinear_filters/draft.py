@@ -35,11 +35,11 @@
 #
 # | part | what you write | points | about |
 # |---|---|---|---|
-# | 1. The Kalman update, twice | derivation 2 (derivation 1 is worked) | 3 | 30 min |
+# | 1. The Kalman update, twice | derivation 2 (derivation 1 is worked) | 3 | 35 min |
 # | 2, 3. Point sets and their moments | `cubature_points`, `unscented_points`, `cut4_points`, `moment_error`, Question 1 | 8 | 50 min |
 # | 5–7. The filters | `sigma_point_predict`, `sigma_point_update`, `ekf_update`, `bootstrap_pf_step` | 10 | 1 h 10 min |
 # | 8. Seven filters on the turning aircraft | Question 2 (three parts, a point each) | 3 | 45 min |
-# | **all** | 8 functions, 3 written answers | **24** | **about 3 h 15 min** |
+# | **all** | 8 functions, 3 written answers | **24** | **about 3 h 20 min** |
 #
 # Section 4 (the aircraft and the radar) has nothing to write: read it before section 5. Section 9,
 # "Going further", is optional and not graded.
@@ -47,8 +47,8 @@
 # **How this notebook works.** Each blank is one function in a cell that says `YOUR CODE HERE`. The read-only
 # cell below it runs *visible checks* whose messages say what to fix. In grading, *hidden tests* compare your
 # function with a reference on random inputs of several sizes, each blank on its own. Return new arrays and
-# leave the ones you are given as they are; draw random numbers only from the `rng` you are given. The
-# derivations and the questions are marked by hand; the code blanks by the hidden tests. The grey cells are
+# leave the ones you are given as they are; draw random numbers only from the `rng` you are given.
+# Derivation 2 and the two questions are marked by hand; the code blanks by the hidden tests. The grey cells are
 # locked: grading puts back their originals. Before you submit, press **Validate**: it lists each blank that is
 # not written yet or fails its visible checks.
 #
@@ -102,7 +102,8 @@ from course.checks import check_array, check_close, check_pair, check_symmetric,
 # %% [markdown]
 # **Derivation 2 (minimum variance).** Now assume nothing about Gaussians. Look for an estimate of the form
 # $\hat x^+ = \hat x^- + K(y - \hat y)$, with $\hat y = E[y]$, that minimises
-# $\mathrm{tr}\, E[(x - \hat x^+)(x - \hat x^+)^T]$. Show that the best gain is $K = P_{xy} P_{yy}^{-1}$, where
+# $\mathrm{tr}\, E[(x - \hat x^+)(x - \hat x^+)^T]$. With $P^- = E[(x - \hat x^-)(x - \hat x^-)^T]$, show that the
+# best gain is $K = P_{xy} P_{yy}^{-1}$, where
 # $P_{xy} = E[(x - \hat x^-)(y - \hat y)^T]$ and $P_{yy} = E[(y - \hat y)(y - \hat y)^T]$, that the posterior
 # covariance is then $P^- - K P_{yy} K^T$, and that for the linear model above this is the Kalman filter
 # ($P_{yy} = H P^- H^T + R$, $P_{xy} = P^- H^T$). This route is what every sigma-point filter below uses: it only
