@@ -151,15 +151,24 @@ def _() -> None:
 
 @claim("reentry-pf/handout-band-narrow-early")
 def _() -> None:
-    """The handout's setting (N = 5000): from 1 s to 13 s, before the readings hold information about beta, its 90% band
-    is narrower than the yardstick's in about half the study's runs or more (at least 40% at every second)."""
+    """The handout's setting (N = 5000): from 1 s to 13 s, before the readings hold information about beta, the median
+    run's 90% band of beta is 90-100% of the yardstick's, and about a quarter of the study's runs (20-35%) fall below
+    80% of it at some second."""
     widths = study().runs[HANDOUT_SETTING]["width90_beta"]
-    every = fo.WIDTH_EVERY
-    ideal = 2 * fo.Z90 * crb()[::every][: widths.shape[1]]
-    narrower = np.mean(widths < ideal, axis=0)[1:14]
-    assert narrower.min() >= 0.4 and np.median(narrower) >= 0.5, narrower
+    ratio = (widths / (2 * fo.Z90 * crb()[:: fo.WIDTH_EVERY][: widths.shape[1]]))[:, 1:14]
+    median = np.median(ratio, axis=0)
+    dipped = np.mean(np.any(ratio < 0.8, axis=1))
+    assert 0.88 <= median.min() and median.max() <= 1.01 and 0.2 <= dipped <= 0.35, (median, dipped)
     # the yardstick is still the prior's there: the narrowing is not information
     assert crb()[13 * round(1 / fo.DT)] > 0.95 * fo.PRIOR_STD[2], crb()[13 * round(1 / fo.DT)]
+
+
+@claim("reentry-pf/handout-band-above-prior")
+def _() -> None:
+    """The handout's setting (N = 5000): at 30 s, 20-40% of the study's runs end with a 90% band of beta wider than the
+    prior's, the widest below 1.7 times it (about 30%, up to 1.6 times)."""
+    ratio = study().runs[HANDOUT_SETTING]["width90_beta"][:, -1] / prior_band()
+    assert 0.2 <= np.mean(ratio > 1.0) <= 0.4 and 1.4 <= ratio.max() < 1.7, (np.mean(ratio > 1.0), ratio.max())
 
 
 @claim("reentry-pf/ess-after-d-high")
