@@ -514,8 +514,9 @@ class ResamplingHealth:
     ``info`` is not read; you may also fill t_0 yourself and start at j = 1). It fills
     ``history.ess_resample[j]`` with ``info["ess"]``, ``history.parents[j]`` with the number of distinct
     indices in ``info["parents"]``, and ``history.roots[j]`` with the number of particles of t_0 that still
-    have descendants in the cloud at t_j. At t_0 all three are N. A call that cannot give the right numbers (twice for one t_j,
-    a time skipped, a dict that the step did not fill, the wrong N) raises HelperMisused, saying why.
+    have descendants in the cloud at t_j. At t_0 all three are N. A call that cannot give the right numbers
+    (twice for one t_j, a time skipped, a dict that the step did not fill, the wrong N) raises HelperMisused,
+    saying why.
     """
 
     def __init__(self, n_particles: int) -> None:
@@ -527,12 +528,12 @@ class ResamplingHealth:
         """Record the resampling of the step to t_j (j > 0) in ``history``, or N three times at j = 0."""
         n = self.root.size
         if self.last_j is not None and j == self.last_j:
-            raise RecordedOutOfOrder(f"health.record(history, {j}, info) was called twice for t_{j}: call it once at every "
-                                "t_j, after the step to t_j.")
+            raise RecordedOutOfOrder(f"health.record(history, {j}, info) was called twice for t_{j}: call it once at "
+                                     "every t_j, after the step to t_j.")
         if j == 0:
             if self.last_j is not None:
                 raise RecordedOutOfOrder("health.record(history, 0, ...) came after later times: make one "
-                                    "ResamplingHealth(N) per run, before the loop, and record t_0 first.")
+                                         "ResamplingHealth(N) per run, before the loop, and record t_0 first.")
             history.ess_resample[0] = history.parents[0] = history.roots[0] = n
             self.last_j = 0
             return
